@@ -1,0 +1,99 @@
+#include "device/device_description.hpp"
+
+namespace vecat::device {
+namespace {
+
+unsigned assigned_bytes(const std::vector<Pdo>& pdos) {
+    unsigned bits = 0;
+    for (const auto& p : pdos)
+        if (p.assigned) bits += p.bit_length();
+    return (bits + 7) / 8;
+}
+
+}  // namespace
+
+unsigned DeviceDescription::output_bytes() const { return assigned_bytes(rx_pdos); }
+unsigned DeviceDescription::input_bytes() const { return assigned_bytes(tx_pdos); }
+
+const SyncManagerConfig* DeviceDescription::sm_of_type(SmType t) const {
+    for (const auto& s : sync_managers)
+        if (s.type == t) return &s;
+    return nullptr;
+}
+
+std::optional<unsigned> DeviceDescription::sm_index_of_type(SmType t) const {
+    for (unsigned i = 0; i < sync_managers.size(); ++i)
+        if (sync_managers[i].type == t) return i;
+    return std::nullopt;
+}
+
+DeviceDescription default_drive() {
+    DeviceDescription d;
+    // 0x00000A3C is not an ETG-assigned vendor ID of any real company we know of; it marks vecat devices.
+    d.identity = {0x00000A3C, 0x00000402, 0x00010000, 0x00000001};
+    d.vendor_name = "vecat";
+    d.name = "vecat CiA402 servo drive";
+    d.order_code = "VECAT-SD402";
+    d.group_type = "ServoDrives";
+    d.group_name = "Servo drives";
+    d.mailbox_protocols = mbx_proto::CoE;
+    d.coe_details = coe_details::Sdo | coe_details::SdoInfo | coe_details::PdoAssign | coe_details::PdoConfig |
+                    coe_details::CompleteAccess;
+    d.ebus_current_ma = 0;
+
+    // SyncManager layout of the HIWIN D2 (drive guide, section 4): mailbox at 0x1800/0x18F6, process
+    // data at 0x1000/0x1100.
+    d.sync_managers = {
+        {0x1800, 0x00F6, 0x26, 0x01, SmType::MailboxOut},
+        {0x18F6, 0x00F6, 0x22, 0x01, SmType::MailboxIn},
+        {0x1000, 0x0000, 0x64, 0x01, SmType::Outputs},
+        {0x1100, 0x0000, 0x20, 0x01, SmType::Inputs},
+    };
+    d.fmmus = {FmmuUsage::Outputs, FmmuUsage::Inputs, FmmuUsage::MailboxState};
+
+    using DT = DataType;
+    d.rx_pdos = {Pdo{0x1600,
+                     "RxPDO 1 (CSP/CSV/CST)",
+                     2,
+                     false,
+                     false,
+                     true,
+                     {
+                         {0x6040, 0, 16, DT::Unsigned16, "Controlword"},
+                         {0x6060, 0, 8, DT::Integer8, "Modes of operation"},
+                         {0x0000, 0, 8, DT::Unsigned8, ""},
+                         {0x607A, 0, 32, DT::Integer32, "Target position"},
+                         {0x60FF, 0, 32, DT::Integer32, "Target velocity"},
+                         {0x6071, 0, 16, DT::Integer16, "Target torque"},
+                         {0x60B8, 0, 16, DT::Unsigned16, "Touch probe function"},
+                     }}};
+    d.tx_pdos = {Pdo{0x1A00,
+                     "TxPDO 1 (CSP/CSV/CST)",
+                     3,
+                     false,
+                     false,
+                     true,
+                     {
+                         {0x6041, 0, 16, DT::Unsigned16, "Statusword"},
+                         {0x6061, 0, 8, DT::Integer8, "Modes of operation display"},
+                         {0x0000, 0, 8, DT::Unsigned8, ""},
+                         {0x6064, 0, 32, DT::Integer32, "Position actual value"},
+                         {0x606C, 0, 32, DT::Integer32, "Velocity actual value"},
+                         {0x6077, 0, 16, DT::Integer16, "Torque actual value"},
+                         {0x60F4, 0, 32, DT::Integer32, "Following error actual value"},
+                         {0x60FD, 0, 32, DT::Unsigned32, "Digital inputs"},
+                         {0x60B9, 0, 16, DT::Unsigned16, "Touch probe status"},
+                         {0x60BA, 0, 32, DT::Integer32, "Touch probe 1 positive value"},
+                     }}};
+    d.sync_managers[2].length = static_cast<std::uint16_t>(d.output_bytes());
+    d.sync_managers[3].length = static_cast<std::uint16_t>(d.input_bytes());
+
+    d.dc_modes = {
+        DcOpMode{"FreeRun", "Free run (no synchronisation)", 0x0000, 0, 0, 0, 0, 0},
+        DcOpMode{"SM-Synchron", "SM-synchronous", 0x0000, 0, 0, 0, 0, 0},
+        DcOpMode{"DC", "DC SYNC0", 0x0300, 1000000, 0, 0, 1, 0},
+    };
+    return d;
+}
+
+}  // namespace vecat::device

@@ -1,0 +1,149 @@
+// The one description of a device. The SII EEPROM image, the CoE object dictionary and the ESI file are
+// all generated from it, so they cannot disagree.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vecat::device {
+
+struct Identity {
+    std::uint32_t vendor_id = 0;
+    std::uint32_t product_code = 0;
+    std::uint32_t revision = 0;
+    std::uint32_t serial = 0;
+};
+
+// SII SyncM category type byte (ETG.2010 Table 8).
+enum class SmType : std::uint8_t { Unused = 0, MailboxOut = 1, MailboxIn = 2, Outputs = 3, Inputs = 4 };
+
+struct SyncManagerConfig {
+    std::uint16_t start = 0;
+    std::uint16_t length = 0;
+    std::uint8_t control = 0;
+    std::uint8_t enable = 0;  // SII "enable synch manager" byte: bit 0 enable
+    SmType type = SmType::Unused;
+};
+
+// SII FMMU category usage byte (ETG.2010 Table 7).
+enum class FmmuUsage : std::uint8_t { Unused = 0, Outputs = 1, Inputs = 2, MailboxState = 3 };
+
+// CoE base data types (ETG.1000.6 Table 64), as used in PDO entries and the dictionary.
+enum class DataType : std::uint16_t {
+    Boolean = 0x0001,
+    Integer8 = 0x0002,
+    Integer16 = 0x0003,
+    Integer32 = 0x0004,
+    Unsigned8 = 0x0005,
+    Unsigned16 = 0x0006,
+    Unsigned32 = 0x0007,
+    Real32 = 0x0008,
+    VisibleString = 0x0009,
+    OctetString = 0x000A,
+    UnicodeString = 0x000B,
+    Domain = 0x000F,
+    Integer64 = 0x0015,
+    Unsigned64 = 0x001B,
+    Real64 = 0x0011,
+};
+
+struct PdoEntry {
+    std::uint16_t index = 0;     // 0 with subindex 0: padding (gap)
+    std::uint8_t subindex = 0;
+    std::uint8_t bit_length = 0;
+    DataType type = DataType::Unsigned8;
+    std::string name;
+};
+
+struct Pdo {
+    std::uint16_t index = 0;  // 0x16xx RxPDO, 0x1Axx TxPDO
+    std::string name;
+    std::uint8_t sm = 0;      // SyncManager it is assigned to by default
+    bool fixed = false;
+    bool mandatory = false;
+    bool assigned = true;     // part of the default assignment
+    std::vector<PdoEntry> entries;
+
+    unsigned bit_length() const {
+        unsigned n = 0;
+        for (const auto& e : entries) n += e.bit_length;
+        return n;
+    }
+};
+
+// One operation mode of the DC category / ESI Dc element.
+struct DcOpMode {
+    std::string name;
+    std::string description;
+    std::uint16_t assign_activate = 0;
+    std::uint32_t cycle_time0 = 0;
+    std::uint32_t shift_time0 = 0;
+    std::uint32_t shift_time1 = 0;
+    std::int16_t sync0_cycle_factor = 1;
+    std::int16_t sync1_cycle_factor = 0;
+};
+
+// Mailbox protocols word (SII word 0x1C).
+namespace mbx_proto {
+inline constexpr std::uint16_t AoE = 0x0001;
+inline constexpr std::uint16_t EoE = 0x0002;
+inline constexpr std::uint16_t CoE = 0x0004;
+inline constexpr std::uint16_t FoE = 0x0008;
+inline constexpr std::uint16_t SoE = 0x0010;
+inline constexpr std::uint16_t VoE = 0x0020;
+}  // namespace mbx_proto
+
+// CoE details byte of the SII General category.
+namespace coe_details {
+inline constexpr std::uint8_t Sdo = 0x01;
+inline constexpr std::uint8_t SdoInfo = 0x02;
+inline constexpr std::uint8_t PdoAssign = 0x04;
+inline constexpr std::uint8_t PdoConfig = 0x08;
+inline constexpr std::uint8_t Upload = 0x10;
+inline constexpr std::uint8_t CompleteAccess = 0x20;
+}  // namespace coe_details
+
+struct DeviceDescription {
+    Identity identity;
+    std::string vendor_name;
+    std::string name;        // device name, SII string shown by masters
+    std::string order_code;  // ESI Type
+    std::string group_type;
+    std::string group_name;
+    std::uint32_t profile_no = 402;
+
+    // ESC configuration area of the SII (words 0..7).
+    std::uint16_t pdi_control = 0x0005;  // 0x05: SPI-like "on-chip bus"/digital I/O; value copied to 0x0140
+    std::uint16_t pdi_config = 0x0000;
+    std::uint16_t sync_impulse_len = 100;  // in 10 ns
+    std::uint16_t station_alias = 0;
+
+    std::uint16_t mailbox_protocols = mbx_proto::CoE;
+    std::uint8_t coe_details = 0;
+    std::uint8_t foe_details = 0;
+    std::uint8_t eoe_details = 0;
+    std::uint8_t general_flags = 0;
+    std::int16_t ebus_current_ma = 0;
+    bool bootstrap_supported = false;
+
+    std::vector<SyncManagerConfig> sync_managers;  // SM0.. in order
+    std::vector<FmmuUsage> fmmus;
+    std::vector<Pdo> rx_pdos;  // outputs (master -> slave)
+    std::vector<Pdo> tx_pdos;  // inputs (slave -> master)
+    std::vector<DcOpMode> dc_modes;
+
+    std::uint32_t eeprom_size_bytes = 4096;
+
+    // Byte sizes of the default process data image for the SM of a given type.
+    unsigned output_bytes() const;
+    unsigned input_bytes() const;
+    const SyncManagerConfig* sm_of_type(SmType t) const;
+    std::optional<unsigned> sm_index_of_type(SmType t) const;
+};
+
+// The built-in default device: a CiA402 servo drive with HIWIN-like SyncManager layout.
+DeviceDescription default_drive();
+
+}  // namespace vecat::device

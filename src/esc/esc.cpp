@@ -1,0 +1,772 @@
+#include "esc/esc.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+#include "esc/al_status.hpp"
+#include "esc/sii_image.hpp"
+
+namespace vecat::esc {
+namespace {
+
+constexpr std::uint16_t kDefaultWatchdogDivider = 2498;  // (2498 + 2) x 40 ns = 100 us
+constexpr std::uint16_t kDefaultWatchdogTime = 1000;     // 1000 x 100 us = 100 ms
+
+bool overlaps(std::uint32_t lo, std::uint32_t hi, std::uint32_t a, std::uint32_t len) {
+    return lo < a + len && hi >= a;  // hi inclusive
+}
+
+void saturating_inc(std::uint8_t& c) {
+    if (c != 0xFF) ++c;
+}
+
+}  // namespace
+
+Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
+    : cfg_(cfg),
+      mem_(kRegisterSpaceSize + std::max<std::uint32_t>(cfg.ram_bytes, 8192), 0),
+      eeprom_(std::move(eeprom)),
+      wmask_(make_write_mask_table(std::min<unsigned>(cfg.fmmu_count, kMaxFmmus),
+                                   std::min<unsigned>(cfg.sm_count, kMaxSms))) {
+    cfg_.fmmu_count = static_cast<std::uint8_t>(std::min<unsigned>(cfg_.fmmu_count, kMaxFmmus));
+    cfg_.sm_count = static_cast<std::uint8_t>(std::min<unsigned>(cfg_.sm_count, kMaxSms));
+    cfg_.ram_bytes = static_cast<std::uint32_t>(mem_.size() - kRegisterSpaceSize);
+    if (eeprom_.size() % 2) eeprom_.push_back(0xFF);
+
+    mem_[addr(Reg::Type)] = cfg_.type;
+    mem_[addr(Reg::Revision)] = cfg_.revision;
+    st_le16(&mem_[addr(Reg::Build)], cfg_.build);
+    mem_[addr(Reg::FmmuCount)] = cfg_.fmmu_count;
+    mem_[addr(Reg::SmCount)] = cfg_.sm_count;
+    mem_[addr(Reg::RamSize)] = static_cast<std::uint8_t>(std::min<std::uint32_t>(cfg_.ram_bytes / 1024, 255));
+    mem_[addr(Reg::PortDescriptor)] = cfg_.port_descriptor;
+    st_le16(&mem_[addr(Reg::Features)], cfg_.features);
+    st_le32(&mem_[addr(Reg::DlControl)], 0x00070001);
+    st_le16(&mem_[addr(Reg::AlStatus)], static_cast<std::uint16_t>(AlState::Init));
+    st_le32(&mem_[addr(Reg::AlEventMask)], 0x00FFFF0F);
+    st_le16(&mem_[addr(Reg::WatchdogDivider)], kDefaultWatchdogDivider);
+    st_le16(&mem_[addr(Reg::WatchdogTimePdi)], kDefaultWatchdogTime);
+    st_le16(&mem_[addr(Reg::WatchdogTimeProcessData)], kDefaultWatchdogTime);
+    mem_[addr(Reg::WatchdogStatusProcessData)] = 0x01;
+    std::uint16_t sii = 0;
+    if (cfg_.sii_read_8_bytes) sii |= sii_ctrl::Read8Bytes;
+    if (eeprom_.size() > 2048) sii |= sii_ctrl::TwoAddressBytes;
+    st_le16(&mem_[addr(Reg::SiiControl)], sii);
+    st_le16(&mem_[addr(Reg::DcSpeedCounterStart)], 0x1000);
+    mem_[addr(Reg::DcSystemTimeDiffFilterDepth)] = 0x04;
+    mem_[addr(Reg::DcSpeedCounterFilterDepth)] = 0x0C;
+    reload_eeprom();
+}
+
+std::uint64_t Esc::local_time(std::uint64_t host_ns) const {
+    const double scaled = static_cast<double>(host_ns) * (1.0 + cfg_.dc_drift_ppm * 1e-6);
+    return cfg_.dc_initial_ns + static_cast<std::uint64_t>(scaled);
+}
+
+void Esc::reload_eeprom() {
+    auto word = [&](unsigned w) -> std::uint16_t {
+        return 2 * w + 1 < eeprom_.size() ? ld_le16(&eeprom_[2 * w]) : 0xFFFF;
+    };
+    std::uint16_t ctrl = ld_le16(&mem_[addr(Reg::SiiControl)]);
+    const bool crc_ok =
+        eeprom_.size() >= 16 && sii_config_crc(ConstBytes(eeprom_.data(), 14)) == eeprom_[2 * sii::Checksum];
+    if (crc_ok) {
+        st_le16(&mem_[addr(Reg::PdiControl)], word(sii::PdiControl));
+        st_le16(&mem_[addr(Reg::PdiConfiguration)], word(sii::PdiConfig));
+        st_le16(&mem_[addr(Reg::ExtendedPdiConfiguration)], word(sii::PdiConfig2));
+        st_le16(&mem_[addr(Reg::StationAlias)], word(sii::StationAlias));
+        st_le16(&mem_[addr(Reg::DcPulseLength)], word(sii::SyncImpulseLen));
+        ctrl = static_cast<std::uint16_t>(ctrl & ~(sii_ctrl::ChecksumError | sii_ctrl::NotLoaded));
+    } else {
+        ctrl |= sii_ctrl::ChecksumError | sii_ctrl::NotLoaded;
+    }
+    st_le16(&mem_[addr(Reg::SiiControl)], ctrl);
+    update_dl_status();
+}
+
+void Esc::set_port_link(unsigned port, bool up) {
+    if (port > 3) return;
+    if (up)
+        link_mask_ = static_cast<std::uint8_t>(link_mask_ | (1u << port));
+    else
+        link_mask_ = static_cast<std::uint8_t>(link_mask_ & ~(1u << port));
+    update_dl_status();
+}
+
+void Esc::update_dl_status() {
+    const std::uint16_t ctrl = ld_le16(&mem_[addr(Reg::SiiControl)]);
+    std::uint16_t v = dl_status::PdiWatchdogOk;
+    if (!(ctrl & sii_ctrl::NotLoaded)) v |= dl_status::PdiOperational;
+    for (unsigned p = 0; p < 4; ++p) {
+        const bool implemented = ((cfg_.port_descriptor >> (2 * p)) & 0x3) != 0;
+        if (implemented && port_link(p))
+            v |= static_cast<std::uint16_t>(dl_status::link(p) | dl_status::communication(p));
+        else
+            v |= dl_status::loop_closed(p);
+    }
+    st_le16(&mem_[addr(Reg::DlStatus)], v);
+}
+
+void Esc::count_invalid_frame(unsigned port) {
+    if (port > 3) return;
+    saturating_inc(mem_[addr(Reg::RxErrorCounter) + 2 * port]);
+    ++counters_.dropped_frames;
+}
+
+void Esc::set_al_event(std::uint32_t bits) {
+    st_le32(&mem_[addr(Reg::AlEventRequest)], ld_le32(&mem_[addr(Reg::AlEventRequest)]) | bits);
+}
+void Esc::clear_al_event(std::uint32_t bits) {
+    st_le32(&mem_[addr(Reg::AlEventRequest)], ld_le32(&mem_[addr(Reg::AlEventRequest)]) & ~bits);
+}
+
+bool Esc::addressed_fixed(std::uint16_t adp) const {
+    if (adp == ld_le16(&mem_[addr(Reg::StationAddress)])) return true;
+    const bool alias_enabled = (mem_[addr(Reg::DlControl) + 3] & 0x01) != 0;
+    return alias_enabled && adp == ld_le16(&mem_[addr(Reg::StationAlias)]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Datagram dispatch (ETG.1000.4 5.4, working counter rules of Table 13)
+
+void Esc::process(DatagramView d, const FrameTiming& t) {
+    ++counters_.datagrams;
+    last_host_ns_ = t.port0_ns;
+    unsigned wkc = 0;
+    const auto inc_adp = [&] { d.set_adp(static_cast<std::uint16_t>(d.adp() + 1)); };
+    switch (d.command()) {
+        case Command::NOP:
+            break;
+        case Command::APRD:
+            if (d.adp() == 0) physical(d, d.ado(), true, false, false, t, wkc);
+            inc_adp();
+            break;
+        case Command::APWR:
+            if (d.adp() == 0) physical(d, d.ado(), false, true, false, t, wkc);
+            inc_adp();
+            break;
+        case Command::APRW:
+            if (d.adp() == 0) physical(d, d.ado(), true, true, false, t, wkc);
+            inc_adp();
+            break;
+        case Command::FPRD:
+            if (addressed_fixed(d.adp())) physical(d, d.ado(), true, false, false, t, wkc);
+            break;
+        case Command::FPWR:
+            if (addressed_fixed(d.adp())) physical(d, d.ado(), false, true, false, t, wkc);
+            break;
+        case Command::FPRW:
+            if (addressed_fixed(d.adp())) physical(d, d.ado(), true, true, false, t, wkc);
+            break;
+        case Command::BRD:
+            physical(d, d.ado(), true, false, true, t, wkc);
+            inc_adp();
+            break;
+        case Command::BWR:
+            physical(d, d.ado(), false, true, false, t, wkc);
+            inc_adp();
+            break;
+        case Command::BRW:
+            physical(d, d.ado(), true, true, true, t, wkc);
+            inc_adp();
+            break;
+        case Command::LRD:
+            logical(d, true, false, t, wkc);
+            break;
+        case Command::LWR:
+            logical(d, false, true, t, wkc);
+            break;
+        case Command::LRW:
+            logical(d, true, true, t, wkc);
+            break;
+        case Command::ARMW:
+            if (d.adp() == 0)
+                physical(d, d.ado(), true, false, false, t, wkc);
+            else
+                physical(d, d.ado(), false, true, false, t, wkc);
+            inc_adp();
+            break;
+        case Command::FRMW:
+            if (addressed_fixed(d.adp()))
+                physical(d, d.ado(), true, false, false, t, wkc);
+            else
+                physical(d, d.ado(), false, true, false, t, wkc);
+            break;
+        default:
+            // Unknown commands pass the ESC unchanged, like a NOP.
+            break;
+    }
+    if (wkc) d.add_wkc(wkc);
+}
+
+void Esc::physical(DatagramView d, std::uint16_t ado, bool do_read, bool do_write, bool or_read,
+                   const FrameTiming& t, unsigned& wkc_add) {
+    const std::size_t n = d.length();
+    if (n == 0) return;
+    std::uint8_t* data = d.data();
+    if (do_read && do_write) {
+        // Read-write: the frame leaves with the old memory content; memory takes the incoming data.
+        std::memcpy(scratch_.data(), data, n);
+        const bool r = ecat_read(ado, data, n, or_read, t);
+        const bool w = ecat_write(ado, scratch_.data(), n, t);
+        wkc_add += (r ? 1u : 0u) + (w ? 2u : 0u);
+    } else if (do_read) {
+        wkc_add += ecat_read(ado, data, n, or_read, t) ? 1u : 0u;
+    } else {
+        wkc_add += ecat_write(ado, data, n, t) ? 1u : 0u;
+    }
+}
+
+void Esc::logical(DatagramView d, bool do_read, bool do_write, const FrameTiming& t, unsigned& wkc_add) {
+    const std::size_t dlen = d.length();
+    if (dlen == 0) return;
+    std::uint8_t* data = d.data();
+    const std::uint64_t dfirst = static_cast<std::uint64_t>(d.logical_address()) * 8;
+    const std::uint64_t dlast = dfirst + dlen * 8 - 1;
+    bool any_read = false, any_write = false;
+    // Writes take the incoming frame data, so all writes happen before any read replaces it.
+    for (int pass = 0; pass < 2; ++pass) {
+        const bool writing = pass == 0;
+        if (writing ? !do_write : !do_read) continue;
+        for (unsigned i = 0; i < cfg_.fmmu_count; ++i) {
+            const FmmuState& f = fmmu_[i];
+            if (!f.active || (writing ? !f.write : !f.read)) continue;
+            const std::uint64_t first = std::max(f.log_first_bit, dfirst);
+            const std::uint64_t last = std::min(f.log_last_bit, dlast);
+            if (first > last) continue;
+            const std::uint64_t pfirst = f.phys_first_bit + (first - f.log_first_bit);
+            const std::uint64_t nbits = last - first + 1;
+            bool ok = false;
+            if (f.byte_aligned) {
+                const std::uint64_t pbyte = pfirst / 8;
+                if (pbyte > 0xFFFF) continue;
+                const std::size_t doff = static_cast<std::size_t>((first - dfirst) / 8);
+                const std::size_t nbytes = static_cast<std::size_t>(nbits / 8);
+                ok = writing ? ecat_write(static_cast<std::uint16_t>(pbyte), data + doff, nbytes, t)
+                             : ecat_read(static_cast<std::uint16_t>(pbyte), data + doff, nbytes, false, t);
+            } else {
+                const std::uint64_t p0 = pfirst / 8;
+                const std::uint64_t p1 = (pfirst + nbits - 1) / 8;
+                if (p0 > 0xFFFF) continue;
+                const std::size_t np = static_cast<std::size_t>(std::min<std::uint64_t>(p1, 0xFFFF) - p0 + 1);
+                const unsigned pshift = static_cast<unsigned>(pfirst % 8);
+                const std::uint64_t dbit0 = first - dfirst;
+                if (writing) {
+                    for (std::size_t k = 0; k < np; ++k) {
+                        const std::uint8_t* cur = ecat_write_target(static_cast<std::uint32_t>(p0 + k));
+                        scratch_[k] = cur ? *cur : 0;
+                    }
+                    for (std::uint64_t j = 0; j < nbits; ++j) {
+                        const std::uint64_t sb = dbit0 + j;
+                        const std::uint64_t db = pshift + j;
+                        if (db / 8 >= np) break;
+                        const bool bit = (data[sb / 8] >> (sb % 8)) & 1u;
+                        auto& byte = scratch_[db / 8];
+                        byte = static_cast<std::uint8_t>(bit ? (byte | (1u << (db % 8))) : (byte & ~(1u << (db % 8))));
+                    }
+                    ok = ecat_write(static_cast<std::uint16_t>(p0), scratch_.data(), np, t);
+                } else {
+                    ok = ecat_read(static_cast<std::uint16_t>(p0), scratch_.data(), np, false, t);
+                    if (ok) {
+                        for (std::uint64_t j = 0; j < nbits; ++j) {
+                            const std::uint64_t sb = pshift + j;
+                            const std::uint64_t db = dbit0 + j;
+                            if (sb / 8 >= np) break;
+                            const bool bit = (scratch_[sb / 8] >> (sb % 8)) & 1u;
+                            auto& byte = data[db / 8];
+                            byte = static_cast<std::uint8_t>(bit ? (byte | (1u << (db % 8)))
+                                                                 : (byte & ~(1u << (db % 8))));
+                        }
+                    }
+                }
+            }
+            (writing ? any_write : any_read) |= ok;
+        }
+    }
+    if (any_read) wkc_add += 1;
+    if (any_write) wkc_add += do_read ? 2 : 1;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Memory access with ECAT semantics
+
+int Esc::sm_covering(std::uint32_t a) const {
+    std::uint32_t m = sm_active_mask_;
+    while (m) {
+        const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
+        m &= m - 1;
+        const SmState& s = sm_[i];
+        if (a >= s.start && a < static_cast<std::uint32_t>(s.start) + s.length) return static_cast<int>(i);
+    }
+    return -1;
+}
+
+std::uint32_t Esc::next_sm_start(std::uint32_t a) const {
+    std::uint32_t best = static_cast<std::uint32_t>(mem_.size());
+    std::uint32_t m = sm_active_mask_;
+    while (m) {
+        const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
+        m &= m - 1;
+        if (sm_[i].start > a) best = std::min<std::uint32_t>(best, sm_[i].start);
+    }
+    return best;
+}
+
+std::uint8_t* Esc::ecat_write_target(std::uint32_t a) {
+    if (a >= mem_.size()) return nullptr;
+    if (a >= kRegisterSpaceSize) {
+        const int i = sm_covering(a);
+        if (i >= 0 && !sm_[i].mailbox && sm_[i].ecat_writes)
+            return &mem_[sm_[i].start + static_cast<std::size_t>(sm_[i].buf_ecat) * sm_[i].length + (a - sm_[i].start)];
+    }
+    return &mem_[a];
+}
+
+void Esc::refresh_dynamic_registers(std::uint16_t first, std::uint16_t last, const FrameTiming& t) {
+    if (overlaps(first, last, addr(Reg::DcSystemTime), 8)) {
+        const std::uint64_t sys = local_time(t.port0_ns) + ld_le64(&mem_[addr(Reg::DcSystemTimeOffset)]);
+        st_le64(&mem_[addr(Reg::DcSystemTime)], sys);
+    }
+}
+
+bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_into, const FrameTiming& t) {
+    bool counted = false;
+    std::size_t pos = 0;
+    while (pos < n) {
+        const std::uint32_t cur = static_cast<std::uint32_t>(a) + static_cast<std::uint32_t>(pos);
+        const std::size_t rem = n - pos;
+        std::size_t run;
+        if (cur > 0xFFFF) break;  // past the 16-bit address space: nothing there
+        if (cur < kRegisterSpaceSize) {
+            run = std::min<std::size_t>(rem, kRegisterSpaceSize - cur);
+            refresh_dynamic_registers(static_cast<std::uint16_t>(cur), static_cast<std::uint16_t>(cur + run - 1), t);
+            if (or_into)
+                for (std::size_t k = 0; k < run; ++k) dst[pos + k] |= mem_[cur + k];
+            else
+                std::memcpy(dst + pos, &mem_[cur], run);
+            counted = true;
+        } else if (cur < mem_.size()) {
+            const int s = sm_covering(cur);
+            if (s >= 0) {
+                run = std::min<std::size_t>(rem, sm_[s].start + sm_[s].length - cur);
+                counted |= sm_ecat_read(static_cast<unsigned>(s), cur - sm_[s].start, dst + pos, run, or_into);
+            } else {
+                run = std::min<std::size_t>(rem, next_sm_start(cur) - cur);
+                if (or_into)
+                    for (std::size_t k = 0; k < run; ++k) dst[pos + k] |= mem_[cur + k];
+                else
+                    std::memcpy(dst + pos, &mem_[cur], run);
+                counted = true;
+            }
+        } else {
+            run = std::min<std::size_t>(rem, 0x10000 - cur);
+            if (!or_into) std::memset(dst + pos, 0, run);
+            counted = true;
+        }
+        pos += run;
+    }
+    return counted;
+}
+
+bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t) {
+    bool counted = false;
+    std::uint32_t reg_lo = 0xFFFF, reg_hi = 0;
+    bool sii_cmd_written = false;
+    std::array<std::uint8_t, 8> systime{};
+    std::uint8_t systime_bytes = 0;
+    std::size_t pos = 0;
+    while (pos < n) {
+        const std::uint32_t cur = static_cast<std::uint32_t>(a) + static_cast<std::uint32_t>(pos);
+        const std::size_t rem = n - pos;
+        std::size_t run;
+        if (cur > 0xFFFF) break;
+        if (cur < kRegisterSpaceSize) {
+            run = std::min<std::size_t>(rem, kRegisterSpaceSize - cur);
+            for (std::size_t k = 0; k < run; ++k) {
+                const std::uint32_t ad = cur + static_cast<std::uint32_t>(k);
+                std::uint8_t m = wmask_.mask[ad];
+                if (ad >= 0x0800 && ad < sm_addr(cfg_.sm_count) && (ad & 7) < 5 &&
+                    (mem_[(ad & ~7u) + sm::Activate] & sm::ActEnable))
+                    m = 0;  // SyncManager configuration is locked while the SM is enabled
+                const std::uint8_t v = src[pos + k];
+                if (ad == addr(Reg::SiiControl) + 1) {
+                    written_sii_cmd_ = v;
+                    sii_cmd_written = true;
+                } else if (ad >= addr(Reg::DcSystemTime) && ad < addr(Reg::DcSystemTime) + 8u) {
+                    systime[ad - addr(Reg::DcSystemTime)] = v;
+                    systime_bytes = static_cast<std::uint8_t>(systime_bytes | (1u << (ad - addr(Reg::DcSystemTime))));
+                }
+                mem_[ad] = static_cast<std::uint8_t>((mem_[ad] & ~m) | (v & m));
+            }
+            reg_lo = std::min(reg_lo, cur);
+            reg_hi = std::max(reg_hi, cur + static_cast<std::uint32_t>(run) - 1);
+            counted = true;
+        } else if (cur < mem_.size()) {
+            const int s = sm_covering(cur);
+            if (s >= 0) {
+                run = std::min<std::size_t>(rem, sm_[s].start + sm_[s].length - cur);
+                counted |= sm_ecat_write(static_cast<unsigned>(s), cur - sm_[s].start, src + pos, run);
+            } else {
+                run = std::min<std::size_t>(rem, next_sm_start(cur) - cur);
+                std::memcpy(&mem_[cur], src + pos, run);
+                counted = true;
+            }
+        } else {
+            run = std::min<std::size_t>(rem, 0x10000 - cur);
+            counted = true;  // unimplemented memory: accepted and ignored
+        }
+        pos += run;
+    }
+    if (reg_lo <= reg_hi) {
+        if (sii_cmd_written) sii_command(written_sii_cmd_);
+        if (systime_bytes) {
+            // A write of the system time feeds the time control loop: the difference to the local copy goes
+            // to 0x092C (sign in bit 31), and the local copy is steered towards the received time.
+            const std::uint64_t mine = local_time(t.port0_ns) + ld_le64(&mem_[addr(Reg::DcSystemTimeOffset)]);
+            const bool wide = (systime_bytes & 0xF0) != 0;
+            const std::uint64_t received = ld_le64(systime.data());
+            std::int64_t diff = wide ? static_cast<std::int64_t>(received - mine)
+                                     : static_cast<std::int32_t>(static_cast<std::uint32_t>(received) -
+                                                                 static_cast<std::uint32_t>(mine));
+            const std::uint64_t mag = static_cast<std::uint64_t>(diff < 0 ? -diff : diff);
+            std::uint32_t reg = static_cast<std::uint32_t>(std::min<std::uint64_t>(mag, 0x7FFFFFFF));
+            if (diff > 0) reg |= 0x80000000u;  // local copy smaller than received time
+            st_le32(&mem_[addr(Reg::DcSystemTimeDifference)], reg);
+        }
+        after_register_write(static_cast<std::uint16_t>(reg_lo), static_cast<std::uint16_t>(reg_hi), t);
+    }
+    return counted;
+}
+
+bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into) {
+    SmState& s = sm_[i];
+    if (s.ecat_writes) return false;  // the master may not read a buffer it writes
+    const std::uint8_t* src;
+    if (s.mailbox) {
+        if (!s.mbx_full) return false;  // empty mailbox: not counted
+        src = &mem_[s.start + off];
+    } else {
+        if (!s.ecat_reading) {
+            if (s.buf_next != SmState::kNone) {
+                s.buf_ecat = s.buf_next;
+                s.buf_next = SmState::kNone;
+            }
+            s.ecat_reading = true;
+        }
+        src = &mem_[s.start + static_cast<std::size_t>(s.buf_ecat) * s.length + off];
+    }
+    if (or_into)
+        for (std::size_t k = 0; k < n; ++k) dst[k] |= src[k];
+    else
+        std::memcpy(dst, src, n);
+    if (off + n == s.length) {  // last byte read: buffer released
+        if (s.mailbox)
+            s.mbx_full = false;
+        else
+            s.ecat_reading = false;
+        set_al_event(al_event::sm(i));
+        update_sm_status(i);
+    }
+    return true;
+}
+
+bool Esc::sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n) {
+    SmState& s = sm_[i];
+    if (!s.ecat_writes) return false;
+    if (s.mailbox) {
+        if (s.mbx_full) return false;  // full mailbox: refused, not counted (masters retry)
+        std::memcpy(&mem_[s.start + off], src, n);
+        if (off + n == s.length) {
+            s.mbx_full = true;
+            set_al_event(al_event::sm(i));
+            update_sm_status(i);
+        }
+        return true;
+    }
+    std::memcpy(&mem_[s.start + static_cast<std::size_t>(s.buf_ecat) * s.length + off], src, n);
+    if (s.control & sm::CtrlWatchdog) {
+        wd_armed_ = true;
+        wd_last_trigger_ns_ = last_host_ns_;
+        mem_[addr(Reg::WatchdogStatusProcessData)] |= 0x01;
+    }
+    if (off + n == s.length) {  // last byte written: the buffer becomes the newest complete one
+        s.buf_next = s.buf_ecat;
+        s.buf_ecat = static_cast<std::uint8_t>(3 - s.buf_next - s.buf_pdi);
+        s.ever_written = true;
+        ++s.complete_writes;
+        set_al_event(al_event::sm(i));
+        update_sm_status(i);
+    }
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Register side effects
+
+void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTiming& t) {
+    if (overlaps(lo, hi, addr(Reg::AlControl), 2)) set_al_event(al_event::AlControl);
+    if (overlaps(lo, hi, addr(Reg::RxErrorCounter), 12))
+        std::memset(&mem_[addr(Reg::RxErrorCounter)], 0, 12);  // any write clears 0x0300-0x030B
+    if (overlaps(lo, hi, addr(Reg::EcatProcessingUnitErrorCounter), 1))
+        mem_[addr(Reg::EcatProcessingUnitErrorCounter)] = 0;
+    if (overlaps(lo, hi, addr(Reg::PdiErrorCounter), 1)) mem_[addr(Reg::PdiErrorCounter)] = 0;
+    if (overlaps(lo, hi, addr(Reg::LostLinkCounter), 4)) std::memset(&mem_[addr(Reg::LostLinkCounter)], 0, 4);
+    if (overlaps(lo, hi, addr(Reg::WatchdogCounterProcessData), 1)) mem_[addr(Reg::WatchdogCounterProcessData)] = 0;
+    if (overlaps(lo, hi, addr(Reg::WatchdogCounterPdi), 1)) mem_[addr(Reg::WatchdogCounterPdi)] = 0;
+    if (overlaps(lo, hi, 0x0600, kFmmuSize * cfg_.fmmu_count)) {
+        const unsigned f0 = lo < 0x0600 ? 0 : (lo - 0x0600u) / kFmmuSize;
+        for (unsigned f = f0; f < cfg_.fmmu_count && fmmu_addr(f) <= hi; ++f) update_fmmu(f);
+    }
+    if (overlaps(lo, hi, 0x0800, kSmSize * cfg_.sm_count)) {
+        const unsigned s0 = lo < 0x0800 ? 0 : (lo - 0x0800u) / kSmSize;
+        for (unsigned s = s0; s < cfg_.sm_count && sm_addr(s) <= hi; ++s) update_sm(s);
+    }
+    if (overlaps(lo, hi, addr(Reg::DcRecvTimePort0), 4)) {
+        // Write to receive time port 0: every port latches the time this frame passed it (ETG.1000.4 9.1).
+        const std::uint64_t t0 = local_time(t.port0_ns);
+        st_le32(&mem_[addr(Reg::DcRecvTimePort0)], static_cast<std::uint32_t>(t0));
+        if (port_link(1))
+            st_le32(&mem_[addr(Reg::DcRecvTimePort1)], static_cast<std::uint32_t>(local_time(t.port1_ns)));
+        st_le64(&mem_[addr(Reg::DcRecvTimeEcatPu)], t0);
+    }
+}
+
+void Esc::update_fmmu(unsigned i) {
+    const std::uint8_t* b = &mem_[fmmu_addr(i)];
+    FmmuState& f = fmmu_[i];
+    const std::uint32_t lstart = ld_le32(b + fmmu::LogicalStart);
+    const std::uint16_t len = ld_le16(b + fmmu::Length);
+    const std::uint8_t sbit = b[fmmu::LogicalStartBit] & 7;
+    const std::uint8_t ebit = b[fmmu::LogicalStopBit] & 7;
+    f.read = b[fmmu::Type] & 0x01;
+    f.write = b[fmmu::Type] & 0x02;
+    f.log_first_bit = static_cast<std::uint64_t>(lstart) * 8 + sbit;
+    f.log_last_bit = (static_cast<std::uint64_t>(lstart) + (len ? len - 1 : 0)) * 8 + ebit;
+    f.phys_first_bit = static_cast<std::uint32_t>(ld_le16(b + fmmu::PhysicalStart)) * 8 + (b[fmmu::PhysicalStartBit] & 7);
+    f.byte_aligned = sbit == 0 && ebit == 7 && (b[fmmu::PhysicalStartBit] & 7) == 0;
+    f.active = (b[fmmu::Activate] & 1) && (f.read || f.write) && len > 0 && f.log_last_bit >= f.log_first_bit;
+}
+
+Esc::SmConfigView Esc::sm_config(unsigned i) const {
+    const std::uint8_t* b = &mem_[sm_addr(i)];
+    return {ld_le16(b + sm::PhysicalStart), ld_le16(b + sm::Length), b[sm::Control],
+            (b[sm::Activate] & sm::ActEnable) != 0, (b[sm::PdiControl] & sm::PdiDeactivate) != 0, sm_[i].valid};
+}
+
+void Esc::update_sm(unsigned i) {
+    if (i >= cfg_.sm_count) return;
+    const std::uint8_t* b = &mem_[sm_addr(i)];
+    SmState& s = sm_[i];
+    const std::uint16_t start = ld_le16(b + sm::PhysicalStart);
+    const std::uint16_t length = ld_le16(b + sm::Length);
+    const std::uint8_t control = b[sm::Control];
+    const bool mode_ok = (control & sm::CtrlModeMask) == sm::CtrlModeBuffered ||
+                         (control & sm::CtrlModeMask) == sm::CtrlModeMailbox;
+    const bool dir_ok = (control & sm::CtrlDirMask) == sm::CtrlDirRead || (control & sm::CtrlDirMask) == sm::CtrlDirWrite;
+    const bool mailbox = (control & sm::CtrlModeMask) == sm::CtrlModeMailbox;
+    const std::size_t span = mailbox ? length : 3u * length;
+    const bool valid = mode_ok && dir_ok && length > 0 && start >= kRegisterSpaceSize && start + span <= mem_.size();
+    const bool active = (b[sm::Activate] & sm::ActEnable) && !(b[sm::PdiControl] & sm::PdiDeactivate) && valid;
+    const bool changed = active != s.active || start != s.start || length != s.length || control != s.control;
+    const bool repeat = (b[sm::Activate] & sm::ActRepeatRequest) != 0;
+    static_assert(kMaxSms <= 32);
+    const bool was_repeat = (repeat_bits_ >> i) & 1u;
+    s.valid = valid;
+    if (changed) {
+        s.active = active;
+        s.start = start;
+        s.length = length;
+        s.control = control;
+        s.mailbox = mailbox;
+        s.ecat_writes = (control & sm::CtrlDirMask) == sm::CtrlDirWrite;
+        s.mbx_full = false;
+        s.ecat_reading = false;
+        s.ever_written = false;
+        s.buf_next = SmState::kNone;
+        if (s.ecat_writes) {
+            s.buf_ecat = 0;
+            s.buf_pdi = 1;
+        } else {
+            s.buf_pdi = 0;
+            s.buf_ecat = 1;
+        }
+        sm_activation_event_ = true;
+        set_al_event(al_event::SmActivation);
+    }
+    if (repeat != was_repeat) {
+        repeat_bits_ = repeat ? (repeat_bits_ | (1u << i)) : (repeat_bits_ & ~(1u << i));
+        sm_activation_event_ = true;
+        set_al_event(al_event::SmActivation);
+    }
+    if (active)
+        sm_active_mask_ |= 1u << i;
+    else
+        sm_active_mask_ &= ~(1u << i);
+    update_sm_status(i);
+}
+
+void Esc::update_sm_status(unsigned i) {
+    const SmState& s = sm_[i];
+    std::uint8_t st = 0;
+    if (s.mailbox) {
+        if (s.mbx_full) st = sm::StatusMailboxFull | sm::StatusIrqWrite;
+    } else {
+        const std::uint8_t last = s.buf_next != SmState::kNone ? s.buf_next : (s.ecat_writes ? s.buf_pdi : s.buf_ecat);
+        st = static_cast<std::uint8_t>((last & 0x3) << sm::StatusBufferShift);
+        if (s.buf_next != SmState::kNone) st |= sm::StatusIrqWrite;
+        if (s.ecat_reading) st |= sm::StatusReadBufferInUse;
+    }
+    mem_[sm_addr(i) + sm::Status] = st;
+}
+
+bool Esc::pdi_take_sm_activation_event() {
+    const bool e = sm_activation_event_;
+    sm_activation_event_ = false;
+    clear_al_event(al_event::SmActivation);
+    return e;
+}
+
+void Esc::pdi_deactivate_sm(unsigned i, bool deactivate) {
+    if (i >= cfg_.sm_count) return;
+    std::uint8_t& pc = mem_[sm_addr(i) + sm::PdiControl];
+    pc = static_cast<std::uint8_t>(deactivate ? (pc | sm::PdiDeactivate) : (pc & ~sm::PdiDeactivate));
+    update_sm(i);
+}
+
+bool Esc::sm_repeat_request(unsigned i) const { return (mem_[sm_addr(i) + sm::Activate] & sm::ActRepeatRequest) != 0; }
+
+void Esc::pdi_set_repeat_ack(unsigned i, bool ack) {
+    std::uint8_t& pc = mem_[sm_addr(i) + sm::PdiControl];
+    pc = static_cast<std::uint8_t>(ack ? (pc | sm::PdiRepeatAck) : (pc & ~sm::PdiRepeatAck));
+}
+
+bool Esc::pdi_mailbox_take(unsigned i, Bytes out) {
+    SmState& s = sm_[i];
+    if (i >= cfg_.sm_count || !s.active || !s.mailbox || !s.ecat_writes || !s.mbx_full) return false;
+    std::memcpy(out.data(), &mem_[s.start], std::min<std::size_t>(out.size(), s.length));
+    s.mbx_full = false;
+    clear_al_event(al_event::sm(i));
+    update_sm_status(i);
+    return true;
+}
+
+bool Esc::pdi_mailbox_put(unsigned i, ConstBytes data) {
+    SmState& s = sm_[i];
+    if (i >= cfg_.sm_count || !s.active || !s.mailbox || s.ecat_writes || s.mbx_full) return false;
+    const std::size_t n = std::min<std::size_t>(data.size(), s.length);
+    std::memcpy(&mem_[s.start], data.data(), n);
+    std::memset(&mem_[s.start + n], 0, s.length - n);
+    s.mbx_full = true;
+    update_sm_status(i);
+    return true;
+}
+
+bool Esc::pdi_buffer_read(unsigned i, Bytes out) {
+    SmState& s = sm_[i];
+    if (i >= cfg_.sm_count || !s.active || s.mailbox || !s.ecat_writes) return false;
+    if (s.buf_next != SmState::kNone) {
+        s.buf_pdi = s.buf_next;
+        s.buf_next = SmState::kNone;
+        clear_al_event(al_event::sm(i));
+        update_sm_status(i);
+    }
+    if (!s.ever_written) return false;
+    std::memcpy(out.data(), &mem_[s.start + static_cast<std::size_t>(s.buf_pdi) * s.length],
+                std::min<std::size_t>(out.size(), s.length));
+    return true;
+}
+
+bool Esc::pdi_buffer_write(unsigned i, ConstBytes in) {
+    SmState& s = sm_[i];
+    if (i >= cfg_.sm_count || !s.active || s.mailbox || s.ecat_writes) return false;
+    std::uint8_t* dst = &mem_[s.start + static_cast<std::size_t>(s.buf_pdi) * s.length];
+    const std::size_t n = std::min<std::size_t>(in.size(), s.length);
+    std::memcpy(dst, in.data(), n);
+    std::memset(dst + n, 0, s.length - n);
+    s.buf_next = s.buf_pdi;
+    s.buf_pdi = static_cast<std::uint8_t>(3 - s.buf_next - s.buf_ecat);
+    update_sm_status(i);
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// AL registers (PDI side)
+
+std::uint16_t Esc::pdi_read_al_control() {
+    clear_al_event(al_event::AlControl);
+    return ld_le16(&mem_[addr(Reg::AlControl)]);
+}
+
+void Esc::pdi_write_al_status(std::uint8_t status, std::uint16_t code) {
+    st_le16(&mem_[addr(Reg::AlStatus)], status);
+    st_le16(&mem_[addr(Reg::AlStatusCode)], code);
+}
+
+// ---------------------------------------------------------------------------------------------
+// SII EEPROM interface (ETG.1000.4 6.4, registers 0x0500-0x050F)
+
+void Esc::sii_command(std::uint8_t cmd_byte) {
+    std::uint16_t ctrl = ld_le16(&mem_[addr(Reg::SiiControl)]);
+    const bool write_enable = ctrl & sii_ctrl::WriteEnable;
+    // A new command (or a write of 0) clears the error bits of the previous one.
+    ctrl = static_cast<std::uint16_t>(ctrl & ~(sii_ctrl::ErrorAck | sii_ctrl::ErrorWriteEnable | sii_ctrl::CmdMask |
+                                               sii_ctrl::WriteEnable | sii_ctrl::Busy));
+    const unsigned cmd = cmd_byte & 0x07;
+    const std::uint32_t word_addr = ld_le32(&mem_[addr(Reg::SiiAddress)]);
+    const std::size_t words = eeprom_.size() / 2;
+    switch (cmd) {
+        case 0:
+            break;
+        case 1: {  // read 4 or 8 bytes
+            if (word_addr >= words) {
+                ctrl |= sii_ctrl::ErrorAck;
+                break;
+            }
+            const unsigned n = (ctrl & sii_ctrl::Read8Bytes) ? 8 : 4;
+            for (unsigned k = 0; k < n; ++k) {
+                const std::size_t b = 2 * static_cast<std::size_t>(word_addr) + k;
+                mem_[addr(Reg::SiiData) + k] = b < eeprom_.size() ? eeprom_[b] : 0xFF;
+            }
+            break;
+        }
+        case 2:  // write one word
+            if (!write_enable) {
+                ctrl |= sii_ctrl::ErrorWriteEnable;
+                break;
+            }
+            if (word_addr >= words) {
+                ctrl |= sii_ctrl::ErrorAck;
+                break;
+            }
+            eeprom_[2 * word_addr] = mem_[addr(Reg::SiiData)];
+            eeprom_[2 * word_addr + 1] = mem_[addr(Reg::SiiData) + 1];
+            break;
+        case 4:  // reload
+            st_le16(&mem_[addr(Reg::SiiControl)], ctrl);
+            reload_eeprom();
+            return;
+        default:
+            ctrl |= sii_ctrl::ErrorAck;  // invalid command
+            break;
+    }
+    st_le16(&mem_[addr(Reg::SiiControl)], ctrl);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Watchdogs
+
+void Esc::tick(std::uint64_t now_ns) {
+    last_host_ns_ = now_ns;
+    const std::uint16_t wd_time = ld_le16(&mem_[addr(Reg::WatchdogTimeProcessData)]);
+    if (wd_time == 0 || !wd_armed_) return;
+    const std::uint64_t divider = ld_le16(&mem_[addr(Reg::WatchdogDivider)]);
+    const std::uint64_t period_ns = (divider + 2) * 40 * wd_time;
+    if (now_ns > wd_last_trigger_ns_ && now_ns - wd_last_trigger_ns_ > period_ns) {
+        wd_armed_ = false;
+        mem_[addr(Reg::WatchdogStatusProcessData)] &= static_cast<std::uint8_t>(~0x01);
+        saturating_inc(mem_[addr(Reg::WatchdogCounterProcessData)]);
+        set_al_event(al_event::WatchdogProcessData);
+    }
+}
+
+}  // namespace vecat::esc

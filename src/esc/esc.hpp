@@ -1,0 +1,182 @@
+// The emulated EtherCAT slave controller: register space, process RAM, SyncManagers, FMMUs, SII EEPROM
+// interface, watchdogs and the basic DC time unit. It is the "silicon": it processes datagrams for the
+// EtherCAT side and offers a PDI (process data interface) to the slave application (see slave.hpp).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "common/bytes.hpp"
+#include "esc/datagram.hpp"
+#include "esc/registers.hpp"
+
+namespace vecat::esc {
+
+struct EscConfig {
+    std::uint8_t type = 0x11;  // same family code as an ET1100
+    std::uint8_t revision = 0x00;
+    std::uint16_t build = 0x0002;
+    std::uint8_t fmmu_count = 8;
+    std::uint8_t sm_count = 8;
+    std::uint32_t ram_bytes = 8192;      // process RAM from 0x1000, at least 8 KiB
+    std::uint8_t port_descriptor = 0x0F; // ports 0 and 1: MII; ports 2, 3 not implemented
+    std::uint16_t features = feature::DcAvailable | feature::Dc64Bit | feature::EnhancedLinkMii |
+                             feature::SeparateFcsErrors | feature::EnhancedDcSyncActivation;
+    bool sii_read_8_bytes = true;
+    double dc_drift_ppm = 0.0;           // local clock drift against the host clock
+    std::uint64_t dc_initial_ns = 0;     // local time at power-on
+};
+
+// Where the frame is on the line when it reaches this ESC (nanoseconds on the host clock).
+struct FrameTiming {
+    std::uint64_t port0_ns = 0;  // arrival at port 0 (forward direction)
+    std::uint64_t port1_ns = 0;  // arrival back at port 1 (return direction), if port 1 is open
+};
+
+struct EscCounters {
+    std::uint64_t frames = 0;
+    std::uint64_t datagrams = 0;
+    std::uint64_t dropped_frames = 0;
+};
+
+class Esc {
+public:
+    explicit Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom);
+
+    // ---- EtherCAT side
+    // Processes one datagram as this ESC; updates data, working counter and (auto-increment) ADP.
+    void process(DatagramView d, const FrameTiming& t);
+    // A frame this ESC could not parse: counted as a real ESC counts a malformed frame on port 0.
+    void count_invalid_frame(unsigned port = 0);
+    // Which ports have a link (port 0 is always up; port 1 when another ESC follows).
+    void set_port_link(unsigned port, bool up);
+    bool port_link(unsigned port) const { return (link_mask_ >> port) & 1u; }
+
+    // ---- PDI side (the slave application)
+    std::uint32_t al_events() const { return ld_le32(&mem_[addr(Reg::AlEventRequest)]); }
+    // Reads AL control like a PDI does: clears the AL control event.
+    std::uint16_t pdi_read_al_control();
+    void pdi_write_al_status(std::uint8_t status, std::uint16_t code);
+    std::uint8_t al_status() const { return mem_[addr(Reg::AlStatus)]; }
+    std::uint16_t al_status_code() const { return ld_le16(&mem_[addr(Reg::AlStatusCode)]); }
+
+    struct SmConfigView {
+        std::uint16_t start;
+        std::uint16_t length;
+        std::uint8_t control;
+        bool ecat_enabled;    // enable bit written by the master
+        bool pdi_deactivated; // deactivated by the application
+        bool valid;           // the buffers fit the process RAM
+    };
+    SmConfigView sm_config(unsigned i) const;
+    void pdi_deactivate_sm(unsigned i, bool deactivate);
+    // SM activation register changed by the master (enable or repeat request): cleared by this read.
+    bool pdi_take_sm_activation_event();
+    void pdi_clear_al_event(std::uint32_t bits) { clear_al_event(bits); }
+
+    // Mailbox SyncManagers.
+    bool sm_mailbox_full(unsigned i) const { return sm_[i].mbx_full; }
+    // Takes the content of a full ECAT-written mailbox (copies sm length bytes); false when empty.
+    bool pdi_mailbox_take(unsigned i, Bytes out);
+    // Puts a reply into an ECAT-read mailbox (fills the whole SM length); false when still full.
+    bool pdi_mailbox_put(unsigned i, ConstBytes data);
+    bool sm_repeat_request(unsigned i) const;
+    void pdi_set_repeat_ack(unsigned i, bool ack);
+
+    // Buffered (3-buffer) SyncManagers.
+    // Latest complete buffer written by the master (ECAT-write SM). Returns false if none was ever written.
+    bool pdi_buffer_read(unsigned i, Bytes out);
+    std::uint64_t sm_buffer_writes(unsigned i) const { return sm_[i].complete_writes; }
+    // Publishes a new buffer for the master to read (ECAT-read SM).
+    bool pdi_buffer_write(unsigned i, ConstBytes in);
+
+    // Time: runs the watchdogs. Call regularly with the host clock in ns.
+    void tick(std::uint64_t now_ns);
+    bool pd_watchdog_expired() const { return (mem_[addr(Reg::WatchdogStatusProcessData)] & 1) == 0; }
+
+    // DC local time (ns) at a given host time.
+    std::uint64_t local_time(std::uint64_t host_ns) const;
+
+    // ---- Raw access for tests, tools and the application's own registers
+    std::uint8_t peek(std::uint16_t a) const { return a < mem_.size() ? mem_[a] : 0; }
+    std::uint16_t peek16(std::uint16_t a) const { return static_cast<std::uint16_t>(peek(a) | (peek(a + 1) << 8)); }
+    std::uint32_t peek32(std::uint16_t a) const { return peek16(a) | (static_cast<std::uint32_t>(peek16(a + 2)) << 16); }
+    const std::vector<std::uint8_t>& eeprom() const { return eeprom_; }
+    const EscConfig& config() const { return cfg_; }
+    const EscCounters& counters() const { return counters_; }
+    std::uint16_t station_address() const { return peek16(addr(Reg::StationAddress)); }
+
+    // Reloads the ESC configuration area from the EEPROM (as at power-on and on an SII reload command).
+    void reload_eeprom();
+
+private:
+    struct SmState {
+        bool active = false;  // enabled by ECAT, not deactivated by PDI, config valid
+        bool valid = false;
+        std::uint16_t start = 0, length = 0;
+        std::uint8_t control = 0;
+        bool mailbox = false;
+        bool ecat_writes = false;
+        // mailbox
+        bool mbx_full = false;
+        // buffered: buffer numbers 0..2 at start + n * length
+        std::uint8_t buf_ecat = 0, buf_next = kNone, buf_pdi = 1;
+        bool ecat_reading = false;
+        bool ever_written = false;
+        std::uint64_t complete_writes = 0;
+        static constexpr std::uint8_t kNone = 0xFF;
+    };
+    struct FmmuState {
+        bool active = false;
+        bool read = false, write = false;
+        std::uint64_t log_first_bit = 0, log_last_bit = 0;  // inclusive
+        std::uint32_t phys_first_bit = 0;
+        bool byte_aligned = false;
+    };
+
+    bool addressed_fixed(std::uint16_t adp) const;
+    void physical(DatagramView d, std::uint16_t ado, bool do_read, bool do_write, bool or_read,
+                  const FrameTiming& t, unsigned& wkc_add);
+    void logical(DatagramView d, bool do_read, bool do_write, const FrameTiming& t, unsigned& wkc_add);
+
+    // Accesses with full ECAT semantics (masks, SyncManagers, side effects); true if any byte counted.
+    bool ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_into, const FrameTiming& t);
+    bool ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t);
+    bool sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into);
+    bool sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n);
+    int sm_covering(std::uint32_t a) const;     // -1 if none
+    std::uint32_t next_sm_start(std::uint32_t a) const;
+    std::uint8_t* ecat_write_target(std::uint32_t a);  // where an ECAT write of this byte lands
+
+    void refresh_dynamic_registers(std::uint16_t first, std::uint16_t last, const FrameTiming& t);
+    void after_register_write(std::uint16_t first, std::uint16_t last, const FrameTiming& t);
+    void update_sm(unsigned i);
+    void update_sm_status(unsigned i);
+    void update_fmmu(unsigned i);
+    void sii_command(std::uint8_t cmd_byte);
+    void set_al_event(std::uint32_t bits);
+    void clear_al_event(std::uint32_t bits);
+    void update_dl_status();
+
+    EscConfig cfg_;
+    std::vector<std::uint8_t> mem_;     // 0x0000 .. 0x1000 + ram_bytes
+    std::vector<std::uint8_t> eeprom_;
+    WriteMaskTable wmask_;
+    std::array<SmState, kMaxSms> sm_{};
+    std::array<FmmuState, kMaxFmmus> fmmu_{};
+    std::uint32_t sm_active_mask_ = 0;
+    std::uint32_t repeat_bits_ = 0;
+    std::uint8_t link_mask_ = 0x01;
+    std::uint8_t written_sii_cmd_ = 0;
+    bool sm_activation_event_ = false;
+    bool wd_armed_ = false;
+    std::uint64_t wd_last_trigger_ns_ = 0;
+    std::uint64_t last_host_ns_ = 0;
+    std::uint64_t dc_epoch_ns_ = 0;
+    bool dc_epoch_set_ = false;
+    std::array<std::uint8_t, 2048 + 16> scratch_{};
+    EscCounters counters_;
+};
+
+}  // namespace vecat::esc

@@ -1,0 +1,281 @@
+// The ESC register map (ETG.1000.4 clause 6 and the ESC datasheets), as one typed table.
+// Each register carries its address, width, name and the bits the EtherCAT side may write.
+// Repeated blocks (FMMUs, SyncManagers) are computed from their base.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string_view>
+
+namespace vecat::esc {
+
+enum class Reg : std::uint16_t {
+    Type = 0x0000,
+    Revision = 0x0001,
+    Build = 0x0002,
+    FmmuCount = 0x0004,
+    SmCount = 0x0005,
+    RamSize = 0x0006,
+    PortDescriptor = 0x0007,
+    Features = 0x0008,
+    StationAddress = 0x0010,
+    StationAlias = 0x0012,
+    WriteRegEnable = 0x0020,
+    WriteRegProtection = 0x0021,
+    EscWriteEnable = 0x0030,
+    EscWriteProtection = 0x0031,
+    EscResetEcat = 0x0040,
+    EscResetPdi = 0x0041,
+    DlControl = 0x0100,
+    PhysicalRwOffset = 0x0108,
+    DlStatus = 0x0110,
+    AlControl = 0x0120,
+    AlStatus = 0x0130,
+    AlStatusCode = 0x0134,
+    RunLedOverride = 0x0138,
+    ErrLedOverride = 0x0139,
+    PdiControl = 0x0140,
+    EscConfiguration = 0x0141,
+    PdiConfiguration = 0x0150,
+    SyncLatchConfig = 0x0151,
+    ExtendedPdiConfiguration = 0x0152,
+    EcatEventMask = 0x0200,
+    AlEventMask = 0x0204,
+    EcatEventRequest = 0x0210,
+    AlEventRequest = 0x0220,
+    RxErrorCounter = 0x0300,      // 4 ports x {invalid frame, RX error}
+    FwdRxErrorCounter = 0x0308,   // 4 ports
+    EcatProcessingUnitErrorCounter = 0x030C,
+    PdiErrorCounter = 0x030D,
+    PdiErrorCode = 0x030E,
+    LostLinkCounter = 0x0310,     // 4 ports
+    WatchdogDivider = 0x0400,
+    WatchdogTimePdi = 0x0410,
+    WatchdogTimeProcessData = 0x0420,
+    WatchdogStatusProcessData = 0x0440,
+    WatchdogCounterProcessData = 0x0442,
+    WatchdogCounterPdi = 0x0443,
+    SiiConfig = 0x0500,
+    SiiPdiAccess = 0x0501,
+    SiiControl = 0x0502,
+    SiiAddress = 0x0504,
+    SiiData = 0x0508,
+    MiiControl = 0x0510,
+    Fmmu0 = 0x0600,
+    Sm0 = 0x0800,
+    DcRecvTimePort0 = 0x0900,
+    DcRecvTimePort1 = 0x0904,
+    DcRecvTimePort2 = 0x0908,
+    DcRecvTimePort3 = 0x090C,
+    DcSystemTime = 0x0910,
+    DcRecvTimeEcatPu = 0x0918,
+    DcSystemTimeOffset = 0x0920,
+    DcSystemTimeDelay = 0x0928,
+    DcSystemTimeDifference = 0x092C,
+    DcSpeedCounterStart = 0x0930,
+    DcSpeedCounterDiff = 0x0932,
+    DcSystemTimeDiffFilterDepth = 0x0934,
+    DcSpeedCounterFilterDepth = 0x0935,
+    DcCyclicUnitControl = 0x0980,
+    DcActivation = 0x0981,
+    DcPulseLength = 0x0982,
+    DcActivationStatus = 0x0984,
+    DcSync0Status = 0x098E,
+    DcSync1Status = 0x098F,
+    DcStartTimeCyclic = 0x0990,
+    DcNextSync1Pulse = 0x0998,
+    DcSync0CycleTime = 0x09A0,
+    DcSync1CycleTime = 0x09A4,
+    DcLatch0Control = 0x09A8,
+    DcLatch1Control = 0x09A9,
+    DcLatch0Status = 0x09AE,
+    DcLatch1Status = 0x09AF,
+    DcLatch0PositiveEdge = 0x09B0,
+    DcLatch0NegativeEdge = 0x09B8,
+    DcLatch1PositiveEdge = 0x09C0,
+    DcLatch1NegativeEdge = 0x09C8,
+    ProcessRam = 0x1000,
+};
+
+constexpr std::uint16_t addr(Reg r) noexcept { return static_cast<std::uint16_t>(r); }
+
+inline constexpr unsigned kFmmuSize = 16;
+inline constexpr unsigned kSmSize = 8;
+inline constexpr unsigned kMaxFmmus = 16;
+inline constexpr unsigned kMaxSms = 16;
+inline constexpr std::uint16_t kRegisterSpaceSize = 0x1000;
+
+constexpr std::uint16_t fmmu_addr(unsigned i) noexcept { return static_cast<std::uint16_t>(0x0600 + kFmmuSize * i); }
+constexpr std::uint16_t sm_addr(unsigned i) noexcept { return static_cast<std::uint16_t>(0x0800 + kSmSize * i); }
+
+// Offsets inside one FMMU block (ETG.1000.4 Table 56).
+namespace fmmu {
+inline constexpr unsigned LogicalStart = 0;   // u32
+inline constexpr unsigned Length = 4;         // u16, bytes
+inline constexpr unsigned LogicalStartBit = 6;
+inline constexpr unsigned LogicalStopBit = 7;
+inline constexpr unsigned PhysicalStart = 8;  // u16
+inline constexpr unsigned PhysicalStartBit = 10;
+inline constexpr unsigned Type = 11;          // bit 0 read, bit 1 write
+inline constexpr unsigned Activate = 12;      // bit 0
+}  // namespace fmmu
+
+// Offsets inside one SyncManager block (ETG.1000.4 Table 58) and their bits.
+namespace sm {
+inline constexpr unsigned PhysicalStart = 0;  // u16
+inline constexpr unsigned Length = 2;         // u16
+inline constexpr unsigned Control = 4;
+inline constexpr unsigned Status = 5;
+inline constexpr unsigned Activate = 6;
+inline constexpr unsigned PdiControl = 7;
+
+inline constexpr std::uint8_t CtrlModeMask = 0x03;  // 00 buffered (3 buffers), 10 mailbox
+inline constexpr std::uint8_t CtrlModeBuffered = 0x00;
+inline constexpr std::uint8_t CtrlModeMailbox = 0x02;
+inline constexpr std::uint8_t CtrlDirMask = 0x0C;   // 00 ECAT reads, 01 ECAT writes
+inline constexpr std::uint8_t CtrlDirRead = 0x00;
+inline constexpr std::uint8_t CtrlDirWrite = 0x04;
+inline constexpr std::uint8_t CtrlIrqEcat = 0x10;
+inline constexpr std::uint8_t CtrlIrqPdi = 0x20;
+inline constexpr std::uint8_t CtrlWatchdog = 0x40;
+
+inline constexpr std::uint8_t StatusIrqWrite = 0x01;
+inline constexpr std::uint8_t StatusIrqRead = 0x02;
+inline constexpr std::uint8_t StatusMailboxFull = 0x08;
+inline constexpr std::uint8_t StatusBufferShift = 4;  // bits 4-5: last written buffer
+inline constexpr std::uint8_t StatusReadBufferInUse = 0x40;
+inline constexpr std::uint8_t StatusWriteBufferInUse = 0x80;
+
+inline constexpr std::uint8_t ActEnable = 0x01;
+inline constexpr std::uint8_t ActRepeatRequest = 0x02;
+inline constexpr std::uint8_t PdiDeactivate = 0x01;
+inline constexpr std::uint8_t PdiRepeatAck = 0x02;
+}  // namespace sm
+
+// DL status bits (0x0110).
+namespace dl_status {
+inline constexpr std::uint16_t PdiOperational = 0x0001;
+inline constexpr std::uint16_t PdiWatchdogOk = 0x0002;
+inline constexpr std::uint16_t EnhancedLinkDetection = 0x0004;
+constexpr std::uint16_t link(unsigned port) { return static_cast<std::uint16_t>(0x0010u << port); }
+constexpr std::uint16_t loop_closed(unsigned port) { return static_cast<std::uint16_t>(0x0100u << (2 * port)); }
+constexpr std::uint16_t communication(unsigned port) {
+    return static_cast<std::uint16_t>(0x0200u << (2 * port));
+}
+}  // namespace dl_status
+
+// SII control/status bits (0x0502).
+namespace sii_ctrl {
+inline constexpr std::uint16_t WriteEnable = 0x0001;
+inline constexpr std::uint16_t Emulation = 0x0020;
+inline constexpr std::uint16_t Read8Bytes = 0x0040;
+inline constexpr std::uint16_t TwoAddressBytes = 0x0080;
+inline constexpr std::uint16_t CmdMask = 0x0700;
+inline constexpr std::uint16_t CmdRead = 0x0100;
+inline constexpr std::uint16_t CmdWrite = 0x0200;
+inline constexpr std::uint16_t CmdReload = 0x0400;
+inline constexpr std::uint16_t ChecksumError = 0x0800;
+inline constexpr std::uint16_t NotLoaded = 0x1000;
+inline constexpr std::uint16_t ErrorAck = 0x2000;  // missing acknowledge or invalid command
+inline constexpr std::uint16_t ErrorWriteEnable = 0x4000;
+inline constexpr std::uint16_t Busy = 0x8000;
+}  // namespace sii_ctrl
+
+// AL event request bits (0x0220), the ESC's interrupt lines towards the slave application.
+namespace al_event {
+inline constexpr std::uint32_t AlControl = 0x0001;
+inline constexpr std::uint32_t DcLatch = 0x0002;
+inline constexpr std::uint32_t Sync0 = 0x0004;
+inline constexpr std::uint32_t Sync1 = 0x0008;
+inline constexpr std::uint32_t SmActivation = 0x0010;
+inline constexpr std::uint32_t EepromEmulation = 0x0020;
+inline constexpr std::uint32_t WatchdogProcessData = 0x0040;
+constexpr std::uint32_t sm(unsigned i) { return 0x0100u << i; }
+}  // namespace al_event
+
+// Feature bits (0x0008).
+namespace feature {
+inline constexpr std::uint16_t FmmuBytewise = 0x0001;
+inline constexpr std::uint16_t DcAvailable = 0x0004;
+inline constexpr std::uint16_t Dc64Bit = 0x0008;
+inline constexpr std::uint16_t EnhancedLinkMii = 0x0040;
+inline constexpr std::uint16_t SeparateFcsErrors = 0x0080;
+inline constexpr std::uint16_t EnhancedDcSyncActivation = 0x0100;
+}  // namespace feature
+
+// One row of the register table: what the EtherCAT side may write.
+struct RegisterInfo {
+    std::uint16_t address;
+    std::uint8_t width;  // bytes
+    std::string_view name;
+    std::array<std::uint8_t, 8> ecat_write_mask;  // per byte, up to 8 bytes
+};
+
+// Registers the EtherCAT master can write, with their per-byte write masks. Every register not listed
+// (and every bit not set in a mask) is read-only from the EtherCAT side: a write to it is accepted
+// (the working counter counts) and has no effect, as on a real ESC.
+inline constexpr RegisterInfo kWritableRegisters[] = {
+    {0x0010, 2, "Configured Station Address", {0xFF, 0xFF}},
+    {0x0020, 1, "Write Register Enable", {0x01}},
+    {0x0021, 1, "Write Register Protection", {0x01}},
+    {0x0030, 1, "ESC Write Enable", {0x01}},
+    {0x0031, 1, "ESC Write Protection", {0x01}},
+    {0x0040, 1, "ESC Reset ECAT", {0xFF}},
+    {0x0100, 4, "ESC DL Control", {0x03, 0xFF, 0x07, 0x01}},
+    {0x0108, 2, "Physical Read/Write Offset", {0xFF, 0xFF}},
+    {0x0120, 2, "AL Control", {0x3F, 0x00}},
+    {0x0138, 1, "RUN LED Override", {0x1F}},
+    {0x0139, 1, "ERR LED Override", {0x1F}},
+    {0x0200, 2, "ECAT Event Mask", {0xFF, 0xFF}},
+    {0x0400, 2, "Watchdog Divider", {0xFF, 0xFF}},
+    {0x0410, 2, "Watchdog Time PDI", {0xFF, 0xFF}},
+    {0x0420, 2, "Watchdog Time Process Data", {0xFF, 0xFF}},
+    {0x0500, 1, "SII EEPROM Configuration", {0x03}},
+    {0x0502, 2, "SII EEPROM Control/Status", {0x01, 0x00}},  // command bits handled as a side effect
+    {0x0504, 4, "SII EEPROM Address", {0xFF, 0xFF, 0xFF, 0xFF}},
+    {0x0508, 8, "SII EEPROM Data", {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF}},
+    {0x0920, 8, "System Time Offset", {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF}},
+    {0x0928, 4, "System Time Delay", {0xFF, 0xFF, 0xFF, 0xFF}},
+    {0x0930, 2, "Speed Counter Start", {0xFF, 0x7F}},
+    {0x0934, 1, "System Time Difference Filter Depth", {0x0F}},
+    {0x0935, 1, "Speed Counter Filter Depth", {0x0F}},
+    {0x0980, 1, "Cyclic Unit Control", {0x31}},
+    {0x0981, 1, "Activation Register", {0xFF}},
+    {0x0990, 8, "Start Time Cyclic Operation", {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF}},
+    {0x09A0, 4, "SYNC0 Cycle Time", {0xFF, 0xFF, 0xFF, 0xFF}},
+    {0x09A4, 4, "SYNC1 Cycle Time", {0xFF, 0xFF, 0xFF, 0xFF}},
+    {0x09A8, 1, "Latch0 Control", {0x03}},
+    {0x09A9, 1, "Latch1 Control", {0x03}},
+};
+
+// Per-byte ECAT write masks for the whole register space, computed once from the table above plus the
+// repeated FMMU and SyncManager blocks.
+struct WriteMaskTable {
+    std::array<std::uint8_t, kRegisterSpaceSize> mask{};
+};
+
+constexpr WriteMaskTable make_write_mask_table(unsigned fmmu_count, unsigned sm_count) {
+    WriteMaskTable t{};
+    for (const auto& r : kWritableRegisters)
+        for (unsigned i = 0; i < r.width; ++i) t.mask[r.address + i] = r.ecat_write_mask[i];
+    for (unsigned f = 0; f < fmmu_count && f < kMaxFmmus; ++f) {
+        const unsigned b = fmmu_addr(f);
+        for (unsigned i = 0; i < 6; ++i) t.mask[b + i] = 0xFF;
+        t.mask[b + fmmu::LogicalStartBit] = 0x07;
+        t.mask[b + fmmu::LogicalStopBit] = 0x07;
+        t.mask[b + fmmu::PhysicalStart] = 0xFF;
+        t.mask[b + fmmu::PhysicalStart + 1] = 0xFF;
+        t.mask[b + fmmu::PhysicalStartBit] = 0x07;
+        t.mask[b + fmmu::Type] = 0x03;
+        t.mask[b + fmmu::Activate] = 0x01;
+    }
+    for (unsigned s = 0; s < sm_count && s < kMaxSms; ++s) {
+        const unsigned b = sm_addr(s);
+        for (unsigned i = 0; i < 4; ++i) t.mask[b + i] = 0xFF;
+        t.mask[b + sm::Control] = 0x7F;
+        t.mask[b + sm::Activate] = 0xC3;
+    }
+    return t;
+}
+
+}  // namespace vecat::esc

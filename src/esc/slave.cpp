@@ -1,0 +1,365 @@
+#include "esc/slave.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+namespace vecat::esc {
+namespace {
+
+constexpr unsigned rank(AlState s) {
+    switch (s) {
+        case AlState::Init: return 0;
+        case AlState::Boot: return 0;
+        case AlState::PreOp: return 1;
+        case AlState::SafeOp: return 2;
+        case AlState::Op: return 3;
+    }
+    return 0;
+}
+
+constexpr unsigned row(AlState s) {
+    switch (s) {
+        case AlState::Init: return 0;
+        case AlState::PreOp: return 1;
+        case AlState::Boot: return 2;
+        case AlState::SafeOp: return 3;
+        case AlState::Op: return 4;
+    }
+    return 0;
+}
+
+// ETG.1000.6 Table 9 (state transitions). Rows: from; columns: to (INIT, PREOP, BOOT, SAFEOP, OP).
+using A = AlAction;
+constexpr AlAction kAlTable[5][5] = {
+    /* INIT   */ {A::Stay, A::CheckMailbox, A::CheckBoot, A::Refuse, A::Refuse},
+    /* PREOP  */ {A::Down, A::Stay, A::Refuse, A::CheckProcessData, A::Refuse},
+    /* BOOT   */ {A::Down, A::Refuse, A::Stay, A::Refuse, A::Refuse},
+    /* SAFEOP */ {A::Down, A::Down, A::Refuse, A::Stay, A::CheckOutputs},
+    /* OP     */ {A::Down, A::Down, A::Refuse, A::Down, A::Stay},
+};
+
+}  // namespace
+
+AlAction al_transition(AlState from, AlState to) noexcept { return kAlTable[row(from)][row(to)]; }
+
+void ProcessImageApplication::exchange(std::uint64_t, ConstBytes out, bool apply, Bytes in) {
+    if (apply && !out.empty()) std::memcpy(outputs_.data(), out.data(), std::min(out.size(), outputs_.size()));
+    std::memcpy(in.data(), inputs_.data(), std::min(in.size(), inputs_.size()));
+    ++exchanges_;
+}
+
+void ProcessImageApplication::outputs_safe_state() { std::fill(outputs_.begin(), outputs_.end(), 0); }
+
+// Reply sink writing into the slave's bounded reply queue.
+class SlaveReplySink final : public MailboxReplySink {
+public:
+    explicit SlaveReplySink(Slave& s) : s_(s) {}
+    Bytes reply_buffer() override {
+        const std::size_t mbx_len = s_.sm_mbx_in_ >= 0 ? s_.esc_.sm_config(static_cast<unsigned>(s_.sm_mbx_in_)).length : 0;
+        const std::size_t payload = mbx_len > kMailboxHeaderSize ? mbx_len - kMailboxHeaderSize : 0;
+        auto& slot = s_.q_count_ < Slave::kReplySlots ? s_.queue_[(s_.q_head_ + s_.q_count_) % Slave::kReplySlots]
+                                                      : overflow_;
+        return Bytes(slot.data() + kMailboxHeaderSize, std::min(payload, slot.size() - kMailboxHeaderSize));
+    }
+    void commit(MailboxType type, std::size_t payload_len) override {
+        if (s_.q_count_ >= Slave::kReplySlots) {
+            ++s_.counters_.mailbox_replies_dropped;
+            return;
+        }
+        const std::size_t slot_i = (s_.q_head_ + s_.q_count_) % Slave::kReplySlots;
+        auto& slot = s_.queue_[slot_i];
+        s_.reply_counter_ = static_cast<std::uint8_t>(s_.reply_counter_ % 7 + 1);
+        MailboxHeader h;
+        h.length = static_cast<std::uint16_t>(payload_len);
+        h.type = static_cast<std::uint8_t>(type);
+        h.counter = s_.reply_counter_;
+        write_mailbox_header(Bytes(slot.data(), kMailboxHeaderSize), h);
+        s_.queue_len_[slot_i] = kMailboxHeaderSize + payload_len;
+        ++s_.q_count_;
+    }
+
+private:
+    Slave& s_;
+    std::vector<std::uint8_t> overflow_ = std::vector<std::uint8_t>(kMaxMailboxSize);
+};
+
+Slave::Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::unique_ptr<Application> app)
+    : desc_(desc), esc_(esc_cfg, build_sii_image(desc)), app_(std::move(app)) {
+    auto idx = [&](device::SmType t) {
+        auto i = desc_.sm_index_of_type(t);
+        return i ? static_cast<int>(*i) : -1;
+    };
+    sm_mbx_out_ = idx(device::SmType::MailboxOut);
+    sm_mbx_in_ = idx(device::SmType::MailboxIn);
+    sm_out_ = idx(device::SmType::Outputs);
+    sm_in_ = idx(device::SmType::Inputs);
+    rx_.resize(kMaxMailboxSize);
+    last_reply_.resize(kMaxMailboxSize);
+    for (auto& q : queue_) q.resize(kMaxMailboxSize);
+    outputs_.resize(2048);
+    inputs_.resize(2048);
+    sink_ = std::make_unique<SlaveReplySink>(*this);
+    set_sm_group(true, false);
+    set_sm_group(false, false);
+    publish_status();
+}
+
+Slave::~Slave() = default;
+
+void Slave::set_sm_group(bool mailbox, bool active) {
+    const int a = mailbox ? sm_mbx_out_ : sm_out_;
+    const int b = mailbox ? sm_mbx_in_ : sm_in_;
+    if (a >= 0) esc_.pdi_deactivate_sm(static_cast<unsigned>(a), !active);
+    if (b >= 0) esc_.pdi_deactivate_sm(static_cast<unsigned>(b), !active);
+}
+
+void Slave::publish_status() {
+    std::uint8_t st = static_cast<std::uint8_t>(state_);
+    std::uint16_t code = static_cast<std::uint16_t>(code_);
+    if (error_) {
+        st |= kAlErrorFlag;
+    } else if (ident_) {
+        st |= kAlIdentFlag;
+        code = esc_.peek16(addr(Reg::StationAlias));
+    }
+    esc_.pdi_write_al_status(st, error_ ? code : (ident_ ? code : 0));
+}
+
+void Slave::enter(AlState to, std::uint64_t now_ns) {
+    const AlState from = state_;
+    if (from == to) return;
+    if (to == AlState::Init || to == AlState::Boot) {
+        set_sm_group(false, false);
+        set_sm_group(true, false);
+        if (auto* coe = app_->mailbox_protocol(MailboxType::CoE)) coe->reset();
+        q_head_ = q_count_ = 0;
+        last_counter_ = 0;
+        last_reply_len_ = 0;
+    } else if (to == AlState::PreOp) {
+        if (rank(from) > rank(AlState::PreOp)) set_sm_group(false, false);
+        if (from == AlState::Init) set_sm_group(true, true);
+    } else if (to == AlState::SafeOp && from == AlState::PreOp) {
+        set_sm_group(false, true);
+        outputs_at_safeop_ = sm_out_ >= 0 ? esc_.sm_buffer_writes(static_cast<unsigned>(sm_out_)) : 0;
+    }
+    if (from == AlState::Op) app_->outputs_safe_state();
+    op_pending_ = false;
+    state_ = to;
+    app_->on_state_change(from, to);
+    (void)now_ns;
+}
+
+void Slave::set_error(AlStatusCode code, AlState stay, std::uint64_t now_ns) {
+    error_ = true;
+    code_ = code;
+    if (stay != state_) enter(stay, now_ns);
+}
+
+void Slave::raise_error(AlStatusCode code, AlState fallback) {
+    const AlState target = rank(fallback) < rank(state_) ? fallback : state_;
+    set_error(code, target, 0);
+    publish_status();
+}
+
+AlStatusCode Slave::check_mailbox_config() const {
+    const auto* out = desc_.sm_of_type(device::SmType::MailboxOut);
+    const auto* in = desc_.sm_of_type(device::SmType::MailboxIn);
+    if (!out || !in) return AlStatusCode::NoError;  // a device without mailbox
+    const auto c0 = esc_.sm_config(static_cast<unsigned>(sm_mbx_out_));
+    const auto c1 = esc_.sm_config(static_cast<unsigned>(sm_mbx_in_));
+    const bool ok0 = c0.ecat_enabled && c0.start == out->start && c0.length == out->length &&
+                     (c0.control & 0x0F) == (sm::CtrlModeMailbox | sm::CtrlDirWrite);
+    const bool ok1 = c1.ecat_enabled && c1.start == in->start && c1.length == in->length &&
+                     (c1.control & 0x0F) == (sm::CtrlModeMailbox | sm::CtrlDirRead);
+    return ok0 && ok1 ? AlStatusCode::NoError : AlStatusCode::InvalidMailboxConfigPreOp;
+}
+
+AlStatusCode Slave::check_process_data_config() const {
+    auto check = [&](int smi, unsigned bytes, std::uint8_t ctrl) {
+        if (smi < 0) return bytes == 0;
+        const auto c = esc_.sm_config(static_cast<unsigned>(smi));
+        if (bytes == 0) return !c.ecat_enabled || c.length == 0;
+        return c.ecat_enabled && c.valid && c.length == bytes && (c.control & 0x0F) == ctrl;
+    };
+    if (!check(sm_out_, app_->output_bytes(), sm::CtrlModeBuffered | sm::CtrlDirWrite))
+        return AlStatusCode::InvalidOutputConfig;
+    if (!check(sm_in_, app_->input_bytes(), sm::CtrlModeBuffered | sm::CtrlDirRead))
+        return AlStatusCode::InvalidInputConfig;
+    return AlStatusCode::NoError;
+}
+
+void Slave::handle_al_control(std::uint64_t now_ns) {
+    const std::uint16_t ctrl = esc_.pdi_read_al_control();
+    const std::uint8_t req = ctrl & kAlStateMask;
+    const bool ack = ctrl & kAlErrorFlag;
+    ident_ = (ctrl & kAlIdentFlag) != 0;
+    if (error_ && !ack) {
+        // With the error indication set only INIT is obeyed without acknowledge (ETG.1000.6 6.4.1.4).
+        if (req == static_cast<std::uint8_t>(AlState::Init)) {
+            error_ = false;
+            code_ = AlStatusCode::NoError;
+            enter(AlState::Init, now_ns);
+        }
+        publish_status();
+        return;
+    }
+    if (ack) {
+        error_ = false;
+        code_ = AlStatusCode::NoError;
+    }
+    op_pending_ = false;
+    const AlState fallback = state_ == AlState::Op ? AlState::SafeOp : state_;
+    if (!is_valid_state(req)) {
+        set_error(AlStatusCode::UnknownRequestedState, fallback, now_ns);
+        publish_status();
+        return;
+    }
+    const AlState to = static_cast<AlState>(req);
+    AlStatusCode code = AlStatusCode::NoError;
+    switch (al_transition(state_, to)) {
+        case AlAction::Stay:
+            break;
+        case AlAction::Down:
+            enter(to, now_ns);
+            break;
+        case AlAction::CheckMailbox:
+            code = check_mailbox_config();
+            if (code == AlStatusCode::NoError) code = app_->check_transition(state_, to);
+            if (code == AlStatusCode::NoError)
+                enter(to, now_ns);
+            else
+                set_error(code, AlState::Init, now_ns);
+            break;
+        case AlAction::CheckBoot:
+            set_error(desc_.bootstrap_supported ? AlStatusCode::InvalidMailboxConfigBoot
+                                                : AlStatusCode::BootstrapNotSupported,
+                      AlState::Init, now_ns);
+            break;
+        case AlAction::CheckProcessData:
+            code = check_process_data_config();
+            if (code == AlStatusCode::NoError) code = app_->check_transition(state_, to);
+            if (code == AlStatusCode::NoError)
+                enter(to, now_ns);
+            else
+                set_error(code, AlState::PreOp, now_ns);
+            break;
+        case AlAction::CheckOutputs:
+            code = app_->check_transition(state_, to);
+            if (code != AlStatusCode::NoError) {
+                set_error(code, AlState::SafeOp, now_ns);
+            } else if (outputs_valid()) {
+                enter(AlState::Op, now_ns);
+            } else {
+                op_pending_ = true;  // stays SAFEOP until the first outputs arrive
+                op_pending_since_ = now_ns;
+            }
+            break;
+        case AlAction::Refuse:
+            set_error(AlStatusCode::InvalidRequestedStateChange, fallback, now_ns);
+            break;
+    }
+    publish_status();
+}
+
+bool Slave::outputs_valid() const {
+    if (app_->output_bytes() == 0 || sm_out_ < 0) return true;
+    return esc_.sm_buffer_writes(static_cast<unsigned>(sm_out_)) > outputs_at_safeop_;
+}
+
+void Slave::service_mailbox() {
+    if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0) return;
+    const auto out_idx = static_cast<unsigned>(sm_mbx_out_);
+    const auto in_idx = static_cast<unsigned>(sm_mbx_in_);
+    // Repeat request (ETG.1000.4 5.6.3): re-send the last reply, then toggle the acknowledge.
+    if (esc_.pdi_take_sm_activation_event()) {
+        const bool req = esc_.sm_repeat_request(in_idx);
+        const bool ack = (esc_.peek(static_cast<std::uint16_t>(sm_addr(in_idx) + sm::PdiControl)) & sm::PdiRepeatAck) != 0;
+        if (req != ack) {
+            ++counters_.mailbox_repeats;
+            if (last_reply_len_ && !esc_.sm_mailbox_full(in_idx))
+                esc_.pdi_mailbox_put(in_idx, ConstBytes(last_reply_.data(), last_reply_len_));
+            esc_.pdi_set_repeat_ack(in_idx, req);
+        }
+    }
+    const std::size_t rx_len = esc_.sm_config(out_idx).length;
+    if (esc_.sm_mailbox_full(out_idx) && esc_.pdi_mailbox_take(out_idx, Bytes(rx_.data(), rx_.size()))) {
+        ++counters_.mailbox_requests;
+        const auto h = parse_mailbox_header(ConstBytes(rx_.data(), std::min(rx_len, rx_.size())));
+        auto& sink = *sink_;
+        auto error_reply = [&](MailboxError e) {
+            ++counters_.mailbox_errors;
+            const std::size_t n = make_mailbox_error(sink.reply_buffer(), e);
+            sink.commit(MailboxType::Error, n);
+        };
+        if (!h || rx_len < kMailboxHeaderSize) {
+            error_reply(MailboxError::Syntax);
+        } else if (h->length > rx_len - kMailboxHeaderSize) {
+            error_reply(MailboxError::InvalidSize);
+        } else if (h->counter != 0 && h->counter == last_counter_) {
+            ++counters_.mailbox_duplicates;  // the same request again: executed once only
+        } else {
+            if (h->counter != 0) last_counter_ = h->counter;
+            MailboxProtocol* proto = app_->mailbox_protocol(static_cast<MailboxType>(h->type));
+            if (h->type == static_cast<std::uint8_t>(MailboxType::Error) || !proto) {
+                error_reply(MailboxError::UnsupportedProtocol);
+            } else {
+                proto->handle(*h, ConstBytes(rx_.data() + kMailboxHeaderSize, h->length), sink);
+            }
+        }
+    }
+    if (auto* coe = app_->mailbox_protocol(MailboxType::CoE)) coe->poll(*sink_);
+    send_pending_replies();
+}
+
+void Slave::send_pending_replies() {
+    const auto in_idx = static_cast<unsigned>(sm_mbx_in_);
+    while (q_count_ > 0 && !esc_.sm_mailbox_full(in_idx)) {
+        const auto& slot = queue_[q_head_];
+        const std::size_t len = queue_len_[q_head_];
+        if (!esc_.pdi_mailbox_put(in_idx, ConstBytes(slot.data(), len))) break;
+        std::memcpy(last_reply_.data(), slot.data(), len);
+        last_reply_len_ = len;
+        q_head_ = (q_head_ + 1) % kReplySlots;
+        --q_count_;
+    }
+}
+
+void Slave::exchange_process_data(std::uint64_t now_ns) {
+    const unsigned out_len = std::min<unsigned>(app_->output_bytes(), static_cast<unsigned>(outputs_.size()));
+    const unsigned in_len = std::min<unsigned>(app_->input_bytes(), static_cast<unsigned>(inputs_.size()));
+    bool have_out = false;
+    if (out_len > 0 && sm_out_ >= 0)
+        have_out = esc_.pdi_buffer_read(static_cast<unsigned>(sm_out_), Bytes(outputs_.data(), out_len));
+    app_->exchange(now_ns, have_out ? ConstBytes(outputs_.data(), out_len) : ConstBytes{},
+                   state_ == AlState::Op && have_out, Bytes(inputs_.data(), in_len));
+    if (in_len > 0 && sm_in_ >= 0) esc_.pdi_buffer_write(static_cast<unsigned>(sm_in_), ConstBytes(inputs_.data(), in_len));
+}
+
+void Slave::run(std::uint64_t now_ns) {
+    esc_.tick(now_ns);
+    const std::uint32_t ev = esc_.al_events();
+    if (ev & al_event::AlControl) handle_al_control(now_ns);
+    if (ev & al_event::WatchdogProcessData) {
+        esc_.pdi_clear_al_event(al_event::WatchdogProcessData);
+        ++counters_.watchdog_expiries;
+        if (state_ == AlState::Op) {
+            set_error(AlStatusCode::SyncManagerWatchdog, AlState::SafeOp, now_ns);
+            publish_status();
+        }
+    }
+    if (op_pending_) {
+        if (outputs_valid()) {
+            enter(AlState::Op, now_ns);
+            publish_status();
+        } else if (now_ns - op_pending_since_ > kOutputsValidTimeoutNs) {
+            op_pending_ = false;
+            set_error(AlStatusCode::NoValidOutputs, AlState::SafeOp, now_ns);
+            publish_status();
+        }
+    }
+    if (state_ != AlState::Init && state_ != AlState::Boot) service_mailbox();
+    if (rank(state_) >= rank(AlState::SafeOp)) exchange_process_data(now_ns);
+    app_->tick(now_ns);
+}
+
+}  // namespace vecat::esc

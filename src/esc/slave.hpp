@@ -1,0 +1,141 @@
+// One EtherCAT slave: the ESC plus the firmware that a real device runs on its PDI side: the AL state
+// machine (a table, ETG.1000.6 6.4), the mailbox layer and the process data exchange with the
+// application (the drive).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "device/device_description.hpp"
+#include "esc/al_status.hpp"
+#include "esc/esc.hpp"
+#include "esc/mailbox.hpp"
+#include "esc/sii_image.hpp"
+
+namespace vecat::esc {
+
+// What the application behind the PDI provides. The slave calls it from the frame-processing thread.
+class Application {
+public:
+    virtual ~Application() = default;
+    // Current process data sizes in bytes (they follow the PDO assignment).
+    virtual unsigned output_bytes() const = 0;
+    virtual unsigned input_bytes() const = 0;
+    // Application-specific checks of a transition (PDO mapping, sync configuration...). NoError allows it.
+    virtual AlStatusCode check_transition(AlState /*from*/, AlState /*to*/) { return AlStatusCode::NoError; }
+    virtual void on_state_change(AlState /*from*/, AlState /*to*/) {}
+    // One process data exchange. outputs is empty when no valid outputs exist (below OP they are not applied).
+    virtual void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply_outputs, Bytes inputs) = 0;
+    // The outputs must go to their safe state (watchdog expired, left OP).
+    virtual void outputs_safe_state() {}
+    virtual MailboxProtocol* mailbox_protocol(MailboxType) { return nullptr; }
+    // Called regularly, also without frames (time-driven behaviour).
+    virtual void tick(std::uint64_t /*now_ns*/) {}
+};
+
+// A process image without behaviour: keeps the last outputs and serves inputs set from outside.
+class ProcessImageApplication : public Application {
+public:
+    ProcessImageApplication(unsigned out_bytes, unsigned in_bytes) : outputs_(out_bytes), inputs_(in_bytes) {}
+    unsigned output_bytes() const override { return static_cast<unsigned>(outputs_.size()); }
+    unsigned input_bytes() const override { return static_cast<unsigned>(inputs_.size()); }
+    void exchange(std::uint64_t, ConstBytes out, bool apply, Bytes in) override;
+    void outputs_safe_state() override;
+    std::vector<std::uint8_t>& inputs() { return inputs_; }
+    const std::vector<std::uint8_t>& outputs() const { return outputs_; }
+    std::uint64_t exchanges() const { return exchanges_; }
+
+private:
+    std::vector<std::uint8_t> outputs_;
+    std::vector<std::uint8_t> inputs_;
+    std::uint64_t exchanges_ = 0;
+};
+
+// The AL state machine as a table: what a request from one state to another does.
+enum class AlAction : std::uint8_t {
+    Stay,            // requested state == current state
+    Down,            // allowed without checks
+    CheckMailbox,    // INIT -> PREOP
+    CheckBoot,       // INIT -> BOOT
+    CheckProcessData,// PREOP -> SAFEOP
+    CheckOutputs,    // SAFEOP -> OP: waits for valid outputs
+    Refuse,          // 0x0011 invalid requested state change
+};
+AlAction al_transition(AlState from, AlState to) noexcept;
+
+struct SlaveCounters {
+    std::uint64_t mailbox_requests = 0;
+    std::uint64_t mailbox_errors = 0;
+    std::uint64_t mailbox_repeats = 0;
+    std::uint64_t mailbox_duplicates = 0;
+    std::uint64_t mailbox_replies_dropped = 0;
+    std::uint64_t watchdog_expiries = 0;
+};
+
+class Slave {
+public:
+    Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::unique_ptr<Application> app);
+    ~Slave();
+    Slave(const Slave&) = delete;
+    Slave& operator=(const Slave&) = delete;
+
+    Esc& esc() { return esc_; }
+    const Esc& esc() const { return esc_; }
+    Application& app() { return *app_; }
+    const device::DeviceDescription& description() const { return desc_; }
+
+    // Firmware step after a frame went through the ESC, and on timer ticks.
+    void run(std::uint64_t now_ns);
+
+    AlState state() const { return state_; }
+    bool error() const { return error_; }
+    AlStatusCode status_code() const { return code_; }
+    // Forces an error as the application would (fault injection, sync loss...): falls back to target.
+    void raise_error(AlStatusCode code, AlState fallback);
+    const SlaveCounters& counters() const { return counters_; }
+
+    static constexpr std::uint64_t kOutputsValidTimeoutNs = 1'000'000'000;  // SAFEOP -> OP wait
+
+private:
+    void handle_al_control(std::uint64_t now_ns);
+    void enter(AlState to, std::uint64_t now_ns);
+    void set_error(AlStatusCode code, AlState stay, std::uint64_t now_ns);
+    bool outputs_valid() const;
+    void publish_status();
+    AlStatusCode check_mailbox_config() const;
+    AlStatusCode check_process_data_config() const;
+    void service_mailbox();
+    void send_pending_replies();
+    void exchange_process_data(std::uint64_t now_ns);
+    void set_sm_group(bool mailbox, bool active);
+
+    device::DeviceDescription desc_;
+    Esc esc_;
+    std::unique_ptr<Application> app_;
+    AlState state_ = AlState::Init;
+    bool error_ = false;
+    AlStatusCode code_ = AlStatusCode::NoError;
+    bool ident_ = false;
+    bool op_pending_ = false;
+    std::uint64_t op_pending_since_ = 0;
+    std::uint64_t outputs_at_safeop_ = 0;
+    int sm_mbx_out_ = -1, sm_mbx_in_ = -1, sm_out_ = -1, sm_in_ = -1;
+    std::uint8_t last_counter_ = 0;
+    std::uint8_t reply_counter_ = 0;
+    std::unique_ptr<MailboxReplySink> sink_;
+    // Mailbox buffers, allocated once.
+    std::vector<std::uint8_t> rx_;
+    std::vector<std::uint8_t> last_reply_;
+    std::size_t last_reply_len_ = 0;
+    static constexpr std::size_t kReplySlots = 8;
+    std::array<std::vector<std::uint8_t>, kReplySlots> queue_;
+    std::array<std::size_t, kReplySlots> queue_len_{};
+    std::size_t q_head_ = 0, q_count_ = 0;
+    std::vector<std::uint8_t> outputs_, inputs_;
+    SlaveCounters counters_;
+    friend class SlaveReplySink;
+};
+
+}  // namespace vecat::esc
