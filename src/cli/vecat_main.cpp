@@ -1,0 +1,185 @@
+// vecat: the command line program.
+#include <fmt/core.h>
+#include <signal.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "device/device_description.hpp"
+#include "esc/segment.hpp"
+#include "esc/sii_image.hpp"
+#include "master/master.hpp"
+#include "net/netns.hpp"
+#include "net/raw_socket.hpp"
+#include "net/server.hpp"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+void on_signal(int) { g_stop.store(true); }
+
+void install_signals() {
+    struct sigaction sa {};
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+}
+
+int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy, bool allow_busy_if) {
+    std::string why;
+    if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
+        fmt::print(stderr,
+                   "vecat: refusing to serve on {}: {}.\n"
+                   "       EtherCAT takes over the whole link; use a veth pair or a dedicated NIC, or pass "
+                   "--allow-used-interface.\n",
+                   iface, why);
+        return 2;
+    }
+    auto dev = vecat::device::default_drive();
+    auto seg = vecat::esc::make_segment(dev, slaves);
+    std::unique_ptr<vecat::net::RawSocket> sock;
+    try {
+        sock = std::make_unique<vecat::net::RawSocket>(iface);
+    } catch (const std::exception& e) {
+        fmt::print(stderr, "vecat: {}\n", e.what());
+        return 1;
+    }
+    std::unique_ptr<vecat::net::PcapngWriter> pcap;
+    if (!pcap_path.empty()) pcap = std::make_unique<vecat::net::PcapngWriter>(pcap_path, iface);
+    install_signals();
+    fmt::print("vecat: {} x \"{}\" on {} (vendor 0x{:08X}, product 0x{:08X}); Ctrl-C stops\n", slaves, dev.name, iface,
+               dev.identity.vendor_id, dev.identity.product_code);
+    vecat::net::ServeOptions opt;
+    opt.busy_poll = busy;
+    opt.pcap = pcap.get();
+    const auto st = vecat::net::serve(*seg, *sock, opt, g_stop);
+    fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
+               seg->counters().dropped);
+    if (pcap) fmt::print("vecat: capture written to {} ({} frames)\n", pcap_path, pcap->frames());
+    return 0;
+}
+
+int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
+    using vecat::esc::AlState;
+    std::string why;
+    if (!vecat::net::enter_private_netns(&why) || !vecat::net::create_veth_pair("vecat-m", "vecat-s", &why)) {
+        fmt::print(stderr, "vecat demo: cannot create its network namespace and veth pair: {}\n", why);
+        return 1;
+    }
+    std::filesystem::create_directories(outdir);
+    const std::string pcap_path = outdir + "/demo.pcapng";
+    const std::string sii_path = outdir + "/vecat-drive.sii";
+    install_signals();
+
+    auto dev = vecat::device::default_drive();
+    auto seg = vecat::esc::make_segment(dev, slaves);
+    vecat::net::RawSocket slave_sock("vecat-s");
+    vecat::net::RawSocket master_sock("vecat-m");
+    vecat::net::PcapngWriter pcap(pcap_path, "vecat-s");
+    std::atomic<bool> stop{false};
+    vecat::net::ServeOptions opt;
+    opt.pcap = &pcap;
+    std::thread server([&] { vecat::net::serve(*seg, slave_sock, opt, stop); });
+
+    int rc = 0;
+    vecat::master::Master m(master_sock);
+    fmt::print("vecat demo: {} virtual drive(s) on veth pair vecat-m <-> vecat-s in a private network namespace\n",
+               slaves);
+    std::string fail;
+    if (!m.startup(AlState::Op, &fail)) {
+        fmt::print(stderr, "vecat demo: start-up failed: {}\n", fail);
+        rc = 1;
+    } else {
+        for (const auto& s : m.slaves())
+            fmt::print("  slave {} @0x{:04X}: \"{}\" vendor 0x{:08X} product 0x{:08X} rev 0x{:08X}, {} out / {} in bytes\n",
+                       s.position, s.station, s.sii.device_name(), s.sii.identity.vendor_id,
+                       s.sii.identity.product_code, s.sii.identity.revision, s.out_bytes, s.in_bytes);
+        fmt::print("  all slaves in OP; exchanging process data every 1 ms\n");
+        unsigned misses = 0;
+        auto next = std::chrono::steady_clock::now();
+        for (unsigned c = 0; c < cycles && !g_stop; ++c) {
+            next += std::chrono::milliseconds(1);
+            for (std::size_t i = 0; i < m.slaves().size(); ++i) {
+                auto out = m.outputs(i);
+                if (out.size() >= 2) vecat::st_le16(out.data(), static_cast<std::uint16_t>(c));
+            }
+            auto w = m.exchange_process_data();
+            if (!w || *w != m.expected_wkc()) ++misses;
+            if (c % 250 == 0 || c + 1 == cycles)
+                fmt::print("\r  cycle {:5}/{}  working counter {}/{}  misses {}", c + 1, cycles, w ? *w : 0,
+                           m.expected_wkc(), misses);
+            std::fflush(stdout);
+            std::this_thread::sleep_until(next);
+        }
+        fmt::print("\n");
+        if (!m.request_state(AlState::Init)) {
+            fmt::print(stderr, "vecat demo: back to INIT failed\n");
+            rc = 1;
+        } else {
+            fmt::print("  back in INIT; {} cycles with {} working-counter misses\n", cycles, misses);
+        }
+        if (misses) rc = 1;
+    }
+    stop = true;
+    server.join();
+    pcap.flush();
+    const auto img = vecat::esc::build_sii_image(dev);
+    std::ofstream(sii_path, std::ios::binary).write(reinterpret_cast<const char*>(img.data()),
+                                                    static_cast<std::streamsize>(img.size()));
+    fmt::print("vecat demo: capture {} ({} frames), SII image {}\n", pcap_path, pcap.frames(), sii_path);
+    return rc;
+}
+
+int cmd_sii_generate(const std::string& out) {
+    const auto img = vecat::esc::build_sii_image(vecat::device::default_drive());
+    if (out.empty() || out == "-") {
+        std::fwrite(img.data(), 1, img.size(), stdout);
+        return 0;
+    }
+    std::ofstream f(out, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));
+    return f ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"vecat: a virtual EtherCAT servo drive"};
+    app.require_subcommand(1);
+
+    auto* run = app.add_subcommand("run", "Serve virtual slaves on a network interface");
+    std::string iface, pcap;
+    unsigned slaves = 1;
+    bool busy = false, allow_used = false;
+    run->add_option("-i,--iface", iface, "Interface to serve on (one end of a veth pair, or a dedicated NIC)")
+        ->required();
+    run->add_option("-n,--slaves", slaves, "Number of slaves on the line")->check(CLI::Range(1u, 512u));
+    run->add_option("--pcap", pcap, "Write every frame in and out to this pcapng file");
+    run->add_flag("--busy-poll", busy, "Spin on the socket instead of sleeping (lowest latency, one core busy)");
+    run->add_flag("--allow-used-interface", allow_used,
+                  "Serve even on an interface that has an IP address or the default route");
+
+    auto* demo = app.add_subcommand("demo", "Run virtual slaves and the bundled master on a private veth pair");
+    unsigned demo_slaves = 2, demo_cycles = 3000;
+    std::string outdir = "vecat-demo";
+    demo->add_option("-n,--slaves", demo_slaves, "Number of slaves")->check(CLI::Range(1u, 64u));
+    demo->add_option("--cycles", demo_cycles, "Process data cycles at 1 ms");
+    demo->add_option("-o,--output", outdir, "Directory for the capture and generated files");
+
+    auto* sii = app.add_subcommand("sii", "SII EEPROM tools");
+    sii->require_subcommand(1);
+    auto* sii_gen = sii->add_subcommand("generate", "Write the SII EEPROM image of the default drive");
+    std::string sii_out;
+    sii_gen->add_option("-o,--output", sii_out, "Output file (standard output when omitted)");
+
+    CLI11_PARSE(app, argc, argv);
+    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used);
+    if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);
+    if (*sii_gen) return cmd_sii_generate(sii_out);
+    return 0;
+}

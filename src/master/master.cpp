@@ -1,0 +1,408 @@
+#include "master/master.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <thread>
+
+#include "esc/registers.hpp"
+
+namespace vecat::master {
+
+using esc::AlState;
+using esc::Command;
+using esc::Reg;
+
+namespace {
+constexpr std::uint8_t kBroadcast[6] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF};
+constexpr std::uint8_t kSource[6] = {0x01, 0x01, 0x01, 0x01, 0x01, 0x01};
+std::uint16_t ra(Reg r) { return esc::addr(r); }
+}  // namespace
+
+Master::Master(net::Link& link, MasterOptions opt) : link_(link), opt_(opt) {}
+
+std::size_t Master::build_frame(std::span<DatagramRequest> dgs) {
+    std::memcpy(tx_.data(), kBroadcast, 6);
+    std::memcpy(tx_.data() + 6, kSource, 6);
+    tx_[12] = 0x88;
+    tx_[13] = 0xA4;
+    std::size_t off = esc::kEthHeaderSize + esc::kEcatHeaderSize;
+    for (std::size_t i = 0; i < dgs.size(); ++i) {
+        auto& d = dgs[i];
+        std::uint8_t* p = tx_.data() + off;
+        p[0] = static_cast<std::uint8_t>(d.cmd);
+        p[1] = static_cast<std::uint8_t>(index_ + i);
+        st_le32(p + 2, d.address);
+        std::uint16_t lf = static_cast<std::uint16_t>(d.data.size() & 0x07FF);
+        if (i + 1 < dgs.size()) lf |= 0x8000;
+        st_le16(p + 6, lf);
+        st_le16(p + 8, 0);
+        std::memcpy(p + esc::kDatagramHeaderSize, d.data.data(), d.data.size());
+        st_le16(p + esc::kDatagramHeaderSize + d.data.size(), 0);
+        off += esc::kDatagramHeaderSize + d.data.size() + esc::kWkcSize;
+    }
+    const std::size_t ecat_len = off - esc::kEthHeaderSize - esc::kEcatHeaderSize;
+    st_le16(tx_.data() + esc::kEthHeaderSize, static_cast<std::uint16_t>(ecat_len | 0x1000));
+    return std::max(off, esc::kMinEthFrame);
+}
+
+bool Master::wait_reply(std::span<DatagramRequest> dgs, std::size_t) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(opt_.reply_timeout_us);
+    while (true) {
+        const auto left =
+            std::chrono::duration_cast<std::chrono::microseconds>(deadline - std::chrono::steady_clock::now()).count();
+        if (left <= 0) return false;
+        const long n = link_.receive(Bytes(rx_.data(), rx_.size()), left);
+        if (n < 0) return false;
+        if (n == 0) continue;
+        const auto pf = esc::parse_frame(ConstBytes(rx_.data(), static_cast<std::size_t>(n)));
+        if (pf.error != esc::FrameError::None || pf.count != dgs.size()) continue;
+        bool match = true;
+        for (std::size_t i = 0; i < dgs.size() && match; ++i) {
+            auto d = pf.datagram(Bytes(rx_.data(), static_cast<std::size_t>(n)), i);
+            match = d.index() == static_cast<std::uint8_t>(index_ + i) && d.command() == dgs[i].cmd &&
+                    d.length() == dgs[i].data.size();
+        }
+        if (!match) continue;  // a late reply to an earlier frame
+        for (std::size_t i = 0; i < dgs.size(); ++i) {
+            auto d = pf.datagram(Bytes(rx_.data(), static_cast<std::size_t>(n)), i);
+            std::memcpy(dgs[i].data.data(), d.data(), dgs[i].data.size());
+            dgs[i].wkc = d.wkc();
+        }
+        return true;
+    }
+}
+
+bool Master::transact_frame(std::span<DatagramRequest> dgs) {
+    const std::size_t len = build_frame(dgs);
+    for (int attempt = 0; attempt <= opt_.retries; ++attempt) {
+        if (!link_.send(ConstBytes(tx_.data(), len))) continue;
+        if (wait_reply(dgs, len)) {
+            index_ = static_cast<std::uint8_t>(index_ + dgs.size());
+            return true;
+        }
+    }
+    index_ = static_cast<std::uint8_t>(index_ + dgs.size());
+    return false;
+}
+
+std::optional<std::uint16_t> Master::transact(Command cmd, std::uint16_t adp, std::uint16_t ado, Bytes data) {
+    DatagramRequest r{cmd, static_cast<std::uint32_t>(adp) | (static_cast<std::uint32_t>(ado) << 16), data};
+    if (!transact_frame(std::span<DatagramRequest>(&r, 1))) return std::nullopt;
+    return r.wkc;
+}
+
+std::optional<std::uint16_t> Master::transact_logical(Command cmd, std::uint32_t laddr, Bytes data) {
+    DatagramRequest r{cmd, laddr, data};
+    if (!transact_frame(std::span<DatagramRequest>(&r, 1))) return std::nullopt;
+    return r.wkc;
+}
+
+std::optional<std::uint16_t> Master::read16(std::uint16_t station, std::uint16_t ado) {
+    std::uint8_t b[2] = {};
+    auto w = fprd(station, ado, b);
+    if (!w || *w != 1) return std::nullopt;
+    return ld_le16(b);
+}
+std::optional<std::uint32_t> Master::read32(std::uint16_t station, std::uint16_t ado) {
+    std::uint8_t b[4] = {};
+    auto w = fprd(station, ado, b);
+    if (!w || *w != 1) return std::nullopt;
+    return ld_le32(b);
+}
+bool Master::write8(std::uint16_t station, std::uint16_t ado, std::uint8_t v) {
+    auto w = fpwr(station, ado, Bytes(&v, 1));
+    return w && *w == 1;
+}
+bool Master::write16(std::uint16_t station, std::uint16_t ado, std::uint16_t v) {
+    std::uint8_t b[2];
+    st_le16(b, v);
+    auto w = fpwr(station, ado, b);
+    return w && *w == 1;
+}
+bool Master::write32(std::uint16_t station, std::uint16_t ado, std::uint32_t v) {
+    std::uint8_t b[4];
+    st_le32(b, v);
+    auto w = fpwr(station, ado, b);
+    return w && *w == 1;
+}
+
+int Master::count_slaves() {
+    std::uint8_t b[2] = {};
+    auto w = brd(ra(Reg::Type), b);
+    return w ? static_cast<int>(*w) : -1;
+}
+
+bool Master::reset_slaves() {
+    auto bw = [&](std::uint16_t ado, std::size_t n, std::uint8_t v) {
+        std::vector<std::uint8_t> b(n, v);
+        return bwr(ado, b).has_value();
+    };
+    std::uint8_t init[2] = {static_cast<std::uint8_t>(static_cast<unsigned>(AlState::Init) | esc::kAlErrorFlag), 0};
+    return bw(ra(Reg::DlControl) + 3, 1, 0) &&                   // no alias addressing
+           bwr(ra(Reg::AlControl), init).has_value() &&          // INIT with acknowledge
+           bw(ra(Reg::DlControl), 1, 0) &&                       // forwarding rule
+           bw(ra(Reg::RxErrorCounter), 8, 0) &&                  // clear error counters
+           bw(ra(Reg::Fmmu0), 16 * 3, 0) &&                      // FMMUs off
+           bw(ra(Reg::Sm0), 8 * 4, 0) &&                         // SyncManagers off
+           bw(ra(Reg::DcActivation), 1, 0) &&                    // SYNC off
+           bw(ra(Reg::SiiConfig), 1, 2) && bw(ra(Reg::SiiConfig), 1, 0);  // EEPROM to the master
+}
+
+bool Master::assign_station_addresses(std::uint16_t first) {
+    const int n = count_slaves();
+    if (n < 0) return false;
+    slaves_.clear();
+    for (int i = 0; i < n; ++i) {
+        SlaveInfo s;
+        s.position = static_cast<std::uint16_t>(i);
+        s.station = static_cast<std::uint16_t>(first + i);
+        std::uint8_t b[2];
+        st_le16(b, s.station);
+        auto w = apwr(s.position, ra(Reg::StationAddress), b);
+        if (!w || *w != 1) return false;
+        slaves_.push_back(std::move(s));
+    }
+    return true;
+}
+
+std::optional<std::uint32_t> Master::read_sii_dword(std::uint16_t station, std::uint32_t word) {
+    auto wait_idle = [&]() -> std::optional<std::uint16_t> {
+        for (int i = 0; i < 100; ++i) {
+            auto st = read16(station, ra(Reg::SiiControl));
+            if (!st) return std::nullopt;
+            if (!(*st & (esc::sii_ctrl::Busy | esc::sii_ctrl::CmdMask))) return st;
+            std::this_thread::sleep_for(std::chrono::microseconds(50));
+        }
+        return std::nullopt;
+    };
+    for (int attempt = 0; attempt < 3; ++attempt) {
+        auto st = wait_idle();
+        if (!st) return std::nullopt;
+        if (*st & (esc::sii_ctrl::ErrorAck | esc::sii_ctrl::ErrorWriteEnable)) write16(station, ra(Reg::SiiControl), 0);
+        std::uint8_t cmd[6];
+        st_le16(cmd, esc::sii_ctrl::CmdRead);
+        st_le32(cmd + 2, word);
+        auto w = fpwr(station, ra(Reg::SiiControl), cmd);
+        if (!w || *w != 1) return std::nullopt;
+        st = wait_idle();
+        if (!st) return std::nullopt;
+        if (*st & esc::sii_ctrl::ErrorAck) continue;  // NACK: retry
+        return read32(station, ra(Reg::SiiData));
+    }
+    return std::nullopt;
+}
+
+std::optional<std::vector<std::uint8_t>> Master::read_sii_image(std::uint16_t station) {
+    std::vector<std::uint8_t> img;
+    auto read_words = [&](std::uint32_t word, std::size_t nwords) -> bool {
+        for (std::size_t k = 0; k < nwords; k += 2) {
+            auto v = read_sii_dword(station, static_cast<std::uint32_t>(word + k));
+            if (!v) return false;
+            const std::size_t pos = 2 * (word + k);
+            if (img.size() < pos + 4) img.resize(pos + 4, 0xFF);
+            st_le32(img.data() + pos, *v);
+        }
+        return true;
+    };
+    if (!read_words(0, esc::sii::FirstCategory)) return std::nullopt;
+    std::uint32_t word = esc::sii::FirstCategory;
+    for (int guard = 0; guard < 256; ++guard) {
+        if (!read_words(word, 2)) return std::nullopt;
+        const std::uint16_t type = ld_le16(img.data() + 2 * word);
+        if (type == 0xFFFF) break;
+        const std::uint16_t len = ld_le16(img.data() + 2 * word + 2);
+        if (word + 2 + len > 0x8000) return std::nullopt;
+        if (len && !read_words(word + 2, len)) return std::nullopt;
+        word += 2u + len;
+    }
+    img.resize(std::min<std::size_t>(img.size(), 2 * word + 2));
+    return img;
+}
+
+bool Master::read_slave_information() {
+    for (auto& s : slaves_) {
+        std::uint8_t info[10] = {};
+        auto w = fprd(s.station, ra(Reg::Type), info);
+        if (!w || *w != 1) return false;
+        s.esc_type = info[0];
+        s.fmmu_count = info[4];
+        s.sm_count = info[5];
+        s.features = ld_le16(info + 8);
+        auto dl = read16(s.station, ra(Reg::DlStatus));
+        if (!dl) return false;
+        s.dl_status = *dl;
+        auto img = read_sii_image(s.station);
+        if (!img) return false;
+        s.sii_image = *img;
+        s.sii = esc::parse_sii(s.sii_image);
+        auto bits = [](const std::vector<esc::SiiPdo>& pdos, std::uint8_t sm) {
+            unsigned n = 0;
+            for (const auto& p : pdos)
+                if (p.sm == sm)
+                    for (const auto& e : p.entries) n += e.bit_length;
+            return (n + 7) / 8;
+        };
+        // Process data sizes: the PDOs of the SII assigned to the output / input SyncManagers.
+        for (std::size_t i = 0; i < s.sii.sync_managers.size(); ++i) {
+            const auto& sm = s.sii.sync_managers[i];
+            if (sm.type == 3) s.out_bytes = bits(s.sii.rx_pdos, static_cast<std::uint8_t>(i));
+            if (sm.type == 4) s.in_bytes = bits(s.sii.tx_pdos, static_cast<std::uint8_t>(i));
+        }
+    }
+    return true;
+}
+
+bool Master::configure_mailboxes() {
+    for (auto& s : slaves_) {
+        if (!s.sii.std_rx_mbx_size) continue;
+        for (std::size_t i = 0; i < s.sii.sync_managers.size() && i < 2; ++i) {
+            const auto& sm = s.sii.sync_managers[i];
+            std::uint8_t b[8] = {};
+            st_le16(b, sm.start);
+            st_le16(b + 2, sm.length);
+            b[4] = sm.control;
+            b[6] = sm.length ? 1 : 0;
+            auto w = fpwr(s.station, esc::sm_addr(static_cast<unsigned>(i)), b);
+            if (!w || *w != 1) return false;
+        }
+    }
+    return true;
+}
+
+bool Master::configure_process_data() {
+    std::uint32_t laddr = opt_.logical_base;
+    std::size_t off = 0;
+    unsigned n_out = 0, n_in = 0;
+    for (auto& s : slaves_) {
+        s.out_logical = laddr;
+        s.out_offset = off;
+        laddr += s.out_bytes;
+        off += s.out_bytes;
+    }
+    out_total_ = off;
+    for (auto& s : slaves_) {
+        s.in_logical = laddr;
+        s.in_offset = off;
+        laddr += s.in_bytes;
+        off += s.in_bytes;
+    }
+    image_.assign(off, 0);
+    for (auto& s : slaves_) {
+        unsigned fmmu = 0;
+        for (std::size_t i = 0; i < s.sii.sync_managers.size(); ++i) {
+            const auto& sm = s.sii.sync_managers[i];
+            if (sm.type != 3 && sm.type != 4) continue;
+            const unsigned bytes = sm.type == 3 ? s.out_bytes : s.in_bytes;
+            std::uint8_t b[8] = {};
+            st_le16(b, sm.start);
+            st_le16(b + 2, static_cast<std::uint16_t>(bytes));
+            b[4] = sm.control;
+            b[6] = bytes ? 1 : 0;
+            auto w = fpwr(s.station, esc::sm_addr(static_cast<unsigned>(i)), b);
+            if (!w || *w != 1) return false;
+            if (!bytes) continue;
+            std::uint8_t f[16] = {};
+            st_le32(f, sm.type == 3 ? s.out_logical : s.in_logical);
+            st_le16(f + 4, static_cast<std::uint16_t>(bytes));
+            f[6] = 0;
+            f[7] = 7;
+            st_le16(f + 8, sm.start);
+            f[10] = 0;
+            f[11] = sm.type == 3 ? 2 : 1;
+            f[12] = 1;
+            w = fpwr(s.station, esc::fmmu_addr(fmmu++), f);
+            if (!w || *w != 1) return false;
+            (sm.type == 3 ? n_out : n_in)++;
+        }
+    }
+    expected_wkc_ = static_cast<std::uint16_t>(2 * n_out + n_in);
+    return true;
+}
+
+AlStatusReading Master::read_al_status(std::uint16_t station) {
+    std::uint8_t b[6] = {};
+    AlStatusReading r;
+    auto w = fprd(station, ra(Reg::AlStatus), b);
+    if (!w || *w != 1) return r;
+    r.status = b[0];
+    r.code = ld_le16(b + 4);
+    r.ok = true;
+    return r;
+}
+
+bool Master::acknowledge_error(std::uint16_t station, AlState s) {
+    return write16(station, ra(Reg::AlControl), static_cast<std::uint16_t>(static_cast<unsigned>(s) | esc::kAlErrorFlag));
+}
+
+bool Master::request_state(AlState s, std::chrono::milliseconds timeout) {
+    std::uint8_t b[2];
+    st_le16(b, static_cast<std::uint16_t>(s));
+    if (!bwr(ra(Reg::AlControl), b)) return false;
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    last_states_.assign(slaves_.size(), {});
+    while (true) {
+        if (s == AlState::Op || s == AlState::SafeOp) exchange_process_data();
+        bool all = true, failed = false;
+        for (std::size_t i = 0; i < slaves_.size(); ++i) {
+            last_states_[i] = read_al_status(slaves_[i].station);
+            const auto& r = last_states_[i];
+            if (!r.ok || r.error()) failed |= r.ok && r.error();
+            if (!r.ok || r.state() != s || r.error()) all = false;
+        }
+        if (all) return true;
+        if (failed || std::chrono::steady_clock::now() > deadline) return false;
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+}
+
+bool Master::request_state(std::uint16_t station, AlState s, std::chrono::milliseconds timeout) {
+    if (!write16(station, ra(Reg::AlControl), static_cast<std::uint16_t>(s))) return false;
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (true) {
+        if (s == AlState::Op || s == AlState::SafeOp) exchange_process_data();
+        const auto r = read_al_status(station);
+        if (r.ok && r.error()) return false;
+        if (r.ok && r.state() == s) return true;
+        if (std::chrono::steady_clock::now() > deadline) return false;
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+}
+
+std::optional<std::uint16_t> Master::exchange_process_data() {
+    if (image_.empty()) return std::nullopt;
+    return transact_logical(Command::LRW, opt_.logical_base, Bytes(image_.data(), image_.size()));
+}
+
+Bytes Master::outputs(std::size_t i) {
+    const auto& s = slaves_.at(i);
+    return Bytes(image_.data() + s.out_offset, s.out_bytes);
+}
+
+ConstBytes Master::inputs(std::size_t i) const {
+    const auto& s = slaves_.at(i);
+    return ConstBytes(image_.data() + s.in_offset, s.in_bytes);
+}
+
+bool Master::startup(AlState target, std::string* why) {
+    auto fail = [&](const std::string& m) {
+        if (why) *why = m;
+        return false;
+    };
+    const int n = count_slaves();
+    if (n <= 0) return fail("no slaves found");
+    if (!reset_slaves()) return fail("bus reset failed");
+    if (!assign_station_addresses()) return fail("station address assignment failed");
+    if (!read_slave_information()) return fail("reading ESC information / SII failed");
+    if (target == AlState::Init) return true;
+    if (!configure_mailboxes()) return fail("mailbox SyncManager configuration failed");
+    if (!request_state(AlState::PreOp)) return fail("PREOP refused");
+    if (target == AlState::PreOp) return true;
+    if (!configure_process_data()) return fail("process data configuration failed");
+    if (!request_state(AlState::SafeOp)) return fail("SAFEOP refused");
+    if (target == AlState::SafeOp) return true;
+    exchange_process_data();
+    if (!request_state(AlState::Op)) return fail("OP refused");
+    return true;
+}
+
+}  // namespace vecat::master

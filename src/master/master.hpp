@@ -1,0 +1,133 @@
+// A small EtherCAT master: the start-up sequence of real masters (see shared/docs/masters-checklist.md),
+// used by the tests, the demo and as an example of master code.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/bytes.hpp"
+#include "esc/al_status.hpp"
+#include "esc/datagram.hpp"
+#include "esc/sii_image.hpp"
+#include "net/link.hpp"
+
+namespace vecat::master {
+
+struct AlStatusReading {
+    std::uint8_t status = 0;  // AL status register (state | error flag)
+    std::uint16_t code = 0;   // AL status code
+    bool ok = false;          // the read itself succeeded
+    esc::AlState state() const { return static_cast<esc::AlState>(status & esc::kAlStateMask); }
+    bool error() const { return (status & esc::kAlErrorFlag) != 0; }
+};
+
+struct SlaveInfo {
+    std::uint16_t position = 0;
+    std::uint16_t station = 0;
+    std::uint8_t esc_type = 0;
+    std::uint8_t fmmu_count = 0;
+    std::uint8_t sm_count = 0;
+    std::uint16_t features = 0;
+    std::uint16_t dl_status = 0;
+    std::vector<std::uint8_t> sii_image;
+    esc::SiiInfo sii;
+    unsigned out_bytes = 0;
+    unsigned in_bytes = 0;
+    std::uint32_t out_logical = 0;
+    std::uint32_t in_logical = 0;
+    std::size_t out_offset = 0;  // in the process image
+    std::size_t in_offset = 0;
+};
+
+struct DatagramRequest {
+    esc::Command cmd;
+    std::uint32_t address;  // ADP | ADO << 16, or the logical address
+    Bytes data;
+    std::uint16_t wkc = 0;
+};
+
+struct MasterOptions {
+    std::int64_t reply_timeout_us = 20'000;
+    int retries = 3;
+    std::uint32_t logical_base = 0x00010000;
+};
+
+class Master {
+public:
+    explicit Master(net::Link& link, MasterOptions opt = {});
+
+    // ---- Datagram services. Return the working counter, nullopt when no reply came.
+    std::optional<std::uint16_t> transact(esc::Command cmd, std::uint16_t adp, std::uint16_t ado, Bytes data);
+    std::optional<std::uint16_t> transact_logical(esc::Command cmd, std::uint32_t laddr, Bytes data);
+    // Several datagrams in one frame; false when no reply.
+    bool transact_frame(std::span<DatagramRequest> dgs);
+
+    std::optional<std::uint16_t> brd(std::uint16_t ado, Bytes d) { return transact(esc::Command::BRD, 0, ado, d); }
+    std::optional<std::uint16_t> bwr(std::uint16_t ado, Bytes d) { return transact(esc::Command::BWR, 0, ado, d); }
+    std::optional<std::uint16_t> aprd(std::uint16_t pos, std::uint16_t ado, Bytes d) {
+        return transact(esc::Command::APRD, static_cast<std::uint16_t>(-pos), ado, d);
+    }
+    std::optional<std::uint16_t> apwr(std::uint16_t pos, std::uint16_t ado, Bytes d) {
+        return transact(esc::Command::APWR, static_cast<std::uint16_t>(-pos), ado, d);
+    }
+    std::optional<std::uint16_t> fprd(std::uint16_t st, std::uint16_t ado, Bytes d) {
+        return transact(esc::Command::FPRD, st, ado, d);
+    }
+    std::optional<std::uint16_t> fpwr(std::uint16_t st, std::uint16_t ado, Bytes d) {
+        return transact(esc::Command::FPWR, st, ado, d);
+    }
+    // Typed register helpers (one-slave fixed addressing); nullopt unless WKC == 1.
+    std::optional<std::uint16_t> read16(std::uint16_t station, std::uint16_t ado);
+    std::optional<std::uint32_t> read32(std::uint16_t station, std::uint16_t ado);
+    bool write8(std::uint16_t station, std::uint16_t ado, std::uint8_t v);
+    bool write16(std::uint16_t station, std::uint16_t ado, std::uint16_t v);
+    bool write32(std::uint16_t station, std::uint16_t ado, std::uint32_t v);
+
+    // ---- Start-up, step by step
+    int count_slaves();                     // BRD 0x0000 working counter
+    bool reset_slaves();                    // default register values, like SOEM's ecx_set_slaves_to_default
+    bool assign_station_addresses(std::uint16_t first = 0x1001);
+    bool read_slave_information();          // ESC info, DL status and the whole SII of every slave
+    std::optional<std::uint32_t> read_sii_dword(std::uint16_t station, std::uint32_t word);
+    std::optional<std::vector<std::uint8_t>> read_sii_image(std::uint16_t station);
+    bool configure_mailboxes();             // SM0/SM1 from the SII
+    bool configure_process_data();          // SM2/SM3 and FMMUs; lays out the process image
+    // Requests a state from all slaves (broadcast) and waits until each has it or reports an error.
+    bool request_state(esc::AlState s, std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));
+    bool request_state(std::uint16_t station, esc::AlState s,
+                       std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));
+    AlStatusReading read_al_status(std::uint16_t station);
+    bool acknowledge_error(std::uint16_t station, esc::AlState s);
+    // Runs the whole sequence up to the target state.
+    bool startup(esc::AlState target, std::string* why = nullptr);
+
+    // ---- Process data
+    std::optional<std::uint16_t> exchange_process_data();  // one LRW over the image
+    std::uint16_t expected_wkc() const { return expected_wkc_; }
+    Bytes outputs(std::size_t slave);
+    ConstBytes inputs(std::size_t slave) const;
+
+    std::vector<SlaveInfo>& slaves() { return slaves_; }
+    const std::vector<AlStatusReading>& last_states() const { return last_states_; }
+
+private:
+    std::size_t build_frame(std::span<DatagramRequest> dgs);
+    bool wait_reply(std::span<DatagramRequest> dgs, std::size_t frame_len);
+
+    net::Link& link_;
+    MasterOptions opt_;
+    std::uint8_t index_ = 0;
+    std::array<std::uint8_t, 1600> tx_{};
+    std::array<std::uint8_t, 1600> rx_{};
+    std::vector<SlaveInfo> slaves_;
+    std::vector<std::uint8_t> image_;
+    std::size_t out_total_ = 0;
+    std::uint16_t expected_wkc_ = 0;
+    std::vector<AlStatusReading> last_states_;
+};
+
+}  // namespace vecat::master

@@ -1,0 +1,19 @@
+// Private network namespaces and veth pairs for tests and the demo. A namespace made by
+// enter_private_netns() belongs to this process alone and disappears with it, with its interfaces.
+#pragma once
+
+#include <string>
+
+namespace vecat::net {
+
+// Moves the calling process (call it before starting threads) into a new network namespace.
+// Returns false with a reason when that is not permitted (not root).
+bool enter_private_netns(std::string* why = nullptr);
+
+// Creates a veth pair inside the current namespace and brings both ends up. Returns false with a reason.
+bool create_veth_pair(const std::string& a, const std::string& b, std::string* why = nullptr);
+
+// True when the interface carries an IPv4/IPv6 address or is the default route's interface.
+bool interface_in_use(const std::string& ifname, std::string* why = nullptr);
+
+}  // namespace vecat::net

@@ -1,0 +1,31 @@
+// AF_PACKET raw socket bound to EtherType 0x88A4 on one interface.
+#pragma once
+
+#include <string>
+
+#include "net/link.hpp"
+
+namespace vecat::net {
+
+class RawSocket final : public Link {
+public:
+    // Opens the socket; throws std::system_error when the interface does not exist or on missing rights.
+    explicit RawSocket(const std::string& ifname, bool promiscuous = true);
+    ~RawSocket() override;
+    RawSocket(const RawSocket&) = delete;
+    RawSocket& operator=(const RawSocket&) = delete;
+
+    bool send(ConstBytes frame) override;
+    long receive(Bytes buf, std::int64_t timeout_us) override;
+    // Non-blocking receive: returns 0 at once when nothing is queued.
+    long try_receive(Bytes buf);
+    int fd() const { return fd_; }
+    const std::string& ifname() const { return ifname_; }
+
+private:
+    int fd_ = -1;
+    int ifindex_ = 0;
+    std::string ifname_;
+};
+
+}  // namespace vecat::net

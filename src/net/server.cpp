@@ -1,0 +1,50 @@
+#include "net/server.hpp"
+
+#include <time.h>
+
+#include <array>
+
+namespace vecat::net {
+
+std::uint64_t monotonic_ns() {
+    timespec ts{};
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<std::uint64_t>(ts.tv_nsec);
+}
+
+std::uint64_t realtime_ns() {
+    timespec ts{};
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<std::uint64_t>(ts.tv_nsec);
+}
+
+ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, const std::atomic<bool>& stop) {
+    ServeStats st;
+    std::array<std::uint8_t, 2048> buf{};
+    std::uint64_t last_tick = monotonic_ns();
+    while (!stop.load(std::memory_order_relaxed)) {
+        const long n = opt.busy_poll ? sock.try_receive(Bytes(buf.data(), buf.size()))
+                                     : sock.receive(Bytes(buf.data(), buf.size()), opt.tick_us);
+        const std::uint64_t now = monotonic_ns();
+        if (n > 0) {
+            ++st.received;
+            std::size_t len = static_cast<std::size_t>(n);
+            if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), 1);
+            if (seg.process_frame(Bytes(buf.data(), buf.size()), len, now)) {
+                if (sock.send(ConstBytes(buf.data(), len)))
+                    ++st.sent;
+                else
+                    ++st.send_errors;
+                if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), 2);
+            }
+            last_tick = now;
+        } else if (now - last_tick >= static_cast<std::uint64_t>(opt.tick_us) * 1000) {
+            seg.tick(now);
+            last_tick = now;
+        }
+    }
+    if (opt.pcap) opt.pcap->flush();
+    return st;
+}
+
+}  // namespace vecat::net

@@ -1,0 +1,32 @@
+// The slave side of the transport: receives frames on a raw socket, runs them through the segment and
+// sends the replies back in place. Nothing on this path allocates or locks.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+
+#include "esc/segment.hpp"
+#include "net/pcapng_writer.hpp"
+#include "net/raw_socket.hpp"
+
+namespace vecat::net {
+
+struct ServeOptions {
+    bool busy_poll = false;           // spin on the socket instead of sleeping in poll()
+    std::int64_t tick_us = 100;       // firmware/watchdog tick period when idle
+    PcapngWriter* pcap = nullptr;     // capture of every frame in and out
+};
+
+struct ServeStats {
+    std::uint64_t received = 0;
+    std::uint64_t sent = 0;
+    std::uint64_t send_errors = 0;
+};
+
+// Runs until stop becomes true.
+ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, const std::atomic<bool>& stop);
+
+std::uint64_t monotonic_ns();
+std::uint64_t realtime_ns();
+
+}  // namespace vecat::net
