@@ -36,9 +36,11 @@ DeviceDescription default_drive() {
     d.order_code = "VECAT-SD402";
     d.group_type = "ServoDrives";
     d.group_name = "Servo drives";
-    d.mailbox_protocols = mbx_proto::CoE;
-    d.coe_details = coe_details::Sdo | coe_details::SdoInfo | coe_details::PdoAssign | coe_details::PdoConfig |
-                    coe_details::CompleteAccess;
+    // The SII advertises only the mailbox protocols the slave really serves: masters send what is
+    // advertised, and SOEM 2.x crashes on a mailbox error reply (it reuses the dropped buffer). The CoE
+    // stack sets CoE and its details when it is attached to the device.
+    d.mailbox_protocols = 0;
+    d.coe_details = 0;
     d.ebus_current_ma = 0;
 
     // SyncManager layout of the HIWIN D2 (drive guide, section 4): mailbox at 0x1800/0x18F6, process

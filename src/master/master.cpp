@@ -14,7 +14,8 @@ using esc::Reg;
 
 namespace {
 constexpr std::uint8_t kBroadcast[6] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF};
-constexpr std::uint8_t kSource[6] = {0x01, 0x01, 0x01, 0x01, 0x01, 0x01};
+// A unicast, locally administered source address (the ESC sets bit 0x02 of the first byte on return).
+constexpr std::uint8_t kSource[6] = {0x10, 0x10, 0x10, 0x10, 0x10, 0x10};
 std::uint16_t ra(Reg r) { return esc::addr(r); }
 }  // namespace
 
