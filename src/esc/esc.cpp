@@ -608,7 +608,9 @@ void Esc::update_sm(unsigned i) {
 void Esc::update_sm_status(unsigned i) {
     const SmState& s = sm_[i];
     std::uint8_t st = 0;
-    if (s.mailbox) {
+    if (!s.active) {
+        st = 0;
+    } else if (s.mailbox) {
         if (s.mbx_full) st = sm::StatusMailboxFull | sm::StatusIrqWrite;
     } else {
         const std::uint8_t last = s.buf_next != SmState::kNone ? s.buf_next : (s.ecat_writes ? s.buf_pdi : s.buf_ecat);

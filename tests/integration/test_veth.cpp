@@ -1,0 +1,197 @@
+// End to end on a veth pair in a private network namespace: the vecat program serves the slaves on one
+// end, the project's master runs on the other; the capture is checked with tshark.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "master/master.hpp"
+#include "net/netns.hpp"
+#include "net/raw_socket.hpp"
+
+extern char** environ;
+
+using namespace vecat;
+using esc::AlState;
+
+namespace {
+
+bool g_netns = false;
+int g_pair = 0;
+
+struct VecatProcess {
+    pid_t pid = -1;
+    VecatProcess(const std::string& iface, unsigned slaves, const std::string& pcap) {
+        std::vector<std::string> args{VECAT_BINARY, "run", "--iface", iface, "--slaves", std::to_string(slaves), "--pcap", pcap};
+        std::vector<char*> argv;
+        for (auto& a : args) argv.push_back(a.data());
+        argv.push_back(nullptr);
+        if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) pid = -1;
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    }
+    int stop() {
+        if (pid <= 0) return -1;
+        kill(pid, SIGINT);
+        int st = 0;
+        waitpid(pid, &st, 0);
+        pid = -1;
+        return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    }
+    ~VecatProcess() {
+        if (pid > 0) stop();
+    }
+};
+
+std::string run_capture(const std::string& cmd) {
+    std::string out;
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return out;
+    char buf[4096];
+    std::size_t n;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+    pclose(p);
+    return out;
+}
+
+std::vector<std::string> split(const std::string& s, char c) {
+    std::vector<std::string> v;
+    std::stringstream ss(s);
+    std::string item;
+    while (std::getline(ss, item, c)) v.push_back(item);
+    if (!s.empty() && s.back() == c) v.emplace_back();
+    return v;
+}
+
+// The working counter every datagram of this run must carry, from the command and the line alone.
+unsigned expected_wkc(unsigned cmd, unsigned adp, unsigned n, unsigned lrw_expected) {
+    const bool exists_pos = static_cast<std::uint16_t>(-static_cast<int>(adp)) < n;
+    const bool exists_station = adp >= 0x1001 && adp < 0x1001 + n;
+    switch (cmd) {
+        case 1: case 2: return exists_pos ? 1 : 0;
+        case 3: return exists_pos ? 3 : 0;
+        case 4: case 5: return exists_station ? 1 : 0;
+        case 6: return exists_station ? 3 : 0;
+        case 7: case 8: return n;
+        case 9: return 3 * n;
+        case 12: return lrw_expected;
+        case 13: case 14: return n;
+        default: return 0;
+    }
+}
+
+void check_capture(const std::string& pcap, unsigned n, unsigned lrw_expected) {
+    if (system("command -v tshark >/dev/null 2>&1") != 0) GTEST_SKIP() << "tshark not installed";
+    const std::string verbose = run_capture("tshark -r " + pcap + " -V 2>/dev/null");
+    ASSERT_FALSE(verbose.empty());
+    EXPECT_EQ(verbose.find("Malformed"), std::string::npos);
+    EXPECT_EQ(run_capture("tshark -r " + pcap + " -z expert,error -q 2>/dev/null").find("Error"), std::string::npos);
+    const std::string fields = run_capture("tshark -r " + pcap +
+                                           " -T fields -E separator=';' -e eth.src -e ecat.cmd -e ecat.adp -e ecat.cnt 2>/dev/null");
+    auto lines = split(fields, '\n');
+    unsigned checked = 0;
+    std::vector<std::string> request;
+    for (const auto& line : lines) {
+        auto f = split(line, ';');
+        if (f.size() < 4) continue;
+        const unsigned first = static_cast<unsigned>(std::stoul(f[0].substr(0, 2), nullptr, 16));
+        if (!(first & 0x02)) {
+            request = f;
+            continue;
+        }
+        ASSERT_FALSE(request.empty());
+        auto cmds = split(request[1], ','), adps = split(request[2], ','), wkcs = split(f[3], ',');
+        ASSERT_EQ(cmds.size(), wkcs.size());
+        for (std::size_t i = 0; i < cmds.size(); ++i) {
+            const unsigned cmd = static_cast<unsigned>(std::stoul(cmds[i], nullptr, 16));
+            const unsigned adp = static_cast<unsigned>(std::stoul(adps.at(i), nullptr, 16));
+            EXPECT_EQ(std::stoul(wkcs[i]), expected_wkc(cmd, adp, n, lrw_expected))
+                << "command " << cmd << " adp 0x" << std::hex << adp;
+            ++checked;
+        }
+        request.clear();
+    }
+    EXPECT_GT(checked, 100u);
+}
+
+class Veth : public ::testing::TestWithParam<unsigned> {
+protected:
+    void SetUp() override {
+        if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+        ++g_pair;
+        m_ = "tm" + std::to_string(g_pair);
+        s_ = "ts" + std::to_string(g_pair);
+        std::string why;
+        ASSERT_TRUE(net::create_veth_pair(m_, s_, &why)) << why;
+        pcap_ = (std::filesystem::temp_directory_path() / ("vecat-veth-" + std::to_string(getpid()) + "-" +
+                                                            std::to_string(g_pair) + ".pcapng")).string();
+    }
+    void TearDown() override {
+        if (!pcap_.empty()) std::filesystem::remove(pcap_);
+    }
+    std::string m_, s_, pcap_;
+};
+
+}  // namespace
+
+TEST_P(Veth, MasterFindsConfiguresAndWalksTheStates) {
+    const unsigned n = GetParam();
+    VecatProcess vecat(s_, n, pcap_);
+    ASSERT_GT(vecat.pid, 0);
+    net::RawSocket sock(m_);
+    master::Master m(sock);
+    EXPECT_EQ(m.count_slaves(), static_cast<int>(n));
+    std::string why;
+    ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+    ASSERT_EQ(m.slaves().size(), n);
+    const auto dev = device::default_drive();
+    for (const auto& s : m.slaves()) {
+        EXPECT_EQ(s.sii.identity.vendor_id, dev.identity.vendor_id);
+        EXPECT_EQ(s.sii.identity.product_code, dev.identity.product_code);
+        EXPECT_EQ(s.sii.identity.revision, dev.identity.revision);
+        EXPECT_EQ(s.sii.device_name(), dev.name);
+        EXPECT_EQ(s.sii.sync_managers.size(), 4u);
+        EXPECT_EQ(s.out_bytes, dev.output_bytes());
+    }
+    for (int i = 0; i < 200; ++i) ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+    // ... and back down.
+    ASSERT_TRUE(m.request_state(AlState::SafeOp));
+    ASSERT_TRUE(m.request_state(AlState::PreOp));
+    ASSERT_TRUE(m.request_state(AlState::Init));
+    // A refused transition reports its AL status code.
+    EXPECT_FALSE(m.request_state(AlState::Op, std::chrono::milliseconds(200)));
+    for (const auto& r : m.last_states()) {
+        EXPECT_EQ(r.state(), AlState::Init);
+        EXPECT_TRUE(r.error());
+        EXPECT_EQ(r.code, 0x0011);
+    }
+    for (const auto& s : m.slaves()) EXPECT_TRUE(m.acknowledge_error(s.station, AlState::Init));
+    EXPECT_FALSE(m.read_al_status(m.slaves()[0].station).error());
+    EXPECT_EQ(vecat.stop(), 0);
+    check_capture(pcap_, n, m.expected_wkc());
+}
+
+INSTANTIATE_TEST_SUITE_P(Slaves, Veth, ::testing::Values(1u, 3u));
+
+TEST(VethCli, RefusesAnInterfaceWithAnAddress) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    std::string why;
+    ASSERT_TRUE(net::create_veth_pair("ipm", "ips", &why)) << why;
+    ASSERT_EQ(system("ip addr add 192.0.2.1/24 dev ips"), 0);  // documentation range, inside our namespace
+    const std::string out = run_capture(std::string(VECAT_BINARY) + " run --iface ips 2>&1; echo rc=$?");
+    EXPECT_NE(out.find("refusing"), std::string::npos) << out;
+    EXPECT_NE(out.find("rc=2"), std::string::npos) << out;
+}
+
+int main(int argc, char** argv) {
+    std::string why;
+    g_netns = net::enter_private_netns(&why);
+    if (!g_netns) std::fprintf(stderr, "veth tests skipped: %s\n", why.c_str());
+    ::testing::InitGoogleTest(&argc, argv);
+    return RUN_ALL_TESTS();
+}

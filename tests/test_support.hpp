@@ -1,0 +1,77 @@
+// Helpers shared by the tests: an in-process segment driven by the project's master.
+#pragma once
+
+#include <algorithm>
+#include <memory>
+#include <vector>
+
+#include "device/device_description.hpp"
+#include "esc/registers.hpp"
+#include "esc/segment.hpp"
+#include "master/master.hpp"
+#include "net/in_process_link.hpp"
+
+namespace vecat::test {
+
+// A line of n default drives behind an in-process link, with a master on the other end.
+struct Bench {
+    explicit Bench(std::size_t n = 1, esc::EscConfig cfg = {},
+                   device::DeviceDescription dev = device::default_drive())
+        : desc(std::move(dev)), seg(esc::make_segment(desc, n, cfg)), link(*seg), master(link) {
+        link.set_time(1'000'000'000);
+    }
+    esc::Slave& slave(std::size_t i = 0) { return seg->slave(i); }
+    esc::Esc& escx(std::size_t i = 0) { return seg->slave(i).esc(); }
+    void advance(std::uint64_t ns) {
+        now += ns;
+        link.set_time(now);
+        seg->tick(now);
+    }
+
+    device::DeviceDescription desc;
+    std::unique_ptr<esc::Segment> seg;
+    net::InProcessLink link;
+    master::Master master;
+    std::uint64_t now = 1'000'000'000;
+};
+
+inline std::uint16_t reg(esc::Reg r) { return esc::addr(r); }
+
+// One datagram sent through a segment as a raw frame; what came back.
+struct RawReply {
+    bool replied = false;
+    std::uint16_t adp = 0;
+    std::uint16_t wkc = 0;
+    std::vector<std::uint8_t> data;
+    std::vector<std::uint8_t> frame;
+};
+
+inline RawReply raw_datagram(esc::Segment& seg, std::uint8_t cmd, std::uint32_t address,
+                             std::vector<std::uint8_t> data, std::uint64_t now = 1'000'000'000) {
+    std::vector<std::uint8_t> f(14 + 2 + 10 + data.size() + 2, 0);
+    for (int i = 0; i < 6; ++i) f[i] = 0xFF;
+    for (int i = 6; i < 12; ++i) f[i] = 0x10;
+    f[12] = 0x88;
+    f[13] = 0xA4;
+    st_le16(f.data() + 14, static_cast<std::uint16_t>((10 + data.size() + 2) | 0x1000));
+    f[16] = cmd;
+    f[17] = 0x42;
+    st_le32(f.data() + 18, address);
+    st_le16(f.data() + 22, static_cast<std::uint16_t>(data.size()));
+    std::copy(data.begin(), data.end(), f.begin() + 26);
+    const std::size_t flen = f.size();
+    f.resize(std::max<std::size_t>(flen, 60) + 16, 0);
+    std::size_t len = flen;
+    RawReply r;
+    r.replied = seg.process_frame(Bytes(f.data(), f.size()), len, now);
+    r.adp = ld_le16(f.data() + 18);
+    r.data.assign(f.begin() + 26, f.begin() + 26 + static_cast<long>(data.size()));
+    r.wkc = ld_le16(f.data() + 26 + data.size());
+    f.resize(len);
+    r.frame = f;
+    return r;
+}
+
+inline std::uint32_t phys(std::uint16_t adp, std::uint16_t ado) { return adp | (static_cast<std::uint32_t>(ado) << 16); }
+
+}  // namespace vecat::test

@@ -1,0 +1,80 @@
+// Bad input never crashes, hangs or reads out of bounds (run under ASan/UBSan with VECAT_SANITIZE=ON).
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "test_support.hpp"
+
+using namespace vecat;
+using namespace vecat::test;
+
+TEST(BadInput, TruncatedFramesAreDroppedAndCounted) {
+    Bench b(2);
+    auto good = raw_datagram(*b.seg, 7, phys(0, 0), std::vector<std::uint8_t>(20, 0)).frame;
+    std::uint64_t dropped = 0;
+    for (std::size_t n = 0; n < 16 + 10 + 20 + 2; ++n) {
+        std::vector<std::uint8_t> f(good.begin(), good.begin() + static_cast<long>(n));
+        f.resize(std::max<std::size_t>(n, 64));  // the EtherCAT header still claims the whole datagram
+        std::size_t len = n;
+        EXPECT_FALSE(b.seg->process_frame(f, len, 1)) << n;
+        if (n >= 14) ++dropped;
+    }
+    EXPECT_EQ(b.seg->counters().dropped, dropped);
+    EXPECT_EQ(b.escx(0).peek(0x0300), std::min<std::uint64_t>(dropped, 255));
+    EXPECT_EQ(b.escx(1).peek(0x0300), 0);  // dropped at the first slave
+}
+
+TEST(BadInput, AddressesAtTheEndOfTheSpaces) {
+    Bench b(1);
+    auto r = raw_datagram(*b.seg, 1, phys(0, 0xFFF0), std::vector<std::uint8_t>(64, 0xEE));
+    EXPECT_EQ(r.wkc, 1);
+    auto w = raw_datagram(*b.seg, 2, phys(0, 0xFFFF), std::vector<std::uint8_t>(300, 1));
+    EXPECT_EQ(w.wkc, 1);
+    auto l = raw_datagram(*b.seg, 12, 0xFFFFFFF0, std::vector<std::uint8_t>(64, 0));
+    EXPECT_EQ(l.wkc, 0);
+    // An FMMU ending at the top of the logical space.
+    std::vector<std::uint8_t> f(16, 0);
+    st_le32(f.data(), 0xFFFFFFF0);
+    st_le16(f.data() + 4, 0xFFFF);
+    f[7] = 7;
+    st_le16(f.data() + 8, 0xFFF0);
+    f[10] = 3;
+    f[11] = 3;
+    f[12] = 1;
+    raw_datagram(*b.seg, 2, phys(0, 0x0600), f);
+    raw_datagram(*b.seg, 12, 0xFFFFFFF0, std::vector<std::uint8_t>(16, 0xA5));
+    SUCCEED();
+}
+
+TEST(BadInput, RandomFramesNeverCrash) {
+    Bench b(3);
+    ASSERT_TRUE(b.master.startup(esc::AlState::Op));
+    std::mt19937 rng(20261122);
+    std::vector<std::uint8_t> f(1600);
+    std::uint64_t replies = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const std::size_t n = 14 + rng() % 600;
+        for (std::size_t k = 0; k < n; ++k) f[k] = static_cast<std::uint8_t>(rng());
+        f[6] &= 0xFD;
+        f[12] = 0x88;
+        f[13] = 0xA4;
+        if (rng() % 2) st_le16(f.data() + 14, static_cast<std::uint16_t>(0x1000 | ((n - 16) & 0x7FF)));
+        std::size_t len = n;
+        replies += b.seg->process_frame(f, len, 1'000'000'000 + static_cast<std::uint64_t>(i) * 1000);
+        ASSERT_LE(len, f.size());
+    }
+    EXPECT_GT(replies, 0u);
+    EXPECT_GT(b.seg->counters().dropped, 0u);
+    // The slaves still answer a well-formed frame afterwards.
+    EXPECT_EQ(raw_datagram(*b.seg, 7, phys(0, 0), {0, 0}).wkc, 3);
+}
+
+TEST(BadInput, NonsenseAlRequestsGetAStatusCode) {
+    Bench b(1);
+    ASSERT_TRUE(b.master.startup(esc::AlState::Init));
+    const auto st = b.master.slaves()[0].station;
+    ASSERT_TRUE(b.master.write16(st, 0x0120, 0x00FF));
+    const auto r = b.master.read_al_status(st);
+    EXPECT_TRUE(r.error());
+    EXPECT_EQ(r.code, 0x0012);
+}

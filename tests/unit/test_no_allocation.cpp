@@ -1,0 +1,77 @@
+// The cyclic path (receive, process, send) allocates no memory: every operator new is counted.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+#include <thread>
+
+#include "net/netns.hpp"
+#include "net/raw_socket.hpp"
+#include "net/server.hpp"
+#include "test_support.hpp"
+
+namespace {
+std::atomic<std::uint64_t> g_allocs{0};
+}
+
+void* operator new(std::size_t n) {
+    g_allocs.fetch_add(1, std::memory_order_relaxed);
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) { return operator new(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+using namespace vecat;
+using namespace vecat::test;
+
+static bool g_netns = false;
+
+TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
+    Bench b(4);
+    ASSERT_TRUE(b.master.startup(esc::AlState::Op));
+    // A typical cyclic frame: LRW over the process image + FRMW of the reference clock's system time.
+    std::vector<std::uint8_t> img(4 * (16 + 28), 0);
+    std::uint8_t t[8] = {};
+    master::DatagramRequest dg[2] = {{esc::Command::LRW, 0x00010000, Bytes(img.data(), img.size())},
+                                     {esc::Command::FRMW, 0x09101001, Bytes(t, 8)}};
+    for (int i = 0; i < 10; ++i) ASSERT_TRUE(b.master.transact_frame(dg));
+    const auto before = g_allocs.load();
+    for (int i = 0; i < 10000; ++i) {
+        b.link.set_time(2'000'000'000ull + static_cast<std::uint64_t>(i) * 1'000'000);
+        ASSERT_TRUE(b.master.transact_frame(dg));
+        ASSERT_EQ(dg[0].wkc, 12);
+    }
+    EXPECT_EQ(g_allocs.load() - before, 0u);
+}
+
+TEST(NoAllocation, RawSocketServeLoop) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    std::string why;
+    ASSERT_TRUE(net::create_veth_pair("na-m", "na-s", &why)) << why;
+    auto seg = esc::make_segment(device::default_drive(), 2);
+    net::RawSocket ss("na-s"), ms("na-m");
+    std::atomic<bool> stop{false};
+    std::thread srv([&] { net::serve(*seg, ss, {}, stop); });
+    master::Master m(ms);
+    ASSERT_TRUE(m.startup(esc::AlState::Op, &why)) << why;
+    for (int i = 0; i < 50; ++i) m.exchange_process_data();
+    const auto before = g_allocs.load();
+    int ok = 0;
+    for (int i = 0; i < 2000; ++i) ok += m.exchange_process_data().value_or(0) == m.expected_wkc();
+    const auto allocs = g_allocs.load() - before;
+    stop = true;
+    srv.join();
+    EXPECT_EQ(ok, 2000);
+    EXPECT_EQ(allocs, 0u);
+}
+
+int main(int argc, char** argv) {
+    g_netns = net::enter_private_netns();
+    ::testing::InitGoogleTest(&argc, argv);
+    return RUN_ALL_TESTS();
+}

@@ -1,0 +1,137 @@
+// SyncManagers at the ESC level: mailbox (one buffer) and buffered (three buffers) modes.
+#include <gtest/gtest.h>
+
+#include "esc/esc.hpp"
+#include "esc/sii_image.hpp"
+#include "test_support.hpp"
+
+using namespace vecat;
+using namespace vecat::esc;
+
+namespace {
+// An ESC without firmware: the test plays the PDI side.
+struct EscOnly : ::testing::Test {
+    Esc esc{EscConfig{}, build_sii_image(device::default_drive())};
+    std::array<std::uint8_t, 512> buf{};
+
+    std::uint16_t dg(Command cmd, std::uint16_t ado, std::vector<std::uint8_t>& data) {
+        buf.fill(0);
+        buf[0] = static_cast<std::uint8_t>(cmd);
+        st_le16(&buf[2], 0);
+        st_le16(&buf[4], ado);
+        st_le16(&buf[6], static_cast<std::uint16_t>(data.size()));
+        std::copy(data.begin(), data.end(), buf.begin() + 10);
+        DatagramView d(buf.data());
+        esc.process(d, FrameTiming{1000, 2000});
+        std::copy(buf.begin() + 10, buf.begin() + 10 + static_cast<long>(data.size()), data.begin());
+        return d.wkc();
+    }
+    std::uint16_t write(std::uint16_t ado, std::vector<std::uint8_t> data) { return dg(Command::APWR, ado, data); }
+    std::uint16_t read(std::uint16_t ado, std::vector<std::uint8_t>& data) { return dg(Command::APRD, ado, data); }
+    void sm(unsigned i, std::uint16_t start, std::uint16_t len, std::uint8_t ctrl) {
+        std::vector<std::uint8_t> r{static_cast<std::uint8_t>(start), static_cast<std::uint8_t>(start >> 8),
+                                    static_cast<std::uint8_t>(len), static_cast<std::uint8_t>(len >> 8), ctrl, 0, 1, 0};
+        ASSERT_EQ(write(sm_addr(i), r), 1);
+    }
+};
+}  // namespace
+
+TEST_F(EscOnly, MailboxWriteRefusedWhileFull) {
+    sm(0, 0x1800, 8, 0x26);
+    EXPECT_EQ(write(0x1800, {1, 2, 3, 4, 5, 6, 7, 8}), 1);
+    EXPECT_TRUE(esc.sm_mailbox_full(0));
+    EXPECT_EQ(esc.peek(0x0805) & 0x08, 0x08);
+    EXPECT_EQ(write(0x1800, {9, 9, 9, 9, 9, 9, 9, 9}), 0);  // refused, content kept
+    std::array<std::uint8_t, 8> got{};
+    ASSERT_TRUE(esc.pdi_mailbox_take(0, got));
+    EXPECT_EQ(got[0], 1);
+    EXPECT_EQ(esc.peek(0x0805) & 0x08, 0);
+    EXPECT_EQ(write(0x1800, {9, 9, 9, 9, 9, 9, 9, 9}), 1);
+    std::vector<std::uint8_t> r(8);
+    EXPECT_EQ(read(0x1800, r), 0);  // the master may not read its write mailbox
+}
+
+TEST_F(EscOnly, MailboxFullOnlyAfterTheLastByte) {
+    sm(0, 0x1800, 8, 0x26);
+    EXPECT_EQ(write(0x1800, {1, 2, 3, 4}), 1);
+    EXPECT_FALSE(esc.sm_mailbox_full(0));
+    EXPECT_EQ(write(0x1804, {5, 6, 7, 8}), 1);
+    EXPECT_TRUE(esc.sm_mailbox_full(0));
+}
+
+TEST_F(EscOnly, MailboxReadEmptiesOnTheLastByte) {
+    sm(1, 0x18F6, 8, 0x22);
+    std::vector<std::uint8_t> r(8);
+    EXPECT_EQ(read(0x18F6, r), 0);  // empty: not counted
+    const std::uint8_t msg[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    ASSERT_TRUE(esc.pdi_mailbox_put(1, msg));
+    EXPECT_FALSE(esc.pdi_mailbox_put(1, msg));  // still full
+    std::vector<std::uint8_t> part(4);
+    EXPECT_EQ(read(0x18F6, part), 1);
+    EXPECT_TRUE(esc.sm_mailbox_full(1));
+    EXPECT_EQ(read(0x18F6, r), 1);
+    EXPECT_EQ(r[7], 8);
+    EXPECT_FALSE(esc.sm_mailbox_full(1));
+    EXPECT_EQ(esc.peek(0x080D) & 0x08, 0);
+    EXPECT_EQ(read(0x18F6, r), 0);
+}
+
+TEST_F(EscOnly, RepeatRequestRaisesAnEvent) {
+    sm(1, 0x18F6, 8, 0x22);
+    esc.pdi_take_sm_activation_event();
+    EXPECT_EQ(write(0x080E, {0x03}), 1);
+    EXPECT_TRUE(esc.sm_repeat_request(1));
+    EXPECT_TRUE(esc.pdi_take_sm_activation_event());
+    esc.pdi_set_repeat_ack(1, true);
+    EXPECT_EQ(esc.peek(0x080F) & 0x02, 0x02);
+}
+
+TEST_F(EscOnly, ThreeBufferOutputsAreConsistent) {
+    sm(2, 0x1000, 4, 0x64);
+    std::array<std::uint8_t, 4> out{};
+    EXPECT_FALSE(esc.pdi_buffer_read(2, out));  // never written
+    EXPECT_EQ(write(0x1000, {1, 1, 1, 1}), 1);
+    ASSERT_TRUE(esc.pdi_buffer_read(2, out));
+    EXPECT_EQ(out[0], 1);
+    EXPECT_EQ(write(0x1000, {2, 2}), 1);  // incomplete write: not visible
+    ASSERT_TRUE(esc.pdi_buffer_read(2, out));
+    EXPECT_EQ(out[0], 1);
+    EXPECT_EQ(write(0x1002, {2, 2}), 1);
+    EXPECT_EQ(write(0x1000, {3, 3, 3, 3}), 1);  // two complete writes before the PDI looks: newest wins
+    ASSERT_TRUE(esc.pdi_buffer_read(2, out));
+    EXPECT_EQ(out, (std::array<std::uint8_t, 4>{3, 3, 3, 3}));
+    EXPECT_EQ(esc.sm_buffer_writes(2), 3u);
+}
+
+TEST_F(EscOnly, ThreeBufferInputsAreConsistent) {
+    sm(3, 0x1100, 4, 0x20);
+    const std::uint8_t a[4] = {0xA, 0xA, 0xA, 0xA}, bb[4] = {0xB, 0xB, 0xB, 0xB};
+    ASSERT_TRUE(esc.pdi_buffer_write(3, a));
+    std::vector<std::uint8_t> first(2), second(2);
+    EXPECT_EQ(read(0x1100, first), 1);
+    ASSERT_TRUE(esc.pdi_buffer_write(3, bb));  // new data while the master is half-way through
+    EXPECT_EQ(read(0x1102, second), 1);
+    EXPECT_EQ(second[0], 0xA);  // the read finishes on the buffer it started with
+    std::vector<std::uint8_t> all(4);
+    EXPECT_EQ(read(0x1100, all), 1);
+    EXPECT_EQ(all[0], 0xB);
+    std::vector<std::uint8_t> again(4);
+    EXPECT_EQ(read(0x1100, again), 1);  // no new data: the last buffer again
+    EXPECT_EQ(again[3], 0xB);
+    EXPECT_EQ(write(0x1100, {1, 2, 3, 4}), 0);  // the master may not write its read buffer
+}
+
+TEST_F(EscOnly, DisabledSyncManagerIsPlainMemory) {
+    sm(2, 0x1000, 4, 0x64);
+    EXPECT_EQ(write(sm_addr(2) + 6, {0x00}), 1);  // disable
+    EXPECT_EQ(write(0x1000, {7, 7, 7, 7}), 1);
+    std::vector<std::uint8_t> r(4);
+    EXPECT_EQ(read(0x1000, r), 1);
+    EXPECT_EQ(r[0], 7);
+}
+
+TEST_F(EscOnly, SyncManagerOutsideRamIsIgnored) {
+    sm(2, 0x2FF0, 0x20, 0x64);  // three buffers would run past the 8 KiB RAM
+    EXPECT_FALSE(esc.sm_config(2).valid);
+    EXPECT_EQ(write(0x2FF0, {1}), 1);  // plain memory
+}
