@@ -35,7 +35,9 @@ struct Bench {
     std::uint64_t now = 1'000'000'000;
 };
 
-inline std::uint16_t reg(esc::Reg r) { return esc::addr(r); }
+inline std::uint16_t reg(esc::Reg r) {
+    return esc::addr(r);
+}
 
 // One datagram sent through a segment as a raw frame; what came back.
 struct RawReply {
@@ -49,8 +51,10 @@ struct RawReply {
 inline RawReply raw_datagram(esc::Segment& seg, std::uint8_t cmd, std::uint32_t address,
                              std::vector<std::uint8_t> data, std::uint64_t now = 1'000'000'000) {
     std::vector<std::uint8_t> f(14 + 2 + 10 + data.size() + 2, 0);
-    for (int i = 0; i < 6; ++i) f[i] = 0xFF;
-    for (int i = 6; i < 12; ++i) f[i] = 0x10;
+    for (int i = 0; i < 6; ++i)
+        f[i] = 0xFF;
+    for (int i = 6; i < 12; ++i)
+        f[i] = 0x10;
     f[12] = 0x88;
     f[13] = 0xA4;
     st_le16(f.data() + 14, static_cast<std::uint16_t>((10 + data.size() + 2) | 0x1000));
@@ -72,6 +76,8 @@ inline RawReply raw_datagram(esc::Segment& seg, std::uint8_t cmd, std::uint32_t 
     return r;
 }
 
-inline std::uint32_t phys(std::uint16_t adp, std::uint16_t ado) { return adp | (static_cast<std::uint32_t>(ado) << 16); }
+inline std::uint32_t phys(std::uint16_t adp, std::uint16_t ado) {
+    return adp | (static_cast<std::uint32_t>(ado) << 16);
+}
 
 }  // namespace vecat::test

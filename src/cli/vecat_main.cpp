@@ -20,7 +20,9 @@ namespace {
 
 std::atomic<bool> g_stop{false};
 
-void on_signal(int) { g_stop.store(true); }
+void on_signal(int) {
+    g_stop.store(true);
+}
 
 void install_signals() {
     struct sigaction sa {};
@@ -30,7 +32,8 @@ void install_signals() {
     sigaction(SIGTERM, &sa, nullptr);
 }
 
-int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy, bool allow_busy_if) {
+int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
+            bool allow_busy_if) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -52,8 +55,8 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     std::unique_ptr<vecat::net::PcapngWriter> pcap;
     if (!pcap_path.empty()) pcap = std::make_unique<vecat::net::PcapngWriter>(pcap_path, iface);
     install_signals();
-    fmt::print("vecat: {} x \"{}\" on {} (vendor 0x{:08X}, product 0x{:08X}); Ctrl-C stops\n", slaves, dev.name, iface,
-               dev.identity.vendor_id, dev.identity.product_code);
+    fmt::print("vecat: {} x \"{}\" on {} (vendor 0x{:08X}, product 0x{:08X}); Ctrl-C stops\n", slaves,
+               dev.name, iface, dev.identity.vendor_id, dev.identity.product_code);
     vecat::net::ServeOptions opt;
     opt.busy_poll = busy;
     opt.pcap = pcap.get();
@@ -88,17 +91,20 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
 
     int rc = 0;
     vecat::master::Master m(master_sock);
-    fmt::print("vecat demo: {} virtual drive(s) on veth pair vecat-m <-> vecat-s in a private network namespace\n",
-               slaves);
+    fmt::print(
+        "vecat demo: {} virtual drive(s) on veth pair vecat-m <-> vecat-s in a private network namespace\n",
+        slaves);
     std::string fail;
     if (!m.startup(AlState::Op, &fail)) {
         fmt::print(stderr, "vecat demo: start-up failed: {}\n", fail);
         rc = 1;
     } else {
         for (const auto& s : m.slaves())
-            fmt::print("  slave {} @0x{:04X}: \"{}\" vendor 0x{:08X} product 0x{:08X} rev 0x{:08X}, {} out / {} in bytes\n",
-                       s.position, s.station, s.sii.device_name(), s.sii.identity.vendor_id,
-                       s.sii.identity.product_code, s.sii.identity.revision, s.out_bytes, s.in_bytes);
+            fmt::print(
+                "  slave {} @0x{:04X}: \"{}\" vendor 0x{:08X} product 0x{:08X} rev 0x{:08X}, {} out / {} in "
+                "bytes\n",
+                s.position, s.station, s.sii.device_name(), s.sii.identity.vendor_id,
+                s.sii.identity.product_code, s.sii.identity.revision, s.out_bytes, s.in_bytes);
         fmt::print("  all slaves in OP; exchanging process data every 1 ms\n");
         unsigned misses = 0;
         auto next = std::chrono::steady_clock::now();
@@ -129,8 +135,8 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     server.join();
     pcap.flush();
     const auto img = vecat::esc::build_sii_image(dev);
-    std::ofstream(sii_path, std::ios::binary).write(reinterpret_cast<const char*>(img.data()),
-                                                    static_cast<std::streamsize>(img.size()));
+    std::ofstream(sii_path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));
     fmt::print("vecat demo: capture {} ({} frames), SII image {}\n", pcap_path, pcap.frames(), sii_path);
     return rc;
 }
@@ -160,11 +166,13 @@ int main(int argc, char** argv) {
         ->required();
     run->add_option("-n,--slaves", slaves, "Number of slaves on the line")->check(CLI::Range(1u, 512u));
     run->add_option("--pcap", pcap, "Write every frame in and out to this pcapng file");
-    run->add_flag("--busy-poll", busy, "Spin on the socket instead of sleeping (lowest latency, one core busy)");
+    run->add_flag("--busy-poll", busy,
+                  "Spin on the socket instead of sleeping (lowest latency, one core busy)");
     run->add_flag("--allow-used-interface", allow_used,
                   "Serve even on an interface that has an IP address or the default route");
 
-    auto* demo = app.add_subcommand("demo", "Run virtual slaves and the bundled master on a private veth pair");
+    auto* demo =
+        app.add_subcommand("demo", "Run virtual slaves and the bundled master on a private veth pair");
     unsigned demo_slaves = 2, demo_cycles = 3000;
     std::string outdir = "vecat-demo";
     demo->add_option("-n,--slaves", demo_slaves, "Number of slaves")->check(CLI::Range(1u, 64u));

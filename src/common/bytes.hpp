@@ -28,10 +28,12 @@ constexpr void st_le16(std::uint8_t* p, std::uint16_t v) noexcept {
     p[1] = static_cast<std::uint8_t>(v >> 8);
 }
 constexpr void st_le32(std::uint8_t* p, std::uint32_t v) noexcept {
-    for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+    for (int i = 0; i < 4; ++i)
+        p[i] = static_cast<std::uint8_t>(v >> (8 * i));
 }
 constexpr void st_le64(std::uint8_t* p, std::uint64_t v) noexcept {
-    for (int i = 0; i < 8; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+    for (int i = 0; i < 8; ++i)
+        p[i] = static_cast<std::uint8_t>(v >> (8 * i));
 }
 
 // Checked reads: nullopt when the field does not fit in the buffer.
@@ -72,7 +74,7 @@ inline bool write_le64(Bytes b, std::size_t off, std::uint64_t v) noexcept {
 // Appends little-endian fields to a byte container (std::vector<uint8_t> or similar).
 template <class Container>
 class LeWriter {
-public:
+  public:
     explicit LeWriter(Container& out) : out_(out) {}
     void u8(std::uint8_t v) { out_.push_back(v); }
     void u16(std::uint16_t v) {
@@ -91,7 +93,7 @@ public:
     void str(std::string_view s) { out_.insert(out_.end(), s.begin(), s.end()); }
     void fill(std::size_t n, std::uint8_t v) { out_.insert(out_.end(), n, v); }
 
-private:
+  private:
     Container& out_;
 };
 

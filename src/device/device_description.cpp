@@ -12,8 +12,12 @@ unsigned assigned_bytes(const std::vector<Pdo>& pdos) {
 
 }  // namespace
 
-unsigned DeviceDescription::output_bytes() const { return assigned_bytes(rx_pdos); }
-unsigned DeviceDescription::input_bytes() const { return assigned_bytes(tx_pdos); }
+unsigned DeviceDescription::output_bytes() const {
+    return assigned_bytes(rx_pdos);
+}
+unsigned DeviceDescription::input_bytes() const {
+    return assigned_bytes(tx_pdos);
+}
 
 const SyncManagerConfig* DeviceDescription::sm_of_type(SmType t) const {
     for (const auto& s : sync_managers)

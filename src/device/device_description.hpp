@@ -50,7 +50,7 @@ enum class DataType : std::uint16_t {
 };
 
 struct PdoEntry {
-    std::uint16_t index = 0;     // 0 with subindex 0: padding (gap)
+    std::uint16_t index = 0;  // 0 with subindex 0: padding (gap)
     std::uint8_t subindex = 0;
     std::uint8_t bit_length = 0;
     DataType type = DataType::Unsigned8;
@@ -60,15 +60,16 @@ struct PdoEntry {
 struct Pdo {
     std::uint16_t index = 0;  // 0x16xx RxPDO, 0x1Axx TxPDO
     std::string name;
-    std::uint8_t sm = 0;      // SyncManager it is assigned to by default
+    std::uint8_t sm = 0;  // SyncManager it is assigned to by default
     bool fixed = false;
     bool mandatory = false;
-    bool assigned = true;     // part of the default assignment
+    bool assigned = true;  // part of the default assignment
     std::vector<PdoEntry> entries;
 
     unsigned bit_length() const {
         unsigned n = 0;
-        for (const auto& e : entries) n += e.bit_length;
+        for (const auto& e : entries)
+            n += e.bit_length;
         return n;
     }
 };

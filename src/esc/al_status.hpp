@@ -15,8 +15,8 @@ enum class AlState : std::uint8_t {
 };
 
 inline constexpr std::uint8_t kAlStateMask = 0x0F;
-inline constexpr std::uint8_t kAlErrorFlag = 0x10;   // AL status: error indication; AL control: acknowledge
-inline constexpr std::uint8_t kAlIdentFlag = 0x20;   // device identification request / loaded
+inline constexpr std::uint8_t kAlErrorFlag = 0x10;  // AL status: error indication; AL control: acknowledge
+inline constexpr std::uint8_t kAlIdentFlag = 0x20;  // device identification request / loaded
 
 constexpr bool is_valid_state(std::uint8_t s) noexcept {
     return s == 0x01 || s == 0x02 || s == 0x03 || s == 0x04 || s == 0x08;
@@ -24,11 +24,16 @@ constexpr bool is_valid_state(std::uint8_t s) noexcept {
 
 constexpr std::string_view to_string(AlState s) noexcept {
     switch (s) {
-        case AlState::Init: return "INIT";
-        case AlState::PreOp: return "PREOP";
-        case AlState::Boot: return "BOOT";
-        case AlState::SafeOp: return "SAFEOP";
-        case AlState::Op: return "OP";
+        case AlState::Init:
+            return "INIT";
+        case AlState::PreOp:
+            return "PREOP";
+        case AlState::Boot:
+            return "BOOT";
+        case AlState::SafeOp:
+            return "SAFEOP";
+        case AlState::Op:
+            return "OP";
     }
     return "?";
 }
@@ -90,58 +95,110 @@ enum class AlStatusCode : std::uint16_t {
 
 constexpr std::string_view describe(AlStatusCode c) noexcept {
     switch (c) {
-        case AlStatusCode::NoError: return "No error";
-        case AlStatusCode::Unspecified: return "Unspecified error";
-        case AlStatusCode::NoMemory: return "No memory";
-        case AlStatusCode::InvalidDeviceSetup: return "Invalid device setup";
-        case AlStatusCode::InvalidRequestedStateChange: return "Invalid requested state change";
-        case AlStatusCode::UnknownRequestedState: return "Unknown requested state";
-        case AlStatusCode::BootstrapNotSupported: return "Bootstrap not supported";
-        case AlStatusCode::NoValidFirmware: return "No valid firmware";
-        case AlStatusCode::InvalidMailboxConfigBoot: return "Invalid mailbox configuration (BOOT)";
-        case AlStatusCode::InvalidMailboxConfigPreOp: return "Invalid mailbox configuration (PREOP)";
-        case AlStatusCode::InvalidSyncManagerConfig: return "Invalid sync manager configuration";
-        case AlStatusCode::NoValidInputs: return "No valid inputs available";
-        case AlStatusCode::NoValidOutputs: return "No valid outputs";
-        case AlStatusCode::SynchronizationError: return "Synchronization error";
-        case AlStatusCode::SyncManagerWatchdog: return "Sync manager watchdog";
-        case AlStatusCode::InvalidSyncManagerTypes: return "Invalid sync manager types";
-        case AlStatusCode::InvalidOutputConfig: return "Invalid output configuration";
-        case AlStatusCode::InvalidInputConfig: return "Invalid input configuration";
-        case AlStatusCode::InvalidWatchdogConfig: return "Invalid watchdog configuration";
-        case AlStatusCode::NeedsColdStart: return "Slave needs cold start";
-        case AlStatusCode::NeedsInit: return "Slave needs INIT";
-        case AlStatusCode::NeedsPreOp: return "Slave needs PREOP";
-        case AlStatusCode::NeedsSafeOp: return "Slave needs SAFEOP";
-        case AlStatusCode::InvalidInputMapping: return "Invalid input mapping";
-        case AlStatusCode::InvalidOutputMapping: return "Invalid output mapping";
-        case AlStatusCode::InconsistentSettings: return "Inconsistent settings";
-        case AlStatusCode::FreeRunNotSupported: return "Free run not supported";
-        case AlStatusCode::SyncNotSupported: return "Synchronization not supported";
-        case AlStatusCode::FreeRunNeeds3Buffer: return "Free run needs 3-buffer mode";
-        case AlStatusCode::BackgroundWatchdog: return "Background watchdog";
-        case AlStatusCode::NoValidInputsAndOutputs: return "No valid inputs and outputs";
-        case AlStatusCode::FatalSyncError: return "Fatal sync error";
-        case AlStatusCode::NoSyncError: return "No sync error";
-        case AlStatusCode::CycleTimeTooSmall: return "Cycle time too small";
-        case AlStatusCode::InvalidDcSyncConfig: return "Invalid DC SYNC configuration";
-        case AlStatusCode::InvalidDcLatchConfig: return "Invalid DC latch configuration";
-        case AlStatusCode::PllError: return "PLL error";
-        case AlStatusCode::DcSyncIoError: return "DC sync IO error";
-        case AlStatusCode::DcSyncTimeout: return "DC sync timeout error";
-        case AlStatusCode::DcInvalidSyncCycleTime: return "DC invalid sync cycle time";
-        case AlStatusCode::DcInvalidSync0CycleTime: return "DC invalid SYNC0 cycle time";
-        case AlStatusCode::DcInvalidSync1CycleTime: return "DC invalid SYNC1 cycle time";
-        case AlStatusCode::MailboxAoe: return "Mailbox AoE error";
-        case AlStatusCode::MailboxEoe: return "Mailbox EoE error";
-        case AlStatusCode::MailboxCoe: return "Mailbox CoE error";
-        case AlStatusCode::MailboxFoe: return "Mailbox FoE error";
-        case AlStatusCode::MailboxSoe: return "Mailbox SoE error";
-        case AlStatusCode::MailboxVoe: return "Mailbox VoE error";
-        case AlStatusCode::EepromNoAccess: return "EEPROM no access";
-        case AlStatusCode::EepromError: return "EEPROM error";
-        case AlStatusCode::RestartedLocally: return "Slave restarted locally";
-        case AlStatusCode::DeviceIdentificationUpdated: return "Device identification value updated";
+        case AlStatusCode::NoError:
+            return "No error";
+        case AlStatusCode::Unspecified:
+            return "Unspecified error";
+        case AlStatusCode::NoMemory:
+            return "No memory";
+        case AlStatusCode::InvalidDeviceSetup:
+            return "Invalid device setup";
+        case AlStatusCode::InvalidRequestedStateChange:
+            return "Invalid requested state change";
+        case AlStatusCode::UnknownRequestedState:
+            return "Unknown requested state";
+        case AlStatusCode::BootstrapNotSupported:
+            return "Bootstrap not supported";
+        case AlStatusCode::NoValidFirmware:
+            return "No valid firmware";
+        case AlStatusCode::InvalidMailboxConfigBoot:
+            return "Invalid mailbox configuration (BOOT)";
+        case AlStatusCode::InvalidMailboxConfigPreOp:
+            return "Invalid mailbox configuration (PREOP)";
+        case AlStatusCode::InvalidSyncManagerConfig:
+            return "Invalid sync manager configuration";
+        case AlStatusCode::NoValidInputs:
+            return "No valid inputs available";
+        case AlStatusCode::NoValidOutputs:
+            return "No valid outputs";
+        case AlStatusCode::SynchronizationError:
+            return "Synchronization error";
+        case AlStatusCode::SyncManagerWatchdog:
+            return "Sync manager watchdog";
+        case AlStatusCode::InvalidSyncManagerTypes:
+            return "Invalid sync manager types";
+        case AlStatusCode::InvalidOutputConfig:
+            return "Invalid output configuration";
+        case AlStatusCode::InvalidInputConfig:
+            return "Invalid input configuration";
+        case AlStatusCode::InvalidWatchdogConfig:
+            return "Invalid watchdog configuration";
+        case AlStatusCode::NeedsColdStart:
+            return "Slave needs cold start";
+        case AlStatusCode::NeedsInit:
+            return "Slave needs INIT";
+        case AlStatusCode::NeedsPreOp:
+            return "Slave needs PREOP";
+        case AlStatusCode::NeedsSafeOp:
+            return "Slave needs SAFEOP";
+        case AlStatusCode::InvalidInputMapping:
+            return "Invalid input mapping";
+        case AlStatusCode::InvalidOutputMapping:
+            return "Invalid output mapping";
+        case AlStatusCode::InconsistentSettings:
+            return "Inconsistent settings";
+        case AlStatusCode::FreeRunNotSupported:
+            return "Free run not supported";
+        case AlStatusCode::SyncNotSupported:
+            return "Synchronization not supported";
+        case AlStatusCode::FreeRunNeeds3Buffer:
+            return "Free run needs 3-buffer mode";
+        case AlStatusCode::BackgroundWatchdog:
+            return "Background watchdog";
+        case AlStatusCode::NoValidInputsAndOutputs:
+            return "No valid inputs and outputs";
+        case AlStatusCode::FatalSyncError:
+            return "Fatal sync error";
+        case AlStatusCode::NoSyncError:
+            return "No sync error";
+        case AlStatusCode::CycleTimeTooSmall:
+            return "Cycle time too small";
+        case AlStatusCode::InvalidDcSyncConfig:
+            return "Invalid DC SYNC configuration";
+        case AlStatusCode::InvalidDcLatchConfig:
+            return "Invalid DC latch configuration";
+        case AlStatusCode::PllError:
+            return "PLL error";
+        case AlStatusCode::DcSyncIoError:
+            return "DC sync IO error";
+        case AlStatusCode::DcSyncTimeout:
+            return "DC sync timeout error";
+        case AlStatusCode::DcInvalidSyncCycleTime:
+            return "DC invalid sync cycle time";
+        case AlStatusCode::DcInvalidSync0CycleTime:
+            return "DC invalid SYNC0 cycle time";
+        case AlStatusCode::DcInvalidSync1CycleTime:
+            return "DC invalid SYNC1 cycle time";
+        case AlStatusCode::MailboxAoe:
+            return "Mailbox AoE error";
+        case AlStatusCode::MailboxEoe:
+            return "Mailbox EoE error";
+        case AlStatusCode::MailboxCoe:
+            return "Mailbox CoE error";
+        case AlStatusCode::MailboxFoe:
+            return "Mailbox FoE error";
+        case AlStatusCode::MailboxSoe:
+            return "Mailbox SoE error";
+        case AlStatusCode::MailboxVoe:
+            return "Mailbox VoE error";
+        case AlStatusCode::EepromNoAccess:
+            return "EEPROM no access";
+        case AlStatusCode::EepromError:
+            return "EEPROM error";
+        case AlStatusCode::RestartedLocally:
+            return "Slave restarted locally";
+        case AlStatusCode::DeviceIdentificationUpdated:
+            return "Device identification value updated";
     }
     return "Unknown AL status code";
 }

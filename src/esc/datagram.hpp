@@ -49,7 +49,7 @@ constexpr std::string_view to_string(Command c) noexcept {
 // A view of one datagram inside a frame buffer. Layout: cmd(1) idx(1) address(4) len/flags(2) irq(2)
 // data(len) wkc(2).
 class DatagramView {
-public:
+  public:
     DatagramView() = default;
     explicit DatagramView(std::uint8_t* hdr) : p_(hdr) {}
 
@@ -70,7 +70,7 @@ public:
     void add_wkc(unsigned n) { set_wkc(static_cast<std::uint16_t>(wkc() + n)); }
     std::size_t total_size() const { return kDatagramHeaderSize + length() + kWkcSize; }
 
-private:
+  private:
     std::uint8_t* p_ = nullptr;
 };
 
@@ -86,13 +86,20 @@ enum class FrameError : std::uint8_t {
 
 constexpr std::string_view to_string(FrameError e) noexcept {
     switch (e) {
-        case FrameError::None: return "ok";
-        case FrameError::TooShort: return "frame too short";
-        case FrameError::NotEtherCat: return "not an EtherCAT frame";
-        case FrameError::NotCommands: return "EtherCAT type is not datagrams";
-        case FrameError::HeaderLength: return "EtherCAT length exceeds the frame";
-        case FrameError::DatagramOverrun: return "datagram runs past the EtherCAT payload";
-        case FrameError::TooManyDatagrams: return "too many datagrams";
+        case FrameError::None:
+            return "ok";
+        case FrameError::TooShort:
+            return "frame too short";
+        case FrameError::NotEtherCat:
+            return "not an EtherCAT frame";
+        case FrameError::NotCommands:
+            return "EtherCAT type is not datagrams";
+        case FrameError::HeaderLength:
+            return "EtherCAT length exceeds the frame";
+        case FrameError::DatagramOverrun:
+            return "datagram runs past the EtherCAT payload";
+        case FrameError::TooManyDatagrams:
+            return "too many datagrams";
     }
     return "?";
 }
@@ -104,7 +111,9 @@ struct ParsedFrame {
     std::size_t count = 0;
     std::array<std::uint16_t, kMaxDatagramsPerFrame> offsets{};  // of each datagram header
 
-    DatagramView datagram(Bytes frame, std::size_t i) const { return DatagramView(frame.data() + offsets[i]); }
+    DatagramView datagram(Bytes frame, std::size_t i) const {
+        return DatagramView(frame.data() + offsets[i]);
+    }
 };
 
 // Locates and checks every datagram. Never reads past frame.size().

@@ -262,7 +262,8 @@ void Esc::logical(DatagramView d, bool do_read, bool do_write, const FrameTiming
                         if (db / 8 >= np) break;
                         const bool bit = (data[sb / 8] >> (sb % 8)) & 1u;
                         auto& byte = scratch_[db / 8];
-                        byte = static_cast<std::uint8_t>(bit ? (byte | (1u << (db % 8))) : (byte & ~(1u << (db % 8))));
+                        byte = static_cast<std::uint8_t>(bit ? (byte | (1u << (db % 8)))
+                                                             : (byte & ~(1u << (db % 8))));
                     }
                     ok = ecat_write(static_cast<std::uint16_t>(p0), scratch_.data(), np, t);
                 } else {
@@ -317,7 +318,8 @@ std::uint8_t* Esc::ecat_write_target(std::uint32_t a) {
     if (a >= kRegisterSpaceSize) {
         const int i = sm_covering(a);
         if (i >= 0 && !sm_[i].mailbox && sm_[i].ecat_writes)
-            return &mem_[sm_[i].start + static_cast<std::size_t>(sm_[i].buf_ecat) * sm_[i].length + (a - sm_[i].start)];
+            return &mem_[sm_[i].start + static_cast<std::size_t>(sm_[i].buf_ecat) * sm_[i].length +
+                         (a - sm_[i].start)];
     }
     return &mem_[a];
 }
@@ -339,9 +341,11 @@ bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_i
         if (cur > 0xFFFF) break;  // past the 16-bit address space: nothing there
         if (cur < kRegisterSpaceSize) {
             run = std::min<std::size_t>(rem, kRegisterSpaceSize - cur);
-            refresh_dynamic_registers(static_cast<std::uint16_t>(cur), static_cast<std::uint16_t>(cur + run - 1), t);
+            refresh_dynamic_registers(static_cast<std::uint16_t>(cur),
+                                      static_cast<std::uint16_t>(cur + run - 1), t);
             if (or_into)
-                for (std::size_t k = 0; k < run; ++k) dst[pos + k] |= mem_[cur + k];
+                for (std::size_t k = 0; k < run; ++k)
+                    dst[pos + k] |= mem_[cur + k];
             else
                 std::memcpy(dst + pos, &mem_[cur], run);
             counted = true;
@@ -349,11 +353,13 @@ bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_i
             const int s = sm_covering(cur);
             if (s >= 0) {
                 run = std::min<std::size_t>(rem, sm_[s].start + sm_[s].length - cur);
-                counted |= sm_ecat_read(static_cast<unsigned>(s), cur - sm_[s].start, dst + pos, run, or_into);
+                counted |=
+                    sm_ecat_read(static_cast<unsigned>(s), cur - sm_[s].start, dst + pos, run, or_into);
             } else {
                 run = std::min<std::size_t>(rem, next_sm_start(cur) - cur);
                 if (or_into)
-                    for (std::size_t k = 0; k < run; ++k) dst[pos + k] |= mem_[cur + k];
+                    for (std::size_t k = 0; k < run; ++k)
+                        dst[pos + k] |= mem_[cur + k];
                 else
                     std::memcpy(dst + pos, &mem_[cur], run);
                 counted = true;
@@ -394,7 +400,8 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
                     sii_cmd_written = true;
                 } else if (ad >= addr(Reg::DcSystemTime) && ad < addr(Reg::DcSystemTime) + 8u) {
                     systime[ad - addr(Reg::DcSystemTime)] = v;
-                    systime_bytes = static_cast<std::uint8_t>(systime_bytes | (1u << (ad - addr(Reg::DcSystemTime))));
+                    systime_bytes =
+                        static_cast<std::uint8_t>(systime_bytes | (1u << (ad - addr(Reg::DcSystemTime))));
                 }
                 mem_[ad] = static_cast<std::uint8_t>((mem_[ad] & ~m) | (v & m));
             }
@@ -456,7 +463,8 @@ bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size
         src = &mem_[s.start + static_cast<std::size_t>(s.buf_ecat) * s.length + off];
     }
     if (or_into)
-        for (std::size_t k = 0; k < n; ++k) dst[k] |= src[k];
+        for (std::size_t k = 0; k < n; ++k)
+            dst[k] |= src[k];
     else
         std::memcpy(dst, src, n);
     if (off + n == s.length) {  // last byte read: buffer released
@@ -511,15 +519,18 @@ void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTi
         mem_[addr(Reg::EcatProcessingUnitErrorCounter)] = 0;
     if (overlaps(lo, hi, addr(Reg::PdiErrorCounter), 1)) mem_[addr(Reg::PdiErrorCounter)] = 0;
     if (overlaps(lo, hi, addr(Reg::LostLinkCounter), 4)) std::memset(&mem_[addr(Reg::LostLinkCounter)], 0, 4);
-    if (overlaps(lo, hi, addr(Reg::WatchdogCounterProcessData), 1)) mem_[addr(Reg::WatchdogCounterProcessData)] = 0;
+    if (overlaps(lo, hi, addr(Reg::WatchdogCounterProcessData), 1))
+        mem_[addr(Reg::WatchdogCounterProcessData)] = 0;
     if (overlaps(lo, hi, addr(Reg::WatchdogCounterPdi), 1)) mem_[addr(Reg::WatchdogCounterPdi)] = 0;
     if (overlaps(lo, hi, 0x0600, kFmmuSize * cfg_.fmmu_count)) {
         const unsigned f0 = lo < 0x0600 ? 0 : (lo - 0x0600u) / kFmmuSize;
-        for (unsigned f = f0; f < cfg_.fmmu_count && fmmu_addr(f) <= hi; ++f) update_fmmu(f);
+        for (unsigned f = f0; f < cfg_.fmmu_count && fmmu_addr(f) <= hi; ++f)
+            update_fmmu(f);
     }
     if (overlaps(lo, hi, 0x0800, kSmSize * cfg_.sm_count)) {
         const unsigned s0 = lo < 0x0800 ? 0 : (lo - 0x0800u) / kSmSize;
-        for (unsigned s = s0; s < cfg_.sm_count && sm_addr(s) <= hi; ++s) update_sm(s);
+        for (unsigned s = s0; s < cfg_.sm_count && sm_addr(s) <= hi; ++s)
+            update_sm(s);
     }
     if (overlaps(lo, hi, addr(Reg::DcRecvTimePort0), 4)) {
         // Write to receive time port 0: every port latches the time this frame passed it (ETG.1000.4 9.1).
@@ -542,15 +553,20 @@ void Esc::update_fmmu(unsigned i) {
     f.write = b[fmmu::Type] & 0x02;
     f.log_first_bit = static_cast<std::uint64_t>(lstart) * 8 + sbit;
     f.log_last_bit = (static_cast<std::uint64_t>(lstart) + (len ? len - 1 : 0)) * 8 + ebit;
-    f.phys_first_bit = static_cast<std::uint32_t>(ld_le16(b + fmmu::PhysicalStart)) * 8 + (b[fmmu::PhysicalStartBit] & 7);
+    f.phys_first_bit =
+        static_cast<std::uint32_t>(ld_le16(b + fmmu::PhysicalStart)) * 8 + (b[fmmu::PhysicalStartBit] & 7);
     f.byte_aligned = sbit == 0 && ebit == 7 && (b[fmmu::PhysicalStartBit] & 7) == 0;
     f.active = (b[fmmu::Activate] & 1) && (f.read || f.write) && len > 0 && f.log_last_bit >= f.log_first_bit;
 }
 
 Esc::SmConfigView Esc::sm_config(unsigned i) const {
     const std::uint8_t* b = &mem_[sm_addr(i)];
-    return {ld_le16(b + sm::PhysicalStart), ld_le16(b + sm::Length), b[sm::Control],
-            (b[sm::Activate] & sm::ActEnable) != 0, (b[sm::PdiControl] & sm::PdiDeactivate) != 0, sm_[i].valid};
+    return {ld_le16(b + sm::PhysicalStart),
+            ld_le16(b + sm::Length),
+            b[sm::Control],
+            (b[sm::Activate] & sm::ActEnable) != 0,
+            (b[sm::PdiControl] & sm::PdiDeactivate) != 0,
+            sm_[i].valid};
 }
 
 void Esc::update_sm(unsigned i) {
@@ -562,11 +578,14 @@ void Esc::update_sm(unsigned i) {
     const std::uint8_t control = b[sm::Control];
     const bool mode_ok = (control & sm::CtrlModeMask) == sm::CtrlModeBuffered ||
                          (control & sm::CtrlModeMask) == sm::CtrlModeMailbox;
-    const bool dir_ok = (control & sm::CtrlDirMask) == sm::CtrlDirRead || (control & sm::CtrlDirMask) == sm::CtrlDirWrite;
+    const bool dir_ok =
+        (control & sm::CtrlDirMask) == sm::CtrlDirRead || (control & sm::CtrlDirMask) == sm::CtrlDirWrite;
     const bool mailbox = (control & sm::CtrlModeMask) == sm::CtrlModeMailbox;
     const std::size_t span = mailbox ? length : 3u * length;
-    const bool valid = mode_ok && dir_ok && length > 0 && start >= kRegisterSpaceSize && start + span <= mem_.size();
-    const bool active = (b[sm::Activate] & sm::ActEnable) && !(b[sm::PdiControl] & sm::PdiDeactivate) && valid;
+    const bool valid =
+        mode_ok && dir_ok && length > 0 && start >= kRegisterSpaceSize && start + span <= mem_.size();
+    const bool active =
+        (b[sm::Activate] & sm::ActEnable) && !(b[sm::PdiControl] & sm::PdiDeactivate) && valid;
     const bool changed = active != s.active || start != s.start || length != s.length || control != s.control;
     const bool repeat = (b[sm::Activate] & sm::ActRepeatRequest) != 0;
     static_assert(kMaxSms <= 32);
@@ -613,7 +632,8 @@ void Esc::update_sm_status(unsigned i) {
     } else if (s.mailbox) {
         if (s.mbx_full) st = sm::StatusMailboxFull | sm::StatusIrqWrite;
     } else {
-        const std::uint8_t last = s.buf_next != SmState::kNone ? s.buf_next : (s.ecat_writes ? s.buf_pdi : s.buf_ecat);
+        const std::uint8_t last =
+            s.buf_next != SmState::kNone ? s.buf_next : (s.ecat_writes ? s.buf_pdi : s.buf_ecat);
         st = static_cast<std::uint8_t>((last & 0x3) << sm::StatusBufferShift);
         if (s.buf_next != SmState::kNone) st |= sm::StatusIrqWrite;
         if (s.ecat_reading) st |= sm::StatusReadBufferInUse;
@@ -635,7 +655,9 @@ void Esc::pdi_deactivate_sm(unsigned i, bool deactivate) {
     update_sm(i);
 }
 
-bool Esc::sm_repeat_request(unsigned i) const { return (mem_[sm_addr(i) + sm::Activate] & sm::ActRepeatRequest) != 0; }
+bool Esc::sm_repeat_request(unsigned i) const {
+    return (mem_[sm_addr(i) + sm::Activate] & sm::ActRepeatRequest) != 0;
+}
 
 void Esc::pdi_set_repeat_ack(unsigned i, bool ack) {
     std::uint8_t& pc = mem_[sm_addr(i) + sm::PdiControl];
@@ -711,8 +733,8 @@ void Esc::sii_command(std::uint8_t cmd_byte) {
     std::uint16_t ctrl = ld_le16(&mem_[addr(Reg::SiiControl)]);
     const bool write_enable = ctrl & sii_ctrl::WriteEnable;
     // A new command (or a write of 0) clears the error bits of the previous one.
-    ctrl = static_cast<std::uint16_t>(ctrl & ~(sii_ctrl::ErrorAck | sii_ctrl::ErrorWriteEnable | sii_ctrl::CmdMask |
-                                               sii_ctrl::WriteEnable | sii_ctrl::Busy));
+    ctrl = static_cast<std::uint16_t>(ctrl & ~(sii_ctrl::ErrorAck | sii_ctrl::ErrorWriteEnable |
+                                               sii_ctrl::CmdMask | sii_ctrl::WriteEnable | sii_ctrl::Busy));
     const unsigned cmd = cmd_byte & 0x07;
     const std::uint32_t word_addr = ld_le32(&mem_[addr(Reg::SiiAddress)]);
     const std::size_t words = eeprom_.size() / 2;

@@ -19,13 +19,13 @@ struct EscConfig {
     std::uint16_t build = 0x0002;
     std::uint8_t fmmu_count = 8;
     std::uint8_t sm_count = 8;
-    std::uint32_t ram_bytes = 8192;      // process RAM from 0x1000, at least 8 KiB
-    std::uint8_t port_descriptor = 0x0F; // ports 0 and 1: MII; ports 2, 3 not implemented
+    std::uint32_t ram_bytes = 8192;       // process RAM from 0x1000, at least 8 KiB
+    std::uint8_t port_descriptor = 0x0F;  // ports 0 and 1: MII; ports 2, 3 not implemented
     std::uint16_t features = feature::DcAvailable | feature::Dc64Bit | feature::EnhancedLinkMii |
                              feature::SeparateFcsErrors | feature::EnhancedDcSyncActivation;
     bool sii_read_8_bytes = true;
-    double dc_drift_ppm = 0.0;           // local clock drift against the host clock
-    std::uint64_t dc_initial_ns = 0;     // local time at power-on
+    double dc_drift_ppm = 0.0;        // local clock drift against the host clock
+    std::uint64_t dc_initial_ns = 0;  // local time at power-on
 };
 
 // Where the frame is on the line when it reaches this ESC (nanoseconds on the host clock).
@@ -41,7 +41,7 @@ struct EscCounters {
 };
 
 class Esc {
-public:
+  public:
     explicit Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom);
 
     // ---- EtherCAT side
@@ -65,9 +65,9 @@ public:
         std::uint16_t start;
         std::uint16_t length;
         std::uint8_t control;
-        bool ecat_enabled;    // enable bit written by the master
-        bool pdi_deactivated; // deactivated by the application
-        bool valid;           // the buffers fit the process RAM
+        bool ecat_enabled;     // enable bit written by the master
+        bool pdi_deactivated;  // deactivated by the application
+        bool valid;            // the buffers fit the process RAM
     };
     SmConfigView sm_config(unsigned i) const;
     void pdi_deactivate_sm(unsigned i, bool deactivate);
@@ -100,8 +100,12 @@ public:
 
     // ---- Raw access for tests, tools and the application's own registers
     std::uint8_t peek(std::uint16_t a) const { return a < mem_.size() ? mem_[a] : 0; }
-    std::uint16_t peek16(std::uint16_t a) const { return static_cast<std::uint16_t>(peek(a) | (peek(a + 1) << 8)); }
-    std::uint32_t peek32(std::uint16_t a) const { return peek16(a) | (static_cast<std::uint32_t>(peek16(a + 2)) << 16); }
+    std::uint16_t peek16(std::uint16_t a) const {
+        return static_cast<std::uint16_t>(peek(a) | (peek(a + 1) << 8));
+    }
+    std::uint32_t peek32(std::uint16_t a) const {
+        return peek16(a) | (static_cast<std::uint32_t>(peek16(a + 2)) << 16);
+    }
     const std::vector<std::uint8_t>& eeprom() const { return eeprom_; }
     const EscConfig& config() const { return cfg_; }
     const EscCounters& counters() const { return counters_; }
@@ -110,7 +114,7 @@ public:
     // Reloads the ESC configuration area from the EEPROM (as at power-on and on an SII reload command).
     void reload_eeprom();
 
-private:
+  private:
     struct SmState {
         bool active = false;  // enabled by ECAT, not deactivated by PDI, config valid
         bool valid = false;
@@ -145,7 +149,7 @@ private:
     bool ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t);
     bool sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into);
     bool sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n);
-    int sm_covering(std::uint32_t a) const;     // -1 if none
+    int sm_covering(std::uint32_t a) const;  // -1 if none
     std::uint32_t next_sm_start(std::uint32_t a) const;
     std::uint8_t* ecat_write_target(std::uint32_t a);  // where an ECAT write of this byte lands
 
@@ -160,7 +164,7 @@ private:
     void update_dl_status();
 
     EscConfig cfg_;
-    std::vector<std::uint8_t> mem_;     // 0x0000 .. 0x1000 + ram_bytes
+    std::vector<std::uint8_t> mem_;  // 0x0000 .. 0x1000 + ram_bytes
     std::vector<std::uint8_t> eeprom_;
     WriteMaskTable wmask_;
     std::array<SmState, kMaxSms> sm_{};

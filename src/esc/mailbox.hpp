@@ -38,15 +38,24 @@ enum class MailboxError : std::uint16_t {
 
 constexpr std::string_view describe(MailboxError e) noexcept {
     switch (e) {
-        case MailboxError::Syntax: return "Syntax of 6 octet mailbox header is wrong";
-        case MailboxError::UnsupportedProtocol: return "The mailbox protocol is not supported";
-        case MailboxError::InvalidChannel: return "Channel field contains wrong value";
-        case MailboxError::ServiceNotSupported: return "The service in the mailbox protocol is not supported";
-        case MailboxError::InvalidHeader: return "The mailbox protocol header is wrong";
-        case MailboxError::SizeTooShort: return "Length of received mailbox data is too short";
-        case MailboxError::NoMoreMemory: return "Mailbox protocol can not be processed: limited resources";
-        case MailboxError::InvalidSize: return "The length of data is inconsistent";
-        case MailboxError::ServiceInWork: return "Mailbox service already in use";
+        case MailboxError::Syntax:
+            return "Syntax of 6 octet mailbox header is wrong";
+        case MailboxError::UnsupportedProtocol:
+            return "The mailbox protocol is not supported";
+        case MailboxError::InvalidChannel:
+            return "Channel field contains wrong value";
+        case MailboxError::ServiceNotSupported:
+            return "The service in the mailbox protocol is not supported";
+        case MailboxError::InvalidHeader:
+            return "The mailbox protocol header is wrong";
+        case MailboxError::SizeTooShort:
+            return "Length of received mailbox data is too short";
+        case MailboxError::NoMoreMemory:
+            return "Mailbox protocol can not be processed: limited resources";
+        case MailboxError::InvalidSize:
+            return "The length of data is inconsistent";
+        case MailboxError::ServiceInWork:
+            return "Mailbox service already in use";
     }
     return "Unknown mailbox error";
 }
@@ -65,7 +74,7 @@ void write_mailbox_header(Bytes b, const MailboxHeader& h) noexcept;
 
 // Where a protocol handler puts its answer. The payload excludes the 6-byte mailbox header.
 class MailboxReplySink {
-public:
+  public:
     virtual ~MailboxReplySink() = default;
     // Space for one reply payload of at most max_payload() bytes; commit() sends it.
     virtual Bytes reply_buffer() = 0;
@@ -75,7 +84,7 @@ public:
 
 // A mailbox protocol served by the slave application (CoE, FoE, ...).
 class MailboxProtocol {
-public:
+  public:
     virtual ~MailboxProtocol() = default;
     virtual MailboxType type() const = 0;
     // Handles one request. Must answer through the sink (data, abort or mailbox error), never silently.

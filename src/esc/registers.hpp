@@ -43,12 +43,12 @@ enum class Reg : std::uint16_t {
     AlEventMask = 0x0204,
     EcatEventRequest = 0x0210,
     AlEventRequest = 0x0220,
-    RxErrorCounter = 0x0300,      // 4 ports x {invalid frame, RX error}
-    FwdRxErrorCounter = 0x0308,   // 4 ports
+    RxErrorCounter = 0x0300,     // 4 ports x {invalid frame, RX error}
+    FwdRxErrorCounter = 0x0308,  // 4 ports
     EcatProcessingUnitErrorCounter = 0x030C,
     PdiErrorCounter = 0x030D,
     PdiErrorCode = 0x030E,
-    LostLinkCounter = 0x0310,     // 4 ports
+    LostLinkCounter = 0x0310,  // 4 ports
     WatchdogDivider = 0x0400,
     WatchdogTimePdi = 0x0410,
     WatchdogTimeProcessData = 0x0420,
@@ -97,7 +97,9 @@ enum class Reg : std::uint16_t {
     ProcessRam = 0x1000,
 };
 
-constexpr std::uint16_t addr(Reg r) noexcept { return static_cast<std::uint16_t>(r); }
+constexpr std::uint16_t addr(Reg r) noexcept {
+    return static_cast<std::uint16_t>(r);
+}
 
 inline constexpr unsigned kFmmuSize = 16;
 inline constexpr unsigned kSmSize = 8;
@@ -105,19 +107,23 @@ inline constexpr unsigned kMaxFmmus = 16;
 inline constexpr unsigned kMaxSms = 16;
 inline constexpr std::uint16_t kRegisterSpaceSize = 0x1000;
 
-constexpr std::uint16_t fmmu_addr(unsigned i) noexcept { return static_cast<std::uint16_t>(0x0600 + kFmmuSize * i); }
-constexpr std::uint16_t sm_addr(unsigned i) noexcept { return static_cast<std::uint16_t>(0x0800 + kSmSize * i); }
+constexpr std::uint16_t fmmu_addr(unsigned i) noexcept {
+    return static_cast<std::uint16_t>(0x0600 + kFmmuSize * i);
+}
+constexpr std::uint16_t sm_addr(unsigned i) noexcept {
+    return static_cast<std::uint16_t>(0x0800 + kSmSize * i);
+}
 
 // Offsets inside one FMMU block (ETG.1000.4 Table 56).
 namespace fmmu {
-inline constexpr unsigned LogicalStart = 0;   // u32
-inline constexpr unsigned Length = 4;         // u16, bytes
+inline constexpr unsigned LogicalStart = 0;  // u32
+inline constexpr unsigned Length = 4;        // u16, bytes
 inline constexpr unsigned LogicalStartBit = 6;
 inline constexpr unsigned LogicalStopBit = 7;
 inline constexpr unsigned PhysicalStart = 8;  // u16
 inline constexpr unsigned PhysicalStartBit = 10;
-inline constexpr unsigned Type = 11;          // bit 0 read, bit 1 write
-inline constexpr unsigned Activate = 12;      // bit 0
+inline constexpr unsigned Type = 11;      // bit 0 read, bit 1 write
+inline constexpr unsigned Activate = 12;  // bit 0
 }  // namespace fmmu
 
 // Offsets inside one SyncManager block (ETG.1000.4 Table 58) and their bits.
@@ -132,7 +138,7 @@ inline constexpr unsigned PdiControl = 7;
 inline constexpr std::uint8_t CtrlModeMask = 0x03;  // 00 buffered (3 buffers), 10 mailbox
 inline constexpr std::uint8_t CtrlModeBuffered = 0x00;
 inline constexpr std::uint8_t CtrlModeMailbox = 0x02;
-inline constexpr std::uint8_t CtrlDirMask = 0x0C;   // 00 ECAT reads, 01 ECAT writes
+inline constexpr std::uint8_t CtrlDirMask = 0x0C;  // 00 ECAT reads, 01 ECAT writes
 inline constexpr std::uint8_t CtrlDirRead = 0x00;
 inline constexpr std::uint8_t CtrlDirWrite = 0x04;
 inline constexpr std::uint8_t CtrlIrqEcat = 0x10;
@@ -157,8 +163,12 @@ namespace dl_status {
 inline constexpr std::uint16_t PdiOperational = 0x0001;
 inline constexpr std::uint16_t PdiWatchdogOk = 0x0002;
 inline constexpr std::uint16_t EnhancedLinkDetection = 0x0004;
-constexpr std::uint16_t link(unsigned port) { return static_cast<std::uint16_t>(0x0010u << port); }
-constexpr std::uint16_t loop_closed(unsigned port) { return static_cast<std::uint16_t>(0x0100u << (2 * port)); }
+constexpr std::uint16_t link(unsigned port) {
+    return static_cast<std::uint16_t>(0x0010u << port);
+}
+constexpr std::uint16_t loop_closed(unsigned port) {
+    return static_cast<std::uint16_t>(0x0100u << (2 * port));
+}
 constexpr std::uint16_t communication(unsigned port) {
     return static_cast<std::uint16_t>(0x0200u << (2 * port));
 }
@@ -190,7 +200,9 @@ inline constexpr std::uint32_t Sync1 = 0x0008;
 inline constexpr std::uint32_t SmActivation = 0x0010;
 inline constexpr std::uint32_t EepromEmulation = 0x0020;
 inline constexpr std::uint32_t WatchdogProcessData = 0x0040;
-constexpr std::uint32_t sm(unsigned i) { return 0x0100u << i; }
+constexpr std::uint32_t sm(unsigned i) {
+    return 0x0100u << i;
+}
 }  // namespace al_event
 
 // Feature bits (0x0008).
@@ -257,10 +269,12 @@ struct WriteMaskTable {
 constexpr WriteMaskTable make_write_mask_table(unsigned fmmu_count, unsigned sm_count) {
     WriteMaskTable t{};
     for (const auto& r : kWritableRegisters)
-        for (unsigned i = 0; i < r.width; ++i) t.mask[r.address + i] = r.ecat_write_mask[i];
+        for (unsigned i = 0; i < r.width; ++i)
+            t.mask[r.address + i] = r.ecat_write_mask[i];
     for (unsigned f = 0; f < fmmu_count && f < kMaxFmmus; ++f) {
         const unsigned b = fmmu_addr(f);
-        for (unsigned i = 0; i < 6; ++i) t.mask[b + i] = 0xFF;
+        for (unsigned i = 0; i < 6; ++i)
+            t.mask[b + i] = 0xFF;
         t.mask[b + fmmu::LogicalStartBit] = 0x07;
         t.mask[b + fmmu::LogicalStopBit] = 0x07;
         t.mask[b + fmmu::PhysicalStart] = 0xFF;
@@ -271,7 +285,8 @@ constexpr WriteMaskTable make_write_mask_table(unsigned fmmu_count, unsigned sm_
     }
     for (unsigned s = 0; s < sm_count && s < kMaxSms; ++s) {
         const unsigned b = sm_addr(s);
-        for (unsigned i = 0; i < 4; ++i) t.mask[b + i] = 0xFF;
+        for (unsigned i = 0; i < 4; ++i)
+            t.mask[b + i] = 0xFF;
         t.mask[b + sm::Control] = 0x7F;
         t.mask[b + sm::Activate] = 0xC3;
     }

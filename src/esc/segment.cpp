@@ -9,7 +9,8 @@ namespace vecat::esc {
 void Segment::add(std::unique_ptr<Slave> s) {
     slaves_.push_back(std::move(s));
     // Port 1 of every slave but the last one has a link to its successor.
-    for (std::size_t i = 0; i < slaves_.size(); ++i) slaves_[i]->esc().set_port_link(1, i + 1 < slaves_.size());
+    for (std::size_t i = 0; i < slaves_.size(); ++i)
+        slaves_[i]->esc().set_port_link(1, i + 1 < slaves_.size());
 }
 
 bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns) {
@@ -34,9 +35,11 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
             t.port0_ns = now_ns + k * hop_delay_ns;
             t.port1_ns = now_ns + (2 * (n - 1) - k) * hop_delay_ns + hop_delay_ns / 2;
             Esc& esc = slaves_[k]->esc();
-            for (std::size_t i = 0; i < pf.count; ++i) esc.process(pf.datagram(frame, i), t);
+            for (std::size_t i = 0; i < pf.count; ++i)
+                esc.process(pf.datagram(frame, i), t);
         }
-        for (auto& s : slaves_) s->run(now_ns);
+        for (auto& s : slaves_)
+            s->run(now_ns);
     }
     frame[6] |= 0x02;  // the ESC marks the frame as processed in the source address
     if (len < kMinEthFrame && frame.size() >= kMinEthFrame) {
@@ -48,10 +51,12 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
 }
 
 void Segment::tick(std::uint64_t now_ns) {
-    for (auto& s : slaves_) s->run(now_ns);
+    for (auto& s : slaves_)
+        s->run(now_ns);
 }
 
-std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n, const EscConfig& cfg) {
+std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n,
+                                      const EscConfig& cfg) {
     auto seg = std::make_unique<Segment>();
     for (std::size_t i = 0; i < n; ++i) {
         auto app = std::make_unique<ProcessImageApplication>(d.output_bytes(), d.input_bytes());

@@ -15,12 +15,12 @@ namespace vecat::esc {
 struct SegmentCounters {
     std::uint64_t frames = 0;
     std::uint64_t replies = 0;
-    std::uint64_t dropped = 0;         // malformed EtherCAT frames
-    std::uint64_t ignored = 0;         // not EtherCAT
+    std::uint64_t dropped = 0;  // malformed EtherCAT frames
+    std::uint64_t ignored = 0;  // not EtherCAT
 };
 
 class Segment {
-public:
+  public:
     Segment() = default;
     void add(std::unique_ptr<Slave> s);
     std::size_t size() const { return slaves_.size(); }
@@ -38,12 +38,13 @@ public:
     // Line model: delay of a frame per hop (cable + PHY + forwarding) in ns.
     std::uint64_t hop_delay_ns = 500;
 
-private:
+  private:
     std::vector<std::unique_ptr<Slave>> slaves_;
     SegmentCounters counters_;
 };
 
 // Builds a segment of n slaves of the given device, each with a process-image application.
-std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n, const EscConfig& cfg = {});
+std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n,
+                                      const EscConfig& cfg = {});
 
 }  // namespace vecat::esc

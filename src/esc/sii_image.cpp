@@ -11,7 +11,7 @@ using Buffer = std::vector<std::uint8_t>;
 
 // The string table of the Strings category; index 0 means "no string".
 class StringTable {
-public:
+  public:
     std::uint8_t add(const std::string& s) {
         if (s.empty()) return 0;
         if (auto it = index_.find(s); it != index_.end()) return it->second;
@@ -24,7 +24,7 @@ public:
     }
     const std::vector<std::string>& strings() const { return strings_; }
 
-private:
+  private:
     std::vector<std::string> strings_;
     std::map<std::string, std::uint8_t> index_;
 };
@@ -139,7 +139,8 @@ std::vector<std::uint8_t> build_sii_image(const device::DeviceDescription& d) {
     }
 
     Buffer fmmu;
-    for (auto f : d.fmmus) fmmu.push_back(static_cast<std::uint8_t>(f));
+    for (auto f : d.fmmus)
+        fmmu.push_back(static_cast<std::uint8_t>(f));
     if (fmmu.size() % 2) fmmu.push_back(0xFF);
 
     Buffer syncm;
@@ -216,7 +217,8 @@ SiiInfo parse_sii(ConstBytes image) {
     s.station_alias = word(sii::StationAlias);
     s.checksum_ok = sii_config_crc(image.first(14)) == image[2 * sii::Checksum];
     if (!s.checksum_ok) s.errors.push_back("configuration area checksum (word 7) does not match");
-    s.identity = {dword(sii::VendorId), dword(sii::ProductCode), dword(sii::RevisionNo), dword(sii::SerialNo)};
+    s.identity = {dword(sii::VendorId), dword(sii::ProductCode), dword(sii::RevisionNo),
+                  dword(sii::SerialNo)};
     s.boot_rx_mbx_offset = word(sii::BootRxMailboxOffset);
     s.boot_rx_mbx_size = word(sii::BootRxMailboxSize);
     s.boot_tx_mbx_offset = word(sii::BootTxMailboxOffset);
@@ -292,8 +294,8 @@ SiiInfo parse_sii(ConstBytes image) {
                 break;
             case sii::Category::SyncM:
                 for (std::size_t p = 0; p + 8 <= data.size(); p += 8)
-                    s.sync_managers.push_back({ld_le16(data.data() + p), ld_le16(data.data() + p + 2), data[p + 4],
-                                               data[p + 5], data[p + 6], data[p + 7]});
+                    s.sync_managers.push_back({ld_le16(data.data() + p), ld_le16(data.data() + p + 2),
+                                               data[p + 4], data[p + 5], data[p + 6], data[p + 7]});
                 break;
             case sii::Category::TxPdo:
             case sii::Category::RxPdo: {
@@ -301,7 +303,7 @@ SiiInfo parse_sii(ConstBytes image) {
                                                                                                   : s.rx_pdos;
                 std::size_t p = 0;
                 while (p + 8 <= data.size()) {
-                    SiiPdo pdo{ld_le16(data.data() + p), data[p + 3], data[p + 4], data[p + 5],
+                    SiiPdo pdo{ld_le16(data.data() + p),     data[p + 3], data[p + 4], data[p + 5],
                                ld_le16(data.data() + p + 6), {}};
                     const unsigned n = data[p + 2];
                     p += 8;
@@ -310,8 +312,8 @@ SiiInfo parse_sii(ConstBytes image) {
                             s.errors.push_back("PDO entries run past their category");
                             break;
                         }
-                        pdo.entries.push_back({ld_le16(data.data() + p), data[p + 2], data[p + 3], data[p + 4],
-                                               data[p + 5], ld_le16(data.data() + p + 6)});
+                        pdo.entries.push_back({ld_le16(data.data() + p), data[p + 2], data[p + 3],
+                                               data[p + 4], data[p + 5], ld_le16(data.data() + p + 6)});
                     }
                     list.push_back(std::move(pdo));
                 }

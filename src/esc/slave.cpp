@@ -8,22 +8,32 @@ namespace {
 
 constexpr unsigned rank(AlState s) {
     switch (s) {
-        case AlState::Init: return 0;
-        case AlState::Boot: return 0;
-        case AlState::PreOp: return 1;
-        case AlState::SafeOp: return 2;
-        case AlState::Op: return 3;
+        case AlState::Init:
+            return 0;
+        case AlState::Boot:
+            return 0;
+        case AlState::PreOp:
+            return 1;
+        case AlState::SafeOp:
+            return 2;
+        case AlState::Op:
+            return 3;
     }
     return 0;
 }
 
 constexpr unsigned row(AlState s) {
     switch (s) {
-        case AlState::Init: return 0;
-        case AlState::PreOp: return 1;
-        case AlState::Boot: return 2;
-        case AlState::SafeOp: return 3;
-        case AlState::Op: return 4;
+        case AlState::Init:
+            return 0;
+        case AlState::PreOp:
+            return 1;
+        case AlState::Boot:
+            return 2;
+        case AlState::SafeOp:
+            return 3;
+        case AlState::Op:
+            return 4;
     }
     return 0;
 }
@@ -40,25 +50,32 @@ constexpr AlAction kAlTable[5][5] = {
 
 }  // namespace
 
-AlAction al_transition(AlState from, AlState to) noexcept { return kAlTable[row(from)][row(to)]; }
+AlAction al_transition(AlState from, AlState to) noexcept {
+    return kAlTable[row(from)][row(to)];
+}
 
 void ProcessImageApplication::exchange(std::uint64_t, ConstBytes out, bool apply, Bytes in) {
-    if (apply && !out.empty()) std::memcpy(outputs_.data(), out.data(), std::min(out.size(), outputs_.size()));
+    if (apply && !out.empty())
+        std::memcpy(outputs_.data(), out.data(), std::min(out.size(), outputs_.size()));
     std::memcpy(in.data(), inputs_.data(), std::min(in.size(), inputs_.size()));
     ++exchanges_;
 }
 
-void ProcessImageApplication::outputs_safe_state() { std::fill(outputs_.begin(), outputs_.end(), 0); }
+void ProcessImageApplication::outputs_safe_state() {
+    std::fill(outputs_.begin(), outputs_.end(), 0);
+}
 
 // Reply sink writing into the slave's bounded reply queue.
 class SlaveReplySink final : public MailboxReplySink {
-public:
+  public:
     explicit SlaveReplySink(Slave& s) : s_(s) {}
     Bytes reply_buffer() override {
-        const std::size_t mbx_len = s_.sm_mbx_in_ >= 0 ? s_.esc_.sm_config(static_cast<unsigned>(s_.sm_mbx_in_)).length : 0;
+        const std::size_t mbx_len =
+            s_.sm_mbx_in_ >= 0 ? s_.esc_.sm_config(static_cast<unsigned>(s_.sm_mbx_in_)).length : 0;
         const std::size_t payload = mbx_len > kMailboxHeaderSize ? mbx_len - kMailboxHeaderSize : 0;
-        auto& slot = s_.q_count_ < Slave::kReplySlots ? s_.queue_[(s_.q_head_ + s_.q_count_) % Slave::kReplySlots]
-                                                      : overflow_;
+        auto& slot = s_.q_count_ < Slave::kReplySlots
+                         ? s_.queue_[(s_.q_head_ + s_.q_count_) % Slave::kReplySlots]
+                         : overflow_;
         return Bytes(slot.data() + kMailboxHeaderSize, std::min(payload, slot.size() - kMailboxHeaderSize));
     }
     void commit(MailboxType type, std::size_t payload_len) override {
@@ -78,7 +95,7 @@ public:
         ++s_.q_count_;
     }
 
-private:
+  private:
     Slave& s_;
     std::vector<std::uint8_t> overflow_ = std::vector<std::uint8_t>(kMaxMailboxSize);
 };
@@ -95,7 +112,8 @@ Slave::Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::uniq
     sm_in_ = idx(device::SmType::Inputs);
     rx_.resize(kMaxMailboxSize);
     last_reply_.resize(kMaxMailboxSize);
-    for (auto& q : queue_) q.resize(kMaxMailboxSize);
+    for (auto& q : queue_)
+        q.resize(kMaxMailboxSize);
     outputs_.resize(2048);
     inputs_.resize(2048);
     sink_ = std::make_unique<SlaveReplySink>(*this);
@@ -273,7 +291,8 @@ void Slave::service_mailbox() {
     // Repeat request (ETG.1000.4 5.6.3): re-send the last reply, then toggle the acknowledge.
     if (esc_.pdi_take_sm_activation_event()) {
         const bool req = esc_.sm_repeat_request(in_idx);
-        const bool ack = (esc_.peek(static_cast<std::uint16_t>(sm_addr(in_idx) + sm::PdiControl)) & sm::PdiRepeatAck) != 0;
+        const bool ack =
+            (esc_.peek(static_cast<std::uint16_t>(sm_addr(in_idx) + sm::PdiControl)) & sm::PdiRepeatAck) != 0;
         if (req != ack) {
             ++counters_.mailbox_repeats;
             if (last_reply_len_ && !esc_.sm_mailbox_full(in_idx))
@@ -332,7 +351,8 @@ void Slave::exchange_process_data(std::uint64_t now_ns) {
         have_out = esc_.pdi_buffer_read(static_cast<unsigned>(sm_out_), Bytes(outputs_.data(), out_len));
     app_->exchange(now_ns, have_out ? ConstBytes(outputs_.data(), out_len) : ConstBytes{},
                    state_ == AlState::Op && have_out, Bytes(inputs_.data(), in_len));
-    if (in_len > 0 && sm_in_ >= 0) esc_.pdi_buffer_write(static_cast<unsigned>(sm_in_), ConstBytes(inputs_.data(), in_len));
+    if (in_len > 0 && sm_in_ >= 0)
+        esc_.pdi_buffer_write(static_cast<unsigned>(sm_in_), ConstBytes(inputs_.data(), in_len));
 }
 
 void Slave::run(std::uint64_t now_ns) {

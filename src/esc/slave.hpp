@@ -18,7 +18,7 @@ namespace vecat::esc {
 
 // What the application behind the PDI provides. The slave calls it from the frame-processing thread.
 class Application {
-public:
+  public:
     virtual ~Application() = default;
     // Current process data sizes in bytes (they follow the PDO assignment).
     virtual unsigned output_bytes() const = 0;
@@ -26,7 +26,8 @@ public:
     // Application-specific checks of a transition (PDO mapping, sync configuration...). NoError allows it.
     virtual AlStatusCode check_transition(AlState /*from*/, AlState /*to*/) { return AlStatusCode::NoError; }
     virtual void on_state_change(AlState /*from*/, AlState /*to*/) {}
-    // One process data exchange. outputs is empty when no valid outputs exist (below OP they are not applied).
+    // One process data exchange. outputs is empty when no valid outputs exist (below OP they are not
+    // applied).
     virtual void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply_outputs, Bytes inputs) = 0;
     // The outputs must go to their safe state (watchdog expired, left OP).
     virtual void outputs_safe_state() {}
@@ -37,7 +38,7 @@ public:
 
 // A process image without behaviour: keeps the last outputs and serves inputs set from outside.
 class ProcessImageApplication : public Application {
-public:
+  public:
     ProcessImageApplication(unsigned out_bytes, unsigned in_bytes) : outputs_(out_bytes), inputs_(in_bytes) {}
     unsigned output_bytes() const override { return static_cast<unsigned>(outputs_.size()); }
     unsigned input_bytes() const override { return static_cast<unsigned>(inputs_.size()); }
@@ -47,7 +48,7 @@ public:
     const std::vector<std::uint8_t>& outputs() const { return outputs_; }
     std::uint64_t exchanges() const { return exchanges_; }
 
-private:
+  private:
     std::vector<std::uint8_t> outputs_;
     std::vector<std::uint8_t> inputs_;
     std::uint64_t exchanges_ = 0;
@@ -55,13 +56,13 @@ private:
 
 // The AL state machine as a table: what a request from one state to another does.
 enum class AlAction : std::uint8_t {
-    Stay,            // requested state == current state
-    Down,            // allowed without checks
-    CheckMailbox,    // INIT -> PREOP
-    CheckBoot,       // INIT -> BOOT
-    CheckProcessData,// PREOP -> SAFEOP
-    CheckOutputs,    // SAFEOP -> OP: waits for valid outputs
-    Refuse,          // 0x0011 invalid requested state change
+    Stay,              // requested state == current state
+    Down,              // allowed without checks
+    CheckMailbox,      // INIT -> PREOP
+    CheckBoot,         // INIT -> BOOT
+    CheckProcessData,  // PREOP -> SAFEOP
+    CheckOutputs,      // SAFEOP -> OP: waits for valid outputs
+    Refuse,            // 0x0011 invalid requested state change
 };
 AlAction al_transition(AlState from, AlState to) noexcept;
 
@@ -75,7 +76,7 @@ struct SlaveCounters {
 };
 
 class Slave {
-public:
+  public:
     Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::unique_ptr<Application> app);
     ~Slave();
     Slave(const Slave&) = delete;
@@ -98,7 +99,7 @@ public:
 
     static constexpr std::uint64_t kOutputsValidTimeoutNs = 1'000'000'000;  // SAFEOP -> OP wait
 
-private:
+  private:
     void handle_al_control(std::uint64_t now_ns);
     void enter(AlState to, std::uint64_t now_ns);
     void set_error(AlStatusCode code, AlState stay, std::uint64_t now_ns);

@@ -16,7 +16,9 @@ namespace {
 constexpr std::uint8_t kBroadcast[6] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF};
 // A unicast, locally administered source address (the ESC sets bit 0x02 of the first byte on return).
 constexpr std::uint8_t kSource[6] = {0x10, 0x10, 0x10, 0x10, 0x10, 0x10};
-std::uint16_t ra(Reg r) { return esc::addr(r); }
+std::uint16_t ra(Reg r) {
+    return esc::addr(r);
+}
 }  // namespace
 
 Master::Master(net::Link& link, MasterOptions opt) : link_(link), opt_(opt) {}
@@ -50,7 +52,8 @@ bool Master::wait_reply(std::span<DatagramRequest> dgs, std::size_t) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(opt_.reply_timeout_us);
     while (true) {
         const auto left =
-            std::chrono::duration_cast<std::chrono::microseconds>(deadline - std::chrono::steady_clock::now()).count();
+            std::chrono::duration_cast<std::chrono::microseconds>(deadline - std::chrono::steady_clock::now())
+                .count();
         if (left <= 0) return false;
         const long n = link_.receive(Bytes(rx_.data(), rx_.size()), left);
         if (n < 0) return false;
@@ -138,14 +141,15 @@ bool Master::reset_slaves() {
         std::vector<std::uint8_t> b(n, v);
         return bwr(ado, b).has_value();
     };
-    std::uint8_t init[2] = {static_cast<std::uint8_t>(static_cast<unsigned>(AlState::Init) | esc::kAlErrorFlag), 0};
-    return bw(ra(Reg::DlControl) + 3, 1, 0) &&                   // no alias addressing
-           bwr(ra(Reg::AlControl), init).has_value() &&          // INIT with acknowledge
-           bw(ra(Reg::DlControl), 1, 0) &&                       // forwarding rule
-           bw(ra(Reg::RxErrorCounter), 8, 0) &&                  // clear error counters
-           bw(ra(Reg::Fmmu0), 16 * 3, 0) &&                      // FMMUs off
-           bw(ra(Reg::Sm0), 8 * 4, 0) &&                         // SyncManagers off
-           bw(ra(Reg::DcActivation), 1, 0) &&                    // SYNC off
+    std::uint8_t init[2] = {
+        static_cast<std::uint8_t>(static_cast<unsigned>(AlState::Init) | esc::kAlErrorFlag), 0};
+    return bw(ra(Reg::DlControl) + 3, 1, 0) &&                            // no alias addressing
+           bwr(ra(Reg::AlControl), init).has_value() &&                   // INIT with acknowledge
+           bw(ra(Reg::DlControl), 1, 0) &&                                // forwarding rule
+           bw(ra(Reg::RxErrorCounter), 8, 0) &&                           // clear error counters
+           bw(ra(Reg::Fmmu0), 16 * 3, 0) &&                               // FMMUs off
+           bw(ra(Reg::Sm0), 8 * 4, 0) &&                                  // SyncManagers off
+           bw(ra(Reg::DcActivation), 1, 0) &&                             // SYNC off
            bw(ra(Reg::SiiConfig), 1, 2) && bw(ra(Reg::SiiConfig), 1, 0);  // EEPROM to the master
 }
 
@@ -179,7 +183,8 @@ std::optional<std::uint32_t> Master::read_sii_dword(std::uint16_t station, std::
     for (int attempt = 0; attempt < 3; ++attempt) {
         auto st = wait_idle();
         if (!st) return std::nullopt;
-        if (*st & (esc::sii_ctrl::ErrorAck | esc::sii_ctrl::ErrorWriteEnable)) write16(station, ra(Reg::SiiControl), 0);
+        if (*st & (esc::sii_ctrl::ErrorAck | esc::sii_ctrl::ErrorWriteEnable))
+            write16(station, ra(Reg::SiiControl), 0);
         std::uint8_t cmd[6];
         st_le16(cmd, esc::sii_ctrl::CmdRead);
         st_le32(cmd + 2, word);
@@ -240,7 +245,8 @@ bool Master::read_slave_information() {
             unsigned n = 0;
             for (const auto& p : pdos)
                 if (p.sm == sm)
-                    for (const auto& e : p.entries) n += e.bit_length;
+                    for (const auto& e : p.entries)
+                        n += e.bit_length;
             return (n + 7) / 8;
         };
         // Process data sizes: the PDOs of the SII assigned to the output / input SyncManagers.
@@ -332,7 +338,8 @@ AlStatusReading Master::read_al_status(std::uint16_t station) {
 }
 
 bool Master::acknowledge_error(std::uint16_t station, AlState s) {
-    return write16(station, ra(Reg::AlControl), static_cast<std::uint16_t>(static_cast<unsigned>(s) | esc::kAlErrorFlag));
+    return write16(station, ra(Reg::AlControl),
+                   static_cast<std::uint16_t>(static_cast<unsigned>(s) | esc::kAlErrorFlag));
 }
 
 bool Master::request_state(AlState s, std::chrono::milliseconds timeout) {

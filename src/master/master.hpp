@@ -57,7 +57,7 @@ struct MasterOptions {
 };
 
 class Master {
-public:
+  public:
     explicit Master(net::Link& link, MasterOptions opt = {});
 
     // ---- Datagram services. Return the working counter, nullopt when no reply came.
@@ -66,8 +66,12 @@ public:
     // Several datagrams in one frame; false when no reply.
     bool transact_frame(std::span<DatagramRequest> dgs);
 
-    std::optional<std::uint16_t> brd(std::uint16_t ado, Bytes d) { return transact(esc::Command::BRD, 0, ado, d); }
-    std::optional<std::uint16_t> bwr(std::uint16_t ado, Bytes d) { return transact(esc::Command::BWR, 0, ado, d); }
+    std::optional<std::uint16_t> brd(std::uint16_t ado, Bytes d) {
+        return transact(esc::Command::BRD, 0, ado, d);
+    }
+    std::optional<std::uint16_t> bwr(std::uint16_t ado, Bytes d) {
+        return transact(esc::Command::BWR, 0, ado, d);
+    }
     std::optional<std::uint16_t> aprd(std::uint16_t pos, std::uint16_t ado, Bytes d) {
         return transact(esc::Command::APRD, static_cast<std::uint16_t>(-pos), ado, d);
     }
@@ -88,14 +92,14 @@ public:
     bool write32(std::uint16_t station, std::uint16_t ado, std::uint32_t v);
 
     // ---- Start-up, step by step
-    int count_slaves();                     // BRD 0x0000 working counter
-    bool reset_slaves();                    // default register values, like SOEM's ecx_set_slaves_to_default
+    int count_slaves();   // BRD 0x0000 working counter
+    bool reset_slaves();  // default register values, like SOEM's ecx_set_slaves_to_default
     bool assign_station_addresses(std::uint16_t first = 0x1001);
-    bool read_slave_information();          // ESC info, DL status and the whole SII of every slave
+    bool read_slave_information();  // ESC info, DL status and the whole SII of every slave
     std::optional<std::uint32_t> read_sii_dword(std::uint16_t station, std::uint32_t word);
     std::optional<std::vector<std::uint8_t>> read_sii_image(std::uint16_t station);
-    bool configure_mailboxes();             // SM0/SM1 from the SII
-    bool configure_process_data();          // SM2/SM3 and FMMUs; lays out the process image
+    bool configure_mailboxes();     // SM0/SM1 from the SII
+    bool configure_process_data();  // SM2/SM3 and FMMUs; lays out the process image
     // Requests a state from all slaves (broadcast) and waits until each has it or reports an error.
     bool request_state(esc::AlState s, std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));
     bool request_state(std::uint16_t station, esc::AlState s,
@@ -114,7 +118,7 @@ public:
     std::vector<SlaveInfo>& slaves() { return slaves_; }
     const std::vector<AlStatusReading>& last_states() const { return last_states_; }
 
-private:
+  private:
     std::size_t build_frame(std::span<DatagramRequest> dgs);
     bool wait_reply(std::span<DatagramRequest> dgs, std::size_t frame_len);
 

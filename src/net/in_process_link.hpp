@@ -12,7 +12,7 @@
 namespace vecat::net {
 
 class InProcessLink final : public Link {
-public:
+  public:
     explicit InProcessLink(esc::Segment& seg) : seg_(seg) {}
     bool send(ConstBytes frame) override {
         if (frame.size() > buf_.size()) return false;
@@ -31,16 +31,16 @@ public:
     // Time seen by the segment; tests may drive it by hand.
     std::uint64_t now_ns() const {
         if (manual_time_) return manual_now_;
-        return static_cast<std::uint64_t>(
-            std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-                .count());
+        return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                              std::chrono::steady_clock::now().time_since_epoch())
+                                              .count());
     }
     void set_time(std::uint64_t ns) {
         manual_time_ = true;
         manual_now_ = ns;
     }
 
-private:
+  private:
     esc::Segment& seg_;
     std::array<std::uint8_t, 1600> buf_{};
     std::size_t len_ = 0;

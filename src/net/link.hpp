@@ -9,7 +9,7 @@
 namespace vecat::net {
 
 class Link {
-public:
+  public:
     virtual ~Link() = default;
     virtual bool send(ConstBytes frame) = 0;
     // Receives one frame into buf; returns its length, 0 on timeout, -1 on error.

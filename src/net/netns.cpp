@@ -21,7 +21,8 @@ namespace {
 
 bool run(const std::vector<std::string>& args, std::string* why) {
     std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    for (const auto& a : args)
+        argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
     pid_t pid = 0;
     const int rc = posix_spawnp(&pid, argv[0], nullptr, nullptr, argv.data(), environ);
@@ -33,7 +34,8 @@ bool run(const std::vector<std::string>& args, std::string* why) {
     if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
         if (why) {
             std::ostringstream s;
-            for (const auto& a : args) s << a << ' ';
+            for (const auto& a : args)
+                s << a << ' ';
             *why = "command failed: " + s.str();
         }
         return false;

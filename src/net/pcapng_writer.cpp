@@ -18,7 +18,9 @@ void put16(std::FILE* f, std::uint16_t v) {
     st_le16(b, v);
     std::fwrite(b, 1, 2, f);
 }
-std::uint32_t pad4(std::size_t n) { return static_cast<std::uint32_t>((n + 3) & ~std::size_t{3}); }
+std::uint32_t pad4(std::size_t n) {
+    return static_cast<std::uint32_t>((n + 3) & ~std::size_t{3});
+}
 void put_padded(std::FILE* f, const void* p, std::size_t n) {
     static constexpr std::uint8_t zeros[4] = {};
     std::fwrite(p, 1, n, f);

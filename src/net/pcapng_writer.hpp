@@ -11,7 +11,7 @@
 namespace vecat::net {
 
 class PcapngWriter {
-public:
+  public:
     // Throws std::system_error if the file cannot be created.
     explicit PcapngWriter(const std::string& path, const std::string& ifname = "vecat");
     ~PcapngWriter();
@@ -23,7 +23,7 @@ public:
     void flush();
     std::uint64_t frames() const { return frames_; }
 
-private:
+  private:
     std::FILE* f_ = nullptr;
     std::uint64_t frames_ = 0;
 };

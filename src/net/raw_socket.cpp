@@ -20,7 +20,9 @@ namespace vecat::net {
 
 namespace {
 constexpr std::uint16_t kEtherCat = 0x88A4;
-[[noreturn]] void fail(const std::string& what) { throw std::system_error(errno, std::generic_category(), what); }
+[[noreturn]] void fail(const std::string& what) {
+    throw std::system_error(errno, std::generic_category(), what);
+}
 }  // namespace
 
 RawSocket::RawSocket(const std::string& ifname, bool promiscuous) : ifname_(ifname) {
@@ -74,7 +76,7 @@ long RawSocket::try_receive(Bytes buf) {
         const ssize_t n = ::recvfrom(fd_, buf.data(), buf.size(), MSG_DONTWAIT | MSG_TRUNC,
                                      reinterpret_cast<sockaddr*>(&from), &fl);
         if (n < 0) return (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) ? 0 : -1;
-        if (from.sll_pkttype == PACKET_OUTGOING) continue;  // kernels without PACKET_IGNORE_OUTGOING
+        if (from.sll_pkttype == PACKET_OUTGOING) continue;       // kernels without PACKET_IGNORE_OUTGOING
         if (static_cast<std::size_t>(n) > buf.size()) continue;  // truncated: not a valid EtherCAT frame
         return n;
     }

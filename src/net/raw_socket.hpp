@@ -8,7 +8,7 @@
 namespace vecat::net {
 
 class RawSocket final : public Link {
-public:
+  public:
     // Opens the socket; throws std::system_error when the interface does not exist or on missing rights.
     explicit RawSocket(const std::string& ifname, bool promiscuous = true);
     ~RawSocket() override;
@@ -22,7 +22,7 @@ public:
     int fd() const { return fd_; }
     const std::string& ifname() const { return ifname_; }
 
-private:
+  private:
     int fd_ = -1;
     int ifindex_ = 0;
     std::string ifname_;

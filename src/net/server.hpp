@@ -12,9 +12,9 @@
 namespace vecat::net {
 
 struct ServeOptions {
-    bool busy_poll = false;           // spin on the socket instead of sleeping in poll()
-    std::int64_t tick_us = 100;       // firmware/watchdog tick period when idle
-    PcapngWriter* pcap = nullptr;     // capture of every frame in and out
+    bool busy_poll = false;        // spin on the socket instead of sleeping in poll()
+    std::int64_t tick_us = 100;    // firmware/watchdog tick period when idle
+    PcapngWriter* pcap = nullptr;  // capture of every frame in and out
 };
 
 struct ServeStats {

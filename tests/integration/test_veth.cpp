@@ -28,9 +28,11 @@ int g_pair = 0;
 struct VecatProcess {
     pid_t pid = -1;
     VecatProcess(const std::string& iface, unsigned slaves, const std::string& pcap) {
-        std::vector<std::string> args{VECAT_BINARY, "run", "--iface", iface, "--slaves", std::to_string(slaves), "--pcap", pcap};
+        std::vector<std::string> args{VECAT_BINARY,           "run",    "--iface", iface, "--slaves",
+                                      std::to_string(slaves), "--pcap", pcap};
         std::vector<char*> argv;
-        for (auto& a : args) argv.push_back(a.data());
+        for (auto& a : args)
+            argv.push_back(a.data());
         argv.push_back(nullptr);
         if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) pid = -1;
         std::this_thread::sleep_for(std::chrono::milliseconds(300));
@@ -54,7 +56,8 @@ std::string run_capture(const std::string& cmd) {
     if (!p) return out;
     char buf[4096];
     std::size_t n;
-    while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0)
+        out.append(buf, n);
     pclose(p);
     return out;
 }
@@ -63,7 +66,8 @@ std::vector<std::string> split(const std::string& s, char c) {
     std::vector<std::string> v;
     std::stringstream ss(s);
     std::string item;
-    while (std::getline(ss, item, c)) v.push_back(item);
+    while (std::getline(ss, item, c))
+        v.push_back(item);
     if (!s.empty() && s.back() == c) v.emplace_back();
     return v;
 }
@@ -73,15 +77,28 @@ unsigned expected_wkc(unsigned cmd, unsigned adp, unsigned n, unsigned lrw_expec
     const bool exists_pos = static_cast<std::uint16_t>(-static_cast<int>(adp)) < n;
     const bool exists_station = adp >= 0x1001 && adp < 0x1001 + n;
     switch (cmd) {
-        case 1: case 2: return exists_pos ? 1 : 0;
-        case 3: return exists_pos ? 3 : 0;
-        case 4: case 5: return exists_station ? 1 : 0;
-        case 6: return exists_station ? 3 : 0;
-        case 7: case 8: return n;
-        case 9: return 3 * n;
-        case 12: return lrw_expected;
-        case 13: case 14: return n;
-        default: return 0;
+        case 1:
+        case 2:
+            return exists_pos ? 1 : 0;
+        case 3:
+            return exists_pos ? 3 : 0;
+        case 4:
+        case 5:
+            return exists_station ? 1 : 0;
+        case 6:
+            return exists_station ? 3 : 0;
+        case 7:
+        case 8:
+            return n;
+        case 9:
+            return 3 * n;
+        case 12:
+            return lrw_expected;
+        case 13:
+        case 14:
+            return n;
+        default:
+            return 0;
     }
 }
 
@@ -90,9 +107,11 @@ void check_capture(const std::string& pcap, unsigned n, unsigned lrw_expected) {
     const std::string verbose = run_capture("tshark -r " + pcap + " -V 2>/dev/null");
     ASSERT_FALSE(verbose.empty());
     EXPECT_EQ(verbose.find("Malformed"), std::string::npos);
-    EXPECT_EQ(run_capture("tshark -r " + pcap + " -z expert,error -q 2>/dev/null").find("Error"), std::string::npos);
-    const std::string fields = run_capture("tshark -r " + pcap +
-                                           " -T fields -E separator=';' -e eth.src -e ecat.cmd -e ecat.adp -e ecat.cnt 2>/dev/null");
+    EXPECT_EQ(run_capture("tshark -r " + pcap + " -z expert,error -q 2>/dev/null").find("Error"),
+              std::string::npos);
+    const std::string fields =
+        run_capture("tshark -r " + pcap +
+                    " -T fields -E separator=';' -e eth.src -e ecat.cmd -e ecat.adp -e ecat.cnt 2>/dev/null");
     auto lines = split(fields, '\n');
     unsigned checked = 0;
     std::vector<std::string> request;
@@ -110,7 +129,9 @@ void check_capture(const std::string& pcap, unsigned n, unsigned lrw_expected) {
         for (std::size_t i = 0; i < cmds.size(); ++i) {
             const unsigned cmd = static_cast<unsigned>(std::stoul(cmds[i], nullptr, 16));
             // Logical commands carry no ADP field: tshark leaves it out.
-            const unsigned adp = i < adps.size() && !adps[i].empty() ? static_cast<unsigned>(std::stoul(adps[i], nullptr, 16)) : 0;
+            const unsigned adp = i < adps.size() && !adps[i].empty()
+                                     ? static_cast<unsigned>(std::stoul(adps[i], nullptr, 16))
+                                     : 0;
             EXPECT_EQ(std::stoul(wkcs[i]), expected_wkc(cmd, adp, n, lrw_expected))
                 << "command " << cmd << " adp 0x" << std::hex << adp;
             ++checked;
@@ -121,7 +142,7 @@ void check_capture(const std::string& pcap, unsigned n, unsigned lrw_expected) {
 }
 
 class Veth : public ::testing::TestWithParam<unsigned> {
-protected:
+  protected:
     void SetUp() override {
         if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
         ++g_pair;
@@ -129,8 +150,9 @@ protected:
         s_ = "ts" + std::to_string(g_pair);
         std::string why;
         ASSERT_TRUE(net::create_veth_pair(m_, s_, &why)) << why;
-        pcap_ = (std::filesystem::temp_directory_path() / ("vecat-veth-" + std::to_string(getpid()) + "-" +
-                                                            std::to_string(g_pair) + ".pcapng")).string();
+        pcap_ = (std::filesystem::temp_directory_path() /
+                 ("vecat-veth-" + std::to_string(getpid()) + "-" + std::to_string(g_pair) + ".pcapng"))
+                    .string();
     }
     void TearDown() override {
         if (!pcap_.empty()) std::filesystem::remove(pcap_);
@@ -159,7 +181,8 @@ TEST_P(Veth, MasterFindsConfiguresAndWalksTheStates) {
         EXPECT_EQ(s.sii.sync_managers.size(), 4u);
         EXPECT_EQ(s.out_bytes, dev.output_bytes());
     }
-    for (int i = 0; i < 200; ++i) ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+    for (int i = 0; i < 200; ++i)
+        ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
     // ... and back down.
     ASSERT_TRUE(m.request_state(AlState::SafeOp));
     ASSERT_TRUE(m.request_state(AlState::PreOp));
@@ -171,7 +194,8 @@ TEST_P(Veth, MasterFindsConfiguresAndWalksTheStates) {
         EXPECT_TRUE(r.error());
         EXPECT_EQ(r.code, 0x0011);
     }
-    for (const auto& s : m.slaves()) EXPECT_TRUE(m.acknowledge_error(s.station, AlState::Init));
+    for (const auto& s : m.slaves())
+        EXPECT_TRUE(m.acknowledge_error(s.station, AlState::Init));
     EXPECT_FALSE(m.read_al_status(m.slaves()[0].station).error());
     EXPECT_EQ(vecat.stop(), 0);
     check_capture(pcap_, n, m.expected_wkc());

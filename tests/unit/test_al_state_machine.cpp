@@ -37,8 +37,12 @@ TEST_P(Transition, RowOfTheTable) {
     const auto& e = GetParam();
     Bench b(1);
     reach(b, e.from);
-    if (e.from == AlState::Init) ASSERT_TRUE(b.master.configure_mailboxes());
-    if (e.from == AlState::PreOp && e.to == AlState::SafeOp) ASSERT_TRUE(b.master.configure_process_data());
+    if (e.from == AlState::Init) {
+        ASSERT_TRUE(b.master.configure_mailboxes());
+    }
+    if (e.from == AlState::PreOp && e.to == AlState::SafeOp) {
+        ASSERT_TRUE(b.master.configure_process_data());
+    }
     if (e.to == AlState::Op) b.master.exchange_process_data();
     const auto r = request(b, static_cast<std::uint16_t>(e.to));
     ASSERT_TRUE(r.ok);
@@ -52,20 +56,21 @@ using S = AlState;
 using C = AlStatusCode;
 INSTANTIATE_TEST_SUITE_P(
     AllRows, Transition,
-    ::testing::Values(Expect{S::Init, S::Init, S::Init, C::NoError}, Expect{S::Init, S::PreOp, S::PreOp, C::NoError},
-                      Expect{S::Init, S::Boot, S::Init, C::BootstrapNotSupported},
-                      Expect{S::Init, S::SafeOp, S::Init, C::InvalidRequestedStateChange},
-                      Expect{S::Init, S::Op, S::Init, C::InvalidRequestedStateChange},
-                      Expect{S::PreOp, S::Init, S::Init, C::NoError}, Expect{S::PreOp, S::PreOp, S::PreOp, C::NoError},
-                      Expect{S::PreOp, S::Boot, S::PreOp, C::InvalidRequestedStateChange},
-                      Expect{S::PreOp, S::SafeOp, S::SafeOp, C::NoError},
-                      Expect{S::PreOp, S::Op, S::PreOp, C::InvalidRequestedStateChange},
-                      Expect{S::SafeOp, S::Init, S::Init, C::NoError}, Expect{S::SafeOp, S::PreOp, S::PreOp, C::NoError},
-                      Expect{S::SafeOp, S::Boot, S::SafeOp, C::InvalidRequestedStateChange},
-                      Expect{S::SafeOp, S::SafeOp, S::SafeOp, C::NoError}, Expect{S::SafeOp, S::Op, S::Op, C::NoError},
-                      Expect{S::Op, S::Init, S::Init, C::NoError}, Expect{S::Op, S::PreOp, S::PreOp, C::NoError},
-                      Expect{S::Op, S::Boot, S::SafeOp, C::InvalidRequestedStateChange},
-                      Expect{S::Op, S::SafeOp, S::SafeOp, C::NoError}, Expect{S::Op, S::Op, S::Op, C::NoError}));
+    ::testing::Values(
+        Expect{S::Init, S::Init, S::Init, C::NoError}, Expect{S::Init, S::PreOp, S::PreOp, C::NoError},
+        Expect{S::Init, S::Boot, S::Init, C::BootstrapNotSupported},
+        Expect{S::Init, S::SafeOp, S::Init, C::InvalidRequestedStateChange},
+        Expect{S::Init, S::Op, S::Init, C::InvalidRequestedStateChange},
+        Expect{S::PreOp, S::Init, S::Init, C::NoError}, Expect{S::PreOp, S::PreOp, S::PreOp, C::NoError},
+        Expect{S::PreOp, S::Boot, S::PreOp, C::InvalidRequestedStateChange},
+        Expect{S::PreOp, S::SafeOp, S::SafeOp, C::NoError},
+        Expect{S::PreOp, S::Op, S::PreOp, C::InvalidRequestedStateChange},
+        Expect{S::SafeOp, S::Init, S::Init, C::NoError}, Expect{S::SafeOp, S::PreOp, S::PreOp, C::NoError},
+        Expect{S::SafeOp, S::Boot, S::SafeOp, C::InvalidRequestedStateChange},
+        Expect{S::SafeOp, S::SafeOp, S::SafeOp, C::NoError}, Expect{S::SafeOp, S::Op, S::Op, C::NoError},
+        Expect{S::Op, S::Init, S::Init, C::NoError}, Expect{S::Op, S::PreOp, S::PreOp, C::NoError},
+        Expect{S::Op, S::Boot, S::SafeOp, C::InvalidRequestedStateChange},
+        Expect{S::Op, S::SafeOp, S::SafeOp, C::NoError}, Expect{S::Op, S::Op, S::Op, C::NoError}));
 
 TEST(AlTable, MatchesTheSpecification) {
     using A = esc::AlAction;
@@ -78,7 +83,7 @@ TEST(AlTable, MatchesTheSpecification) {
 }
 
 TEST(AlStateMachine, UnknownStateIsRefused) {
-    for (std::uint16_t v : {0x00, 0x05, 0x06, 0x07, 0x09, 0x0F}) {
+    for (std::uint16_t v : std::initializer_list<std::uint16_t>{0x00, 0x05, 0x06, 0x07, 0x09, 0x0F}) {
         Bench b(1);
         reach(b, S::PreOp);
         const auto r = request(b, v);
@@ -111,7 +116,7 @@ TEST(AlStateMachine, InvalidMailboxConfigurationIsRefused) {
     const auto st = b.master.slaves()[0].station;
     ASSERT_TRUE(b.master.configure_mailboxes());
     ASSERT_TRUE(b.master.write16(st, esc::sm_addr(0) + 2, 0x0080));  // locked: SM0 is enabled
-    ASSERT_TRUE(b.master.write8(st, esc::sm_addr(0) + 6, 0));         // disable SM0
+    ASSERT_TRUE(b.master.write8(st, esc::sm_addr(0) + 6, 0));        // disable SM0
     ASSERT_TRUE(b.master.write16(st, esc::sm_addr(0) + 2, 0x0080));  // wrong length
     ASSERT_TRUE(b.master.write8(st, esc::sm_addr(0) + 6, 1));
     const auto r = request(b, static_cast<std::uint16_t>(S::PreOp));
@@ -205,9 +210,9 @@ TEST(Mailbox, UnsupportedProtocolGetsAMailboxError) {
     ASSERT_EQ(b.master.fpwr(st, 0x1800, req).value(), 1);
     std::vector<std::uint8_t> rep(246, 0);
     ASSERT_EQ(b.master.fprd(st, 0x18F6, rep).value(), 1);
-    EXPECT_EQ(rep[5] & 0x0F, 0x00);                     // mailbox error reply
-    EXPECT_EQ(ld_le16(rep.data() + 6), 0x0001);          // service
-    EXPECT_EQ(ld_le16(rep.data() + 8), 0x0002);          // unsupported protocol
+    EXPECT_EQ(rep[5] & 0x0F, 0x00);                        // mailbox error reply
+    EXPECT_EQ(ld_le16(rep.data() + 6), 0x0001);            // service
+    EXPECT_EQ(ld_le16(rep.data() + 8), 0x0002);            // unsupported protocol
     ASSERT_EQ(b.master.fpwr(st, 0x1800, req).value(), 1);  // same counter again: not executed twice
     EXPECT_EQ(b.slave().counters().mailbox_duplicates, 1u);
     EXPECT_EQ(b.master.fprd(st, 0x18F6, rep).value(), 0);  // nothing to read

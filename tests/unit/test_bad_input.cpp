@@ -54,7 +54,8 @@ TEST(BadInput, RandomFramesNeverCrash) {
     std::uint64_t replies = 0;
     for (int i = 0; i < 20000; ++i) {
         const std::size_t n = 14 + rng() % 600;
-        for (std::size_t k = 0; k < n; ++k) f[k] = static_cast<std::uint8_t>(rng());
+        for (std::size_t k = 0; k < n; ++k)
+            f[k] = static_cast<std::uint8_t>(rng());
         f[6] &= 0xFD;
         f[12] = 0x88;
         f[13] = 0xA4;

@@ -20,11 +20,21 @@ void* operator new(std::size_t n) {
     if (void* p = std::malloc(n ? n : 1)) return p;
     throw std::bad_alloc();
 }
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void* operator new[](std::size_t n) {
+    return operator new(n);
+}
+void operator delete(void* p) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p) noexcept {
+    std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+    std::free(p);
+}
 
 using namespace vecat;
 using namespace vecat::test;
@@ -39,7 +49,8 @@ TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
     std::uint8_t t[8] = {};
     master::DatagramRequest dg[2] = {{esc::Command::LRW, 0x00010000, Bytes(img.data(), img.size())},
                                      {esc::Command::FRMW, 0x09101001, Bytes(t, 8)}};
-    for (int i = 0; i < 10; ++i) ASSERT_TRUE(b.master.transact_frame(dg));
+    for (int i = 0; i < 10; ++i)
+        ASSERT_TRUE(b.master.transact_frame(dg));
     const auto before = g_allocs.load();
     for (int i = 0; i < 10000; ++i) {
         b.link.set_time(2'000'000'000ull + static_cast<std::uint64_t>(i) * 1'000'000);
@@ -59,10 +70,12 @@ TEST(NoAllocation, RawSocketServeLoop) {
     std::thread srv([&] { net::serve(*seg, ss, {}, stop); });
     master::Master m(ms);
     ASSERT_TRUE(m.startup(esc::AlState::Op, &why)) << why;
-    for (int i = 0; i < 50; ++i) m.exchange_process_data();
+    for (int i = 0; i < 50; ++i)
+        m.exchange_process_data();
     const auto before = g_allocs.load();
     int ok = 0;
-    for (int i = 0; i < 2000; ++i) ok += m.exchange_process_data().value_or(0) == m.expected_wkc();
+    for (int i = 0; i < 2000; ++i)
+        ok += m.exchange_process_data().value_or(0) == m.expected_wkc();
     const auto allocs = g_allocs.load() - before;
     stop = true;
     srv.join();

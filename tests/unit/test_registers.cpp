@@ -11,11 +11,11 @@ TEST(Registers, InformationRegisters) {
     cfg.ram_bytes = 16384;
     Bench b(1, cfg);
     auto r = raw_datagram(*b.seg, 1, phys(0, 0x0000), std::vector<std::uint8_t>(10, 0));
-    EXPECT_EQ(r.data[0], 0x11);          // type
-    EXPECT_EQ(r.data[4], 8);             // FMMUs
-    EXPECT_EQ(r.data[5], 8);             // SyncManagers
-    EXPECT_EQ(r.data[6], 16);            // RAM in KiB
-    EXPECT_EQ(r.data[7], 0x0F);          // ports 0, 1 MII
+    EXPECT_EQ(r.data[0], 0x11);  // type
+    EXPECT_EQ(r.data[4], 8);     // FMMUs
+    EXPECT_EQ(r.data[5], 8);     // SyncManagers
+    EXPECT_EQ(r.data[6], 16);    // RAM in KiB
+    EXPECT_EQ(r.data[7], 0x0F);  // ports 0, 1 MII
     EXPECT_TRUE(ld_le16(&r.data[8]) & esc::feature::DcAvailable);
 }
 
@@ -94,7 +94,9 @@ TEST(Registers, DcReceiveTimesFollowThePositionOnTheLine) {
         const std::uint32_t p0 = b.escx(i).peek32(0x0900);
         EXPECT_GT(p0, prev);
         prev = p0;
-        if (i < 2) EXPECT_GT(b.escx(i).peek32(0x0904), p0);  // the frame comes back later on port 1
+        if (i < 2) {
+            EXPECT_GT(b.escx(i).peek32(0x0904), p0);  // the frame comes back later on port 1
+        }
     }
     // System time reads local time + offset.
     raw_datagram(*b.seg, 5, phys(0x0000, 0x0920), {0, 0, 0, 0, 0, 0, 0, 0});

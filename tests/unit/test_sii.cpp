@@ -16,7 +16,9 @@ std::vector<std::uint8_t> load(const std::string& rel) {
     std::ifstream f(std::string(VECAT_SHARED_DIR) + "/data/" + rel, std::ios::binary);
     return {std::istreambuf_iterator<char>(f), {}};
 }
-std::uint16_t sii_status(Bench& b) { return b.escx().peek16(0x0502); }
+std::uint16_t sii_status(Bench& b) {
+    return b.escx().peek16(0x0502);
+}
 void command(Bench& b, std::uint16_t cmd, std::uint32_t word) {
     std::vector<std::uint8_t> c(6);
     st_le16(c.data(), cmd);
@@ -51,7 +53,8 @@ TEST(SiiImage, DefaultDriveImageIsCompleteAndConsistent) {
     ASSERT_EQ(s.rx_pdos.size(), 1u);
     ASSERT_EQ(s.tx_pdos.size(), 1u);
     unsigned bits = 0;
-    for (const auto& e : s.tx_pdos[0].entries) bits += e.bit_length;
+    for (const auto& e : s.tx_pdos[0].entries)
+        bits += e.bit_length;
     EXPECT_EQ(bits / 8, d.sync_managers[3].length);
     EXPECT_EQ(s.rx_pdos[0].sm, 2);
     ASSERT_EQ(s.dc_modes.size(), 3u);
@@ -60,7 +63,8 @@ TEST(SiiImage, DefaultDriveImageIsCompleteAndConsistent) {
 }
 
 TEST(SiiImage, ChecksumMatchesRealEeproms) {
-    for (const char* f : {"sii/kollmorgen-akd.bin", "sii/beckhoff-el2004.bin", "sii/soes-dynpdo.bin", "sii/soes-lan9252.bin"}) {
+    for (const char* f : {"sii/kollmorgen-akd.bin", "sii/beckhoff-el2004.bin", "sii/soes-dynpdo.bin",
+                          "sii/soes-lan9252.bin"}) {
         const auto img = load(f);
         ASSERT_GE(img.size(), 16u) << f;
         EXPECT_EQ(sii_config_crc(ConstBytes(img.data(), 14)), img[14]) << f;

@@ -26,11 +26,21 @@ struct EscOnly : ::testing::Test {
         std::copy(buf.begin() + 10, buf.begin() + 10 + static_cast<long>(data.size()), data.begin());
         return d.wkc();
     }
-    std::uint16_t write(std::uint16_t ado, std::vector<std::uint8_t> data) { return dg(Command::APWR, ado, data); }
-    std::uint16_t read(std::uint16_t ado, std::vector<std::uint8_t>& data) { return dg(Command::APRD, ado, data); }
+    std::uint16_t write(std::uint16_t ado, std::vector<std::uint8_t> data) {
+        return dg(Command::APWR, ado, data);
+    }
+    std::uint16_t read(std::uint16_t ado, std::vector<std::uint8_t>& data) {
+        return dg(Command::APRD, ado, data);
+    }
     void sm(unsigned i, std::uint16_t start, std::uint16_t len, std::uint8_t ctrl) {
-        std::vector<std::uint8_t> r{static_cast<std::uint8_t>(start), static_cast<std::uint8_t>(start >> 8),
-                                    static_cast<std::uint8_t>(len), static_cast<std::uint8_t>(len >> 8), ctrl, 0, 1, 0};
+        std::vector<std::uint8_t> r{static_cast<std::uint8_t>(start),
+                                    static_cast<std::uint8_t>(start >> 8),
+                                    static_cast<std::uint8_t>(len),
+                                    static_cast<std::uint8_t>(len >> 8),
+                                    ctrl,
+                                    0,
+                                    1,
+                                    0};
         ASSERT_EQ(write(sm_addr(i), r), 1);
     }
 };

@@ -8,14 +8,18 @@ using namespace vecat::test;
 using esc::Command;
 
 namespace {
-constexpr std::uint8_t c(Command x) { return static_cast<std::uint8_t>(x); }
+constexpr std::uint8_t c(Command x) {
+    return static_cast<std::uint8_t>(x);
+}
 
 struct Line : ::testing::Test {
     Bench b{3};
     void SetUp() override {
         for (std::uint16_t i = 0; i < 3; ++i) {
             std::vector<std::uint8_t> a{static_cast<std::uint8_t>(0x01 + i), 0x10};
-            ASSERT_EQ(raw_datagram(*b.seg, c(Command::APWR), phys(static_cast<std::uint16_t>(-i), 0x0010), a).wkc, 1);
+            ASSERT_EQ(
+                raw_datagram(*b.seg, c(Command::APWR), phys(static_cast<std::uint16_t>(-i), 0x0010), a).wkc,
+                1);
         }
     }
 };
@@ -47,10 +51,13 @@ TEST_F(Line, BroadcastWriteAndReadWrite) {
 
 TEST_F(Line, AutoIncrementAddressesOneSlaveByPosition) {
     for (int pos = 0; pos < 4; ++pos) {
-        auto r = raw_datagram(*b.seg, c(Command::APRD), phys(static_cast<std::uint16_t>(-pos), 0x0010), {0, 0});
+        auto r =
+            raw_datagram(*b.seg, c(Command::APRD), phys(static_cast<std::uint16_t>(-pos), 0x0010), {0, 0});
         EXPECT_EQ(r.wkc, pos < 3 ? 1 : 0) << pos;
         EXPECT_EQ(r.adp, static_cast<std::uint16_t>(-pos + 3));
-        if (pos < 3) EXPECT_EQ(r.data[0], 0x01 + pos);
+        if (pos < 3) {
+            EXPECT_EQ(r.data[0], 0x01 + pos);
+        }
     }
     EXPECT_EQ(raw_datagram(*b.seg, c(Command::APWR), phys(0xFFFF, 0x0138), {0x07}).wkc, 1);
     EXPECT_EQ(b.escx(1).peek(0x0138), 0x07);
@@ -96,7 +103,8 @@ TEST_F(Line, ReadMultipleWrite) {
     auto f = raw_datagram(*b.seg, c(Command::FRMW), phys(0x1002, 0x0108), {0, 0});
     EXPECT_EQ(f.wkc, 3);
     EXPECT_EQ(ld_le16(f.data.data()), 0x5678);
-    EXPECT_EQ(b.escx(0).peek16(0x0108), 0x0000);  // slave 0 comes before the reader: it writes the incoming data
+    EXPECT_EQ(b.escx(0).peek16(0x0108),
+              0x0000);  // slave 0 comes before the reader: it writes the incoming data
     EXPECT_EQ(b.escx(2).peek16(0x0108), 0x5678);
 }
 
