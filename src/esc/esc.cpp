@@ -16,6 +16,15 @@ bool overlaps(std::uint32_t lo, std::uint32_t hi, std::uint32_t a, std::uint32_t
     return lo < a + len && hi >= a;  // hi inclusive
 }
 
+// Copies memory into a datagram, or ORs it in (broadcast reads).
+void copy_out(std::uint8_t* dst, const std::uint8_t* src, std::size_t n, bool or_into) {
+    if (or_into)
+        for (std::size_t k = 0; k < n; ++k)
+            dst[k] |= src[k];
+    else
+        std::memcpy(dst, src, n);
+}
+
 void saturating_inc(std::uint8_t& c) {
     if (c != 0xFF) ++c;
 }
