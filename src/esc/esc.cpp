@@ -352,11 +352,7 @@ bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_i
             run = std::min<std::size_t>(rem, kRegisterSpaceSize - cur);
             refresh_dynamic_registers(static_cast<std::uint16_t>(cur),
                                       static_cast<std::uint16_t>(cur + run - 1), t);
-            if (or_into)
-                for (std::size_t k = 0; k < run; ++k)
-                    dst[pos + k] |= mem_[cur + k];
-            else
-                std::memcpy(dst + pos, &mem_[cur], run);
+            copy_out(dst + pos, &mem_[cur], run, or_into);
             counted = true;
         } else if (cur < mem_.size()) {
             const int s = sm_covering(cur);
@@ -366,11 +362,7 @@ bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_i
                     sm_ecat_read(static_cast<unsigned>(s), cur - sm_[s].start, dst + pos, run, or_into);
             } else {
                 run = std::min<std::size_t>(rem, next_sm_start(cur) - cur);
-                if (or_into)
-                    for (std::size_t k = 0; k < run; ++k)
-                        dst[pos + k] |= mem_[cur + k];
-                else
-                    std::memcpy(dst + pos, &mem_[cur], run);
+                copy_out(dst + pos, &mem_[cur], run, or_into);
                 counted = true;
             }
         } else {
@@ -471,11 +463,7 @@ bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size
         }
         src = &mem_[s.start + static_cast<std::size_t>(s.buf_ecat) * s.length + off];
     }
-    if (or_into)
-        for (std::size_t k = 0; k < n; ++k)
-            dst[k] |= src[k];
-    else
-        std::memcpy(dst, src, n);
+    copy_out(dst, src, n, or_into);
     if (off + n == s.length) {  // last byte read: buffer released
         if (s.mailbox)
             s.mbx_full = false;
