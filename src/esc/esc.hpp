@@ -35,7 +35,6 @@ struct FrameTiming {
 };
 
 struct EscCounters {
-    std::uint64_t frames = 0;
     std::uint64_t datagrams = 0;
     std::uint64_t dropped_frames = 0;
 };
@@ -177,8 +176,6 @@ class Esc {
     bool wd_armed_ = false;
     std::uint64_t wd_last_trigger_ns_ = 0;
     std::uint64_t last_host_ns_ = 0;
-    std::uint64_t dc_epoch_ns_ = 0;
-    bool dc_epoch_set_ = false;
     std::array<std::uint8_t, 2048 + 16> scratch_{};
     EscCounters counters_;
 };

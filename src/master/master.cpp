@@ -48,7 +48,7 @@ std::size_t Master::build_frame(std::span<DatagramRequest> dgs) {
     return std::max(off, esc::kMinEthFrame);
 }
 
-bool Master::wait_reply(std::span<DatagramRequest> dgs, std::size_t) {
+bool Master::wait_reply(std::span<DatagramRequest> dgs) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(opt_.reply_timeout_us);
     while (true) {
         const auto left =
@@ -80,7 +80,7 @@ bool Master::transact_frame(std::span<DatagramRequest> dgs) {
     const std::size_t len = build_frame(dgs);
     for (int attempt = 0; attempt <= opt_.retries; ++attempt) {
         if (!link_.send(ConstBytes(tx_.data(), len))) continue;
-        if (wait_reply(dgs, len)) {
+        if (wait_reply(dgs)) {
             index_ = static_cast<std::uint8_t>(index_ + dgs.size());
             return true;
         }

@@ -120,7 +120,7 @@ class Master {
 
   private:
     std::size_t build_frame(std::span<DatagramRequest> dgs);
-    bool wait_reply(std::span<DatagramRequest> dgs, std::size_t frame_len);
+    bool wait_reply(std::span<DatagramRequest> dgs);
 
     net::Link& link_;
     MasterOptions opt_;
