@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include "coe/coe_application.hpp"
 #include "device/device_description.hpp"
 #include "esc/registers.hpp"
 #include "esc/segment.hpp"
@@ -13,15 +14,17 @@
 
 namespace vecat::test {
 
-// A line of n default drives behind an in-process link, with a master on the other end.
+// A line of n default drives (CoE application) behind an in-process link, with a master on the other end.
 struct Bench {
     explicit Bench(std::size_t n = 1, esc::EscConfig cfg = {},
                    device::DeviceDescription dev = device::default_drive())
-        : desc(std::move(dev)), seg(esc::make_segment(desc, n, cfg)), link(*seg), master(link) {
+        : desc(std::move(dev)), seg(coe::make_coe_segment(desc, n, cfg)), link(*seg), master(link) {
         link.set_time(1'000'000'000);
     }
     esc::Slave& slave(std::size_t i = 0) { return seg->slave(i); }
     esc::Esc& escx(std::size_t i = 0) { return seg->slave(i).esc(); }
+    coe::CoeApplication& app(std::size_t i = 0) { return dynamic_cast<coe::CoeApplication&>(seg->slave(i).app()); }
+    coe::ObjectDictionary& od(std::size_t i = 0) { return app(i).dictionary(); }
     void advance(std::uint64_t ns) {
         now += ns;
         link.set_time(now);

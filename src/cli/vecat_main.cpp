@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "device/device_description.hpp"
+#include "coe/coe_application.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
 #include "master/master.hpp"
@@ -44,7 +45,7 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
         return 2;
     }
     auto dev = vecat::device::default_drive();
-    auto seg = vecat::esc::make_segment(dev, slaves);
+    auto seg = vecat::coe::make_coe_segment(dev, slaves);
     std::unique_ptr<vecat::net::RawSocket> sock;
     try {
         sock = std::make_unique<vecat::net::RawSocket>(iface);
@@ -80,7 +81,7 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     install_signals();
 
     auto dev = vecat::device::default_drive();
-    auto seg = vecat::esc::make_segment(dev, slaves);
+    auto seg = vecat::coe::make_coe_segment(dev, slaves);
     vecat::net::RawSocket slave_sock("vecat-s");
     vecat::net::RawSocket master_sock("vecat-m");
     vecat::net::PcapngWriter pcap(pcap_path, "vecat-s");

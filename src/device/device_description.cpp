@@ -40,11 +40,9 @@ DeviceDescription default_drive() {
     d.order_code = "VECAT-SD402";
     d.group_type = "ServoDrives";
     d.group_name = "Servo drives";
-    // The SII advertises only the mailbox protocols the slave really serves: masters send what is
-    // advertised, and SOEM 2.x crashes on a mailbox error reply (it reuses the dropped buffer). The CoE
-    // stack sets CoE and its details when it is attached to the device.
-    d.mailbox_protocols = 0;
-    d.coe_details = 0;
+    d.mailbox_protocols = mbx_proto::CoE;
+    d.coe_details = coe_details::Sdo | coe_details::SdoInfo | coe_details::PdoAssign | coe_details::PdoConfig |
+                    coe_details::CompleteAccess;
     d.ebus_current_ma = 0;
 
     // SyncManager layout of the HIWIN D2 (drive guide, section 4): mailbox at 0x1800/0x18F6, process
@@ -72,7 +70,22 @@ DeviceDescription default_drive() {
                          {0x60FF, 0, 32, DT::Integer32, "Target velocity"},
                          {0x6071, 0, 16, DT::Integer16, "Target torque"},
                          {0x60B8, 0, 16, DT::Unsigned16, "Touch probe function"},
-                     }}};
+                     },
+                     16},
+                 Pdo{0x1601,
+                     "RxPDO 2 (PP/PV)",
+                     2,
+                     false,
+                     false,
+                     false,
+                     {
+                         {0x6040, 0, 16, DT::Unsigned16, "Controlword"},
+                         {0x607A, 0, 32, DT::Integer32, "Target position"},
+                         {0x6081, 0, 32, DT::Unsigned32, "Profile velocity"},
+                     },
+                     16},
+                 Pdo{0x1602, "RxPDO 3", 2, false, false, false, {}, 16},
+                 Pdo{0x1603, "RxPDO 4", 2, false, false, false, {}, 16}};
     d.tx_pdos = {Pdo{0x1A00,
                      "TxPDO 1 (CSP/CSV/CST)",
                      3,
@@ -90,7 +103,21 @@ DeviceDescription default_drive() {
                          {0x60FD, 0, 32, DT::Unsigned32, "Digital inputs"},
                          {0x60B9, 0, 16, DT::Unsigned16, "Touch probe status"},
                          {0x60BA, 0, 32, DT::Integer32, "Touch probe 1 positive value"},
-                     }}};
+                     },
+                     16},
+                 Pdo{0x1A01,
+                     "TxPDO 2 (PP/PV)",
+                     3,
+                     false,
+                     false,
+                     false,
+                     {
+                         {0x6041, 0, 16, DT::Unsigned16, "Statusword"},
+                         {0x6064, 0, 32, DT::Integer32, "Position actual value"},
+                     },
+                     16},
+                 Pdo{0x1A02, "TxPDO 3", 3, false, false, false, {}, 16},
+                 Pdo{0x1A03, "TxPDO 4", 3, false, false, false, {}, 16}};
     d.sync_managers[2].length = static_cast<std::uint16_t>(d.output_bytes());
     d.sync_managers[3].length = static_cast<std::uint16_t>(d.input_bytes());
 
@@ -99,6 +126,7 @@ DeviceDescription default_drive() {
         DcOpMode{"SM-Synchron", "SM-synchronous", 0x0000, 0, 0, 0, 0, 0},
         DcOpMode{"DC", "DC SYNC0", 0x0300, 1000000, 0, 0, 1, 0},
     };
+    d.objects = cia402_drive_objects();
     return d;
 }
 

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "device/object_description.hpp"
+
 namespace vecat::device {
 
 struct Identity {
@@ -30,25 +32,6 @@ struct SyncManagerConfig {
 // SII FMMU category usage byte (ETG.2010 Table 7).
 enum class FmmuUsage : std::uint8_t { Unused = 0, Outputs = 1, Inputs = 2, MailboxState = 3 };
 
-// CoE base data types (ETG.1000.6 Table 64), as used in PDO entries and the dictionary.
-enum class DataType : std::uint16_t {
-    Boolean = 0x0001,
-    Integer8 = 0x0002,
-    Integer16 = 0x0003,
-    Integer32 = 0x0004,
-    Unsigned8 = 0x0005,
-    Unsigned16 = 0x0006,
-    Unsigned32 = 0x0007,
-    Real32 = 0x0008,
-    VisibleString = 0x0009,
-    OctetString = 0x000A,
-    UnicodeString = 0x000B,
-    Domain = 0x000F,
-    Integer64 = 0x0015,
-    Unsigned64 = 0x001B,
-    Real64 = 0x0011,
-};
-
 struct PdoEntry {
     std::uint16_t index = 0;  // 0 with subindex 0: padding (gap)
     std::uint8_t subindex = 0;
@@ -65,6 +48,7 @@ struct Pdo {
     bool mandatory = false;
     bool assigned = true;  // part of the default assignment
     std::vector<PdoEntry> entries;
+    std::uint8_t capacity = 0;  // subindexes of the mapping object; at least entries.size()
 
     unsigned bit_length() const {
         unsigned n = 0;
@@ -114,6 +98,9 @@ struct DeviceDescription {
     std::string group_type;
     std::string group_name;
     std::uint32_t profile_no = 402;
+    std::uint32_t device_type = 0x00020192;  // 0x1000: CiA 402 servo drive
+    std::string hardware_version = "1.0";
+    std::string software_version = "vecat 0.1.0";
 
     // ESC configuration area of the SII (words 0..7).
     std::uint16_t pdi_control = 0x0005;  // 0x05: SPI-like "on-chip bus"/digital I/O; value copied to 0x0140
@@ -134,6 +121,12 @@ struct DeviceDescription {
     std::vector<Pdo> rx_pdos;  // outputs (master -> slave)
     std::vector<Pdo> tx_pdos;  // inputs (slave -> master)
     std::vector<DcOpMode> dc_modes;
+    // Synchronisation capabilities reported in 0x1C32/0x1C33.
+    std::uint32_t min_cycle_time_ns = 125'000;
+    std::uint32_t calc_copy_time_ns = 20'000;
+    // The application objects (profile and manufacturer area). The communication area (0x1000-0x1FFF) is
+    // generated from the fields above by dictionary_objects(); an object listed here replaces it.
+    std::vector<ObjectDescription> objects;
 
     std::uint32_t eeprom_size_bytes = 4096;
 
@@ -143,6 +136,15 @@ struct DeviceDescription {
     const SyncManagerConfig* sm_of_type(SmType t) const;
     std::optional<unsigned> sm_index_of_type(SmType t) const;
 };
+
+// Every object of the device's dictionary, sorted by index: the generated communication area
+// (0x1000, 0x1001, 0x1008-0x100A, 0x1018, 0x10F1, 0x16xx, 0x1Axx, 0x1C00, 0x1C1x, 0x1C32, 0x1C33) and
+// the application objects. The CoE dictionary, the ESI Dictionary and the SDO information come from this.
+std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d);
+
+// The objects of the CiA 402 drive profile the vecat drive core implements (0x603F-0x60FF, 0x6502) and
+// its manufacturer objects (0x2000...).
+std::vector<ObjectDescription> cia402_drive_objects();
 
 // The built-in default device: a CiA402 servo drive with HIWIN-like SyncManager layout.
 DeviceDescription default_drive();

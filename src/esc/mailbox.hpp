@@ -79,6 +79,10 @@ class MailboxReplySink {
     // Space for one reply payload of at most max_payload() bytes; commit() sends it.
     virtual Bytes reply_buffer() = 0;
     virtual void commit(MailboxType type, std::size_t payload_len) = 0;
+    // True when a commit() now would be queued (not dropped).
+    virtual bool can_commit() const = 0;
+    // Replies committed but not yet read by the master.
+    virtual std::size_t pending() const = 0;
     std::size_t max_payload() { return reply_buffer().size(); }
 };
 

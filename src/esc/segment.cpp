@@ -55,11 +55,15 @@ void Segment::tick(std::uint64_t now_ns) {
         s->run(now_ns);
 }
 
-std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n,
-                                      const EscConfig& cfg) {
+std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n, const EscConfig& cfg,
+                                      const ApplicationFactory& factory) {
     auto seg = std::make_unique<Segment>();
     for (std::size_t i = 0; i < n; ++i) {
-        auto app = std::make_unique<ProcessImageApplication>(d.output_bytes(), d.input_bytes());
+        std::unique_ptr<Application> app;
+        if (factory)
+            app = factory(d);
+        else
+            app = std::make_unique<ProcessImageApplication>(d.output_bytes(), d.input_bytes());
         seg->add(std::make_unique<Slave>(d, cfg, std::move(app)));
     }
     return seg;

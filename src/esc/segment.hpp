@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -43,8 +44,12 @@ class Segment {
     SegmentCounters counters_;
 };
 
-// Builds a segment of n slaves of the given device, each with a process-image application.
-std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n,
-                                      const EscConfig& cfg = {});
+// Makes the application of one slave (the CoE stack and drive, or a bare process image).
+using ApplicationFactory = std::function<std::unique_ptr<Application>(const device::DeviceDescription&)>;
+
+// Builds a segment of n slaves of the given device, each with an application from the factory (by
+// default a ProcessImageApplication without mailbox protocols).
+std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n, const EscConfig& cfg = {},
+                                      const ApplicationFactory& factory = {});
 
 }  // namespace vecat::esc

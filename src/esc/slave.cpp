@@ -95,6 +95,12 @@ class SlaveReplySink final : public MailboxReplySink {
         ++s_.q_count_;
     }
 
+    bool can_commit() const override { return s_.q_count_ < Slave::kReplySlots; }
+    std::size_t pending() const override {
+        const bool in_sm = s_.sm_mbx_in_ >= 0 && s_.esc_.sm_mailbox_full(static_cast<unsigned>(s_.sm_mbx_in_));
+        return s_.q_count_ + (in_sm ? 1 : 0);
+    }
+
   private:
     Slave& s_;
     std::vector<std::uint8_t> overflow_ = std::vector<std::uint8_t>(kMaxMailboxSize);
@@ -171,6 +177,14 @@ void Slave::set_error(AlStatusCode code, AlState stay, std::uint64_t now_ns) {
     error_ = true;
     code_ = code;
     if (stay != state_) enter(stay, now_ns);
+    app_->on_al_error(code);
+}
+
+void Slave::clear_error() {
+    if (!error_) return;
+    error_ = false;
+    code_ = AlStatusCode::NoError;
+    app_->on_al_error(AlStatusCode::NoError);
 }
 
 void Slave::raise_error(AlStatusCode code, AlState fallback) {
@@ -214,17 +228,13 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
     if (error_ && !ack) {
         // With the error indication set only INIT is obeyed without acknowledge (ETG.1000.6 6.4.1.4).
         if (req == static_cast<std::uint8_t>(AlState::Init)) {
-            error_ = false;
-            code_ = AlStatusCode::NoError;
+            clear_error();
             enter(AlState::Init, now_ns);
         }
         publish_status();
         return;
     }
-    if (ack) {
-        error_ = false;
-        code_ = AlStatusCode::NoError;
-    }
+    if (ack) clear_error();
     op_pending_ = false;
     const AlState fallback = state_ == AlState::Op ? AlState::SafeOp : state_;
     if (!is_valid_state(req)) {
@@ -254,8 +264,9 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
                       AlState::Init, now_ns);
             break;
         case AlAction::CheckProcessData:
-            code = check_process_data_config();
-            if (code == AlStatusCode::NoError) code = app_->check_transition(state_, to);
+            // The application first checks its mapping (0x0024/0x0025), then the SMs are compared with it.
+            code = app_->check_transition(state_, to);
+            if (code == AlStatusCode::NoError) code = check_process_data_config();
             if (code == AlStatusCode::NoError)
                 enter(to, now_ns);
             else

@@ -26,6 +26,8 @@ class Application {
     // Application-specific checks of a transition (PDO mapping, sync configuration...). NoError allows it.
     virtual AlStatusCode check_transition(AlState /*from*/, AlState /*to*/) { return AlStatusCode::NoError; }
     virtual void on_state_change(AlState /*from*/, AlState /*to*/) {}
+    // The slave signalled an AL error (code), or the master acknowledged it (NoError).
+    virtual void on_al_error(AlStatusCode /*code*/) {}
     // One process data exchange. outputs is empty when no valid outputs exist (below OP they are not
     // applied).
     virtual void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply_outputs, Bytes inputs) = 0;
@@ -103,6 +105,7 @@ class Slave {
     void handle_al_control(std::uint64_t now_ns);
     void enter(AlState to, std::uint64_t now_ns);
     void set_error(AlStatusCode code, AlState stay, std::uint64_t now_ns);
+    void clear_error();
     bool outputs_valid() const;
     void publish_status();
     AlStatusCode check_mailbox_config() const;

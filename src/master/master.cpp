@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "esc/registers.hpp"
+#include "master/coe_client.hpp"
 
 namespace vecat::master {
 
@@ -276,7 +277,47 @@ bool Master::configure_mailboxes() {
     return true;
 }
 
+bool Master::read_pdo_sizes_coe(SlaveInfo& s) {
+    // Like SOEM's ecx_readPDOmap: 0x1C00 gives each SM's type, 0x1C1n the PDOs, 0x16xx/0x1Axx the entries.
+    CoeClient c(*this, s.station);
+    auto u = [&](std::uint16_t idx, std::uint8_t sub) -> std::optional<std::uint32_t> {
+        auto r = c.upload(idx, sub);
+        if (!r.ok() || r.data.empty()) return std::nullopt;
+        std::uint32_t v = 0;
+        for (std::size_t i = 0; i < r.data.size() && i < 4; ++i)
+            v |= static_cast<std::uint32_t>(r.data[i]) << (8 * i);
+        return v;
+    };
+    auto nsm = u(0x1C00, 0);
+    if (!nsm || *nsm <= 2) return false;
+    unsigned out_bits = 0, in_bits = 0;
+    for (std::uint32_t sm = 2; sm < *nsm; ++sm) {
+        auto type = u(0x1C00, static_cast<std::uint8_t>(sm + 1));
+        if (!type || (*type != 3 && *type != 4)) continue;
+        const auto assign = static_cast<std::uint16_t>(0x1C10 + sm);
+        auto npdo = u(assign, 0);
+        if (!npdo) return false;
+        for (std::uint32_t i = 1; i <= *npdo; ++i) {
+            auto pdo = u(assign, static_cast<std::uint8_t>(i));
+            if (!pdo) return false;
+            auto nent = u(static_cast<std::uint16_t>(*pdo), 0);
+            if (!nent) return false;
+            for (std::uint32_t k = 1; k <= *nent; ++k) {
+                auto m = u(static_cast<std::uint16_t>(*pdo), static_cast<std::uint8_t>(k));
+                if (!m) return false;
+                (*type == 3 ? out_bits : in_bits) += *m & 0xFF;
+            }
+        }
+    }
+    s.out_bytes = (out_bits + 7) / 8;
+    s.in_bytes = (in_bits + 7) / 8;
+    return true;
+}
+
 bool Master::configure_process_data() {
+    for (auto& s : slaves_)
+        if ((s.sii.mailbox_protocols & 0x0004) && s.sii.std_rx_mbx_size)
+            if (!read_pdo_sizes_coe(s)) return false;
     std::uint32_t laddr = opt_.logical_base;
     std::size_t off = 0;
     unsigned n_out = 0, n_in = 0;

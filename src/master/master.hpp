@@ -99,7 +99,9 @@ class Master {
     std::optional<std::uint32_t> read_sii_dword(std::uint16_t station, std::uint32_t word);
     std::optional<std::vector<std::uint8_t>> read_sii_image(std::uint16_t station);
     bool configure_mailboxes();     // SM0/SM1 from the SII
-    bool configure_process_data();  // SM2/SM3 and FMMUs; lays out the process image
+    // SM2/SM3 and FMMUs; lays out the process image. CoE slaves' sizes are read from their PDO assignment.
+    bool configure_process_data();
+    bool read_pdo_sizes_coe(SlaveInfo& s);
     // Requests a state from all slaves (broadcast) and waits until each has it or reports an error.
     bool request_state(esc::AlState s, std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));
     bool request_state(std::uint16_t station, esc::AlState s,

@@ -171,16 +171,16 @@ TEST(AlStateMachine, ProcessDataWatchdogDropsToSafeOp) {
     Bench b(1);
     reach(b, S::Op);
     auto out = b.master.outputs(0);
-    out[0] = 0x0F;
+    out[0] = 0x0F;  // controlword, the first object of RxPDO 0x1600
     b.master.exchange_process_data();
-    auto& app = dynamic_cast<esc::ProcessImageApplication&>(b.slave().app());
-    EXPECT_EQ(app.outputs()[0], 0x0F);
+    auto& controlword = *b.od().find(0x6040, 0);
+    EXPECT_EQ(controlword.get<std::uint16_t>(), 0x0F);
     b.advance(50'000'000);  // 50 ms: within the 100 ms default
     EXPECT_EQ(b.slave().state(), S::Op);
     b.advance(60'000'000);
     EXPECT_EQ(b.slave().state(), S::SafeOp);
     EXPECT_EQ(b.slave().status_code(), AlStatusCode::SyncManagerWatchdog);
-    EXPECT_EQ(app.outputs()[0], 0);  // safe state
+    EXPECT_EQ(controlword.get<std::uint16_t>(), 0);  // safe state
     EXPECT_EQ(b.escx().peek(0x0440) & 1, 0);
     EXPECT_EQ(b.escx().peek(0x0442), 1);
 }
@@ -188,16 +188,16 @@ TEST(AlStateMachine, ProcessDataWatchdogDropsToSafeOp) {
 TEST(AlStateMachine, InputsValidInSafeOpOutputsAppliedOnlyInOp) {
     Bench b(1);
     reach(b, S::SafeOp);
-    auto& app = dynamic_cast<esc::ProcessImageApplication&>(b.slave().app());
-    app.inputs()[0] = 0x5A;
+    b.od().find(0x6041, 0)->set(std::uint16_t{0x5A});  // statusword, first in TxPDO 0x1A00
+    auto& controlword = *b.od().find(0x6040, 0);
     b.master.outputs(0)[0] = 0x77;
     b.master.exchange_process_data();
     b.master.exchange_process_data();
     EXPECT_EQ(b.master.inputs(0)[0], 0x5A);
-    EXPECT_EQ(app.outputs()[0], 0);
+    EXPECT_EQ(controlword.get<std::uint16_t>(), 0);
     ASSERT_TRUE(b.master.request_state(S::Op));
     b.master.exchange_process_data();
-    EXPECT_EQ(app.outputs()[0], 0x77);
+    EXPECT_EQ(controlword.get<std::uint16_t>(), 0x77);
 }
 
 TEST(Mailbox, UnsupportedProtocolGetsAMailboxError) {
@@ -206,7 +206,7 @@ TEST(Mailbox, UnsupportedProtocolGetsAMailboxError) {
     const auto st = b.master.slaves()[0].station;
     std::vector<std::uint8_t> req(246, 0);
     st_le16(req.data(), 10);
-    req[5] = 0x13;  // CoE, counter 1
+    req[5] = 0x14;  // FoE (not served by this device), counter 1
     ASSERT_EQ(b.master.fpwr(st, 0x1800, req).value(), 1);
     std::vector<std::uint8_t> rep(246, 0);
     ASSERT_EQ(b.master.fprd(st, 0x18F6, rep).value(), 1);

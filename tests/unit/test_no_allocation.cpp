@@ -9,6 +9,7 @@
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "net/server.hpp"
+#include "coe/coe_application.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -64,7 +65,7 @@ TEST(NoAllocation, RawSocketServeLoop) {
     if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
     std::string why;
     ASSERT_TRUE(net::create_veth_pair("na-m", "na-s", &why)) << why;
-    auto seg = esc::make_segment(device::default_drive(), 2);
+    auto seg = coe::make_coe_segment(device::default_drive(), 2);
     net::RawSocket ss("na-s"), ms("na-m");
     std::atomic<bool> stop{false};
     std::thread srv([&] { net::serve(*seg, ss, {}, stop); });

@@ -50,8 +50,11 @@ TEST(SiiImage, DefaultDriveImageIsCompleteAndConsistent) {
         EXPECT_EQ(s.sync_managers[i].type, static_cast<std::uint8_t>(d.sync_managers[i].type));
     }
     EXPECT_EQ(s.fmmus, (std::vector<std::uint8_t>{1, 2, 3, 0xFF}));
-    ASSERT_EQ(s.rx_pdos.size(), 1u);
-    ASSERT_EQ(s.tx_pdos.size(), 1u);
+    ASSERT_EQ(s.rx_pdos.size(), d.rx_pdos.size());
+    ASSERT_EQ(s.tx_pdos.size(), d.tx_pdos.size());
+    // Only the assigned PDOs carry their SyncManager; the others say 0xFF (not assigned).
+    for (std::size_t i = 1; i < s.rx_pdos.size(); ++i)
+        EXPECT_EQ(s.rx_pdos[i].sm, 0xFF);
     unsigned bits = 0;
     for (const auto& e : s.tx_pdos[0].entries)
         bits += e.bit_length;

@@ -1,0 +1,88 @@
+#include "coe/coe_application.hpp"
+
+namespace vecat::coe {
+
+CoeApplication::CoeApplication(const device::DeviceDescription& d) : od_(device::dictionary_objects(d)) {
+    map_ = std::make_unique<ProcessDataMap>(od_, d);
+    sdo_ = std::make_unique<SdoServer>(od_, [this] { return state_; });
+    error_register_ = od_.find(0x1001, 0);
+    error_code_ = od_.find(0x603F, 0);
+    // An object mapped into the active RxPDOs is written by the master's outputs in SAFEOP and OP.
+    od_.download_guard = [this](const Entry& e, AlState st) {
+        if ((st == AlState::SafeOp || st == AlState::Op) && map_->is_rx_mapped(e)) return SdoAbort::MappedToRxPdo;
+        return SdoAbort::None;
+    };
+}
+
+CoeApplication::~CoeApplication() = default;
+
+void CoeApplication::raise_fault(std::uint16_t code, std::uint8_t bits, std::array<std::uint8_t, 5> data) {
+    std::uint8_t reg = 0;
+    if (error_register_) {
+        reg = static_cast<std::uint8_t>(error_register_->get<std::uint8_t>() | bits | error_register::Generic);
+        error_register_->set(reg);
+    }
+    if (error_code_ && !(bits == error_register::Communication)) error_code_->set(code);
+    sdo_->emergency({code, reg, data});
+}
+
+void CoeApplication::clear_faults() {
+    if (error_register_) error_register_->set(std::uint8_t{0});
+    if (error_code_) error_code_->set(std::uint16_t{0});
+    sdo_->emergency({emcy::ErrorReset, 0, {}});
+}
+
+esc::AlStatusCode CoeApplication::check_transition(AlState from, AlState to) {
+    requested_ = to;
+    if (from == AlState::PreOp && to == AlState::SafeOp) return map_->validate();
+    return esc::AlStatusCode::NoError;
+}
+
+void CoeApplication::on_state_change(AlState, AlState to) {
+    state_ = to;
+}
+
+void CoeApplication::on_al_error(esc::AlStatusCode code) {
+    if (code == esc::AlStatusCode::NoError) {
+        // Acknowledged: the communication error is gone.
+        if (error_register_ && (error_register_->get<std::uint8_t>() & error_register::Communication)) clear_faults();
+        return;
+    }
+    std::uint16_t e = emcy::Communication;
+    if (code == esc::AlStatusCode::SyncManagerWatchdog)
+        e = emcy::LifeGuard;
+    else if (requested_ == AlState::SafeOp)
+        e = emcy::PreOpToSafeOp;
+    else if (requested_ == AlState::Op)
+        e = emcy::SafeOpToOp;
+    const auto c = static_cast<std::uint16_t>(code);
+    // Manufacturer bytes: the AL status code, little-endian.
+    raise_fault(e, error_register::Communication, {static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(c >> 8), 0, 0, 0});
+}
+
+void CoeApplication::exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) {
+    if (apply && !outputs.empty()) map_->copy_outputs(outputs);
+    cycle(now_ns, apply && !outputs.empty());
+    map_->copy_inputs(inputs);
+    ++exchanges_;
+}
+
+void CoeApplication::outputs_safe_state() {
+    // Safe state of the outputs: every RxPDO-mapped object back to zero (controlword 0: disable voltage).
+    static constexpr std::uint8_t kZeros[8] = {};
+    for (const auto& f : map_->outputs())
+        if (f.entry) f.entry->assign(ConstBytes(kZeros, std::min<std::size_t>(8, f.entry->capacity())));
+}
+
+esc::MailboxProtocol* CoeApplication::mailbox_protocol(esc::MailboxType t) {
+    return t == esc::MailboxType::CoE ? sdo_.get() : nullptr;
+}
+
+std::unique_ptr<esc::Segment> make_coe_segment(const device::DeviceDescription& d, std::size_t n,
+                                               const esc::EscConfig& cfg) {
+    return esc::make_segment(d, n, cfg, [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
+        return std::make_unique<CoeApplication>(dd);
+    });
+}
+
+}  // namespace vecat::coe

@@ -1,0 +1,86 @@
+// The application of a CoE slave: its object dictionary, PDO mapping and SDO server, and the process data
+// exchange through the mapped objects. Device behaviour (the CiA 402 drive) derives from it and runs in
+// cycle(), between reading the outputs and writing the inputs.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "coe/object_dictionary.hpp"
+#include "coe/pdo_mapping.hpp"
+#include "coe/sdo_server.hpp"
+#include "esc/segment.hpp"
+#include "esc/slave.hpp"
+
+namespace vecat::coe {
+
+// Error register 0x1001 bits (CiA 301 7.5.2.2).
+namespace error_register {
+inline constexpr std::uint8_t Generic = 0x01;
+inline constexpr std::uint8_t Current = 0x02;
+inline constexpr std::uint8_t Voltage = 0x04;
+inline constexpr std::uint8_t Temperature = 0x08;
+inline constexpr std::uint8_t Communication = 0x10;
+inline constexpr std::uint8_t DeviceProfile = 0x20;
+inline constexpr std::uint8_t Manufacturer = 0x80;
+}  // namespace error_register
+
+// Emergency error codes used for EtherCAT state machine errors (ETG.1000.6 Table 53 / CiA 301).
+namespace emcy {
+inline constexpr std::uint16_t ErrorReset = 0x0000;
+inline constexpr std::uint16_t Communication = 0x8100;
+inline constexpr std::uint16_t LifeGuard = 0x8130;  // used for the SyncManager watchdog
+inline constexpr std::uint16_t PdoLength = 0x8210;
+inline constexpr std::uint16_t PreOpToSafeOp = 0xA000;
+inline constexpr std::uint16_t SafeOpToOp = 0xA001;
+}  // namespace emcy
+
+class CoeApplication : public esc::Application {
+  public:
+    explicit CoeApplication(const device::DeviceDescription& d);
+    ~CoeApplication() override;
+
+    ObjectDictionary& dictionary() { return od_; }
+    ProcessDataMap& process_data() { return *map_; }
+    SdoServer& sdo_server() { return *sdo_; }
+    AlState state() const { return state_; }
+
+    // Sets 0x1001 bits and 0x603F (if present), and queues an emergency with the AL status code or
+    // manufacturer data.
+    void raise_fault(std::uint16_t error_code, std::uint8_t register_bits, std::array<std::uint8_t, 5> data = {});
+    // Clears 0x1001/0x603F and sends the "error reset" emergency.
+    void clear_faults();
+
+    // esc::Application
+    unsigned output_bytes() const override { return map_->output_bytes(); }
+    unsigned input_bytes() const override { return map_->input_bytes(); }
+    esc::AlStatusCode check_transition(AlState from, AlState to) override;
+    void on_state_change(AlState from, AlState to) override;
+    void on_al_error(esc::AlStatusCode code) override;
+    void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply_outputs, Bytes inputs) override;
+    void outputs_safe_state() override;
+    esc::MailboxProtocol* mailbox_protocol(esc::MailboxType t) override;
+
+    std::uint64_t exchanges() const { return exchanges_; }
+
+  protected:
+    // The device's own step, after new outputs were stored in the dictionary and before the inputs are
+    // read from it. outputs_applied is false below OP or without new outputs.
+    virtual void cycle(std::uint64_t /*now_ns*/, bool /*outputs_applied*/) {}
+
+  private:
+    ObjectDictionary od_;
+    std::unique_ptr<ProcessDataMap> map_;
+    std::unique_ptr<SdoServer> sdo_;
+    AlState state_ = AlState::Init;
+    AlState requested_ = AlState::Init;
+    Entry* error_register_ = nullptr;
+    Entry* error_code_ = nullptr;
+    std::uint64_t exchanges_ = 0;
+};
+
+// A segment of n slaves of the device, each served by a CoeApplication.
+std::unique_ptr<esc::Segment> make_coe_segment(const device::DeviceDescription& d, std::size_t n,
+                                               const esc::EscConfig& cfg = {});
+
+}  // namespace vecat::coe

@@ -1,0 +1,322 @@
+#include "coe/object_dictionary.hpp"
+
+#include <algorithm>
+
+#include "common/bits.hpp"
+
+namespace vecat::coe {
+namespace {
+
+namespace acc = device::access;
+
+std::uint16_t read_bit(AlState s) {
+    switch (s) {
+        case AlState::PreOp:
+            return acc::ReadPreop;
+        case AlState::SafeOp:
+            return acc::ReadSafeop;
+        case AlState::Op:
+            return acc::ReadOp;
+        default:
+            return 0;  // no SDO access in INIT/BOOT (the mailbox is off there)
+    }
+}
+
+std::uint16_t write_bit(AlState s) {
+    switch (s) {
+        case AlState::PreOp:
+            return acc::WritePreop;
+        case AlState::SafeOp:
+            return acc::WriteSafeop;
+        case AlState::Op:
+            return acc::WriteOp;
+        default:
+            return 0;
+    }
+}
+
+std::size_t byte_size(const Entry& e) {
+    return (e.bit_length() + 7) / 8;
+}
+
+// Layout of a complete access: sub 0 takes 16 bits (U8 + one pad byte, ETG.1000.6 5.6.2.1.1); entries of
+// 8 bits or more start on a byte boundary, smaller ones are packed.
+template <class F>
+std::size_t for_each_ca_entry(const Object& o, std::uint8_t from, std::uint8_t last, F&& f) {
+    std::size_t bit = 0;
+    for (const auto& e : o.entries()) {
+        if (e.subindex() < from || e.subindex() > last) continue;
+        if (e.subindex() == 0) {
+            f(e, bit, 8u);
+            bit += 16;
+            continue;
+        }
+        if (e.bit_length() >= 8 && bit % 8) bit += 8 - bit % 8;
+        f(e, bit, e.bit_length());
+        bit += e.bit_length();
+    }
+    return (bit + 7) / 8;
+}
+
+}  // namespace
+
+// ---- Entry ----
+
+Entry::Entry(device::EntryDescription d) : desc_(std::move(d)) {
+    storage_.assign(std::max<std::size_t>(1, (desc_.bit_length + 7u) / 8u), 0);
+    reset_to_default();
+}
+
+bool Entry::readable(AlState s) const {
+    return (desc_.access & read_bit(s)) != 0;
+}
+bool Entry::writable(AlState s) const {
+    return (desc_.access & write_bit(s)) != 0;
+}
+
+void Entry::assign(ConstBytes v) {
+    const std::size_t n = std::min(v.size(), storage_.size());
+    std::copy_n(v.begin(), n, storage_.begin());
+    if (device::is_variable_length(desc_.type)) {
+        std::fill(storage_.begin() + static_cast<std::ptrdiff_t>(n), storage_.end(), 0);
+        size_ = n;
+    } else {
+        size_ = (desc_.bit_length + 7u) / 8u;
+    }
+}
+
+void Entry::reset_to_default() {
+    std::fill(storage_.begin(), storage_.end(), 0);
+    assign(ConstBytes(desc_.default_value.data(), desc_.default_value.size()));
+    if (!device::is_variable_length(desc_.type)) size_ = (desc_.bit_length + 7u) / 8u;
+}
+
+std::int64_t Entry::as_int64() const {
+    const std::size_t n = std::min<std::size_t>(8, size_);
+    std::uint64_t u = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        u |= static_cast<std::uint64_t>(storage_[i]) << (8 * i);
+    const unsigned bits = desc_.bit_length;
+    if (device::is_signed(desc_.type) && bits > 0 && bits < 64 && (u >> (bits - 1)) & 1u)
+        u |= ~std::uint64_t{0} << bits;
+    if (bits < 64 && !device::is_signed(desc_.type)) u &= (std::uint64_t{1} << bits) - 1;
+    return static_cast<std::int64_t>(u);
+}
+
+// ---- Object ----
+
+Object::Object(const device::ObjectDescription& d)
+    : index_(d.index), name_(d.name), code_(d.code), type_(d.type), max_sub_(d.max_subindex()) {
+    entries_.reserve(d.entries.size());
+    for (const auto& e : d.entries)
+        entries_.emplace_back(e);
+}
+
+Entry* Object::entry(std::uint8_t sub) {
+    for (auto& e : entries_)
+        if (e.subindex() == sub) return &e;
+    return nullptr;
+}
+const Entry* Object::entry(std::uint8_t sub) const {
+    for (const auto& e : entries_)
+        if (e.subindex() == sub) return &e;
+    return nullptr;
+}
+
+std::uint8_t Object::complete_access_last() const {
+    if (code_ == ObjectCode::Var) return 0;
+    const Entry* s0 = entry(0);
+    if (!s0) return max_sub_;
+    return static_cast<std::uint8_t>(std::min<std::uint64_t>(s0->as_uint64(), max_sub_));
+}
+
+// ---- checks ----
+
+SdoAbort check_length(const Entry& e, std::size_t len) {
+    if (device::is_variable_length(e.type())) return len > e.capacity() ? SdoAbort::LengthTooHigh : SdoAbort::None;
+    const std::size_t want = byte_size(e);
+    if (len > want) return SdoAbort::LengthTooHigh;
+    if (len < want) return SdoAbort::LengthTooLow;
+    return SdoAbort::None;
+}
+
+SdoAbort check_range(const Entry& e, ConstBytes v) {
+    const auto& d = e.desc();
+    if (device::is_variable_length(d.type) || device::is_real(d.type)) return SdoAbort::None;
+    const unsigned bits = d.bit_length;
+    auto decode = [&](ConstBytes b) {
+        std::uint64_t u = 0;
+        for (std::size_t i = 0; i < std::min<std::size_t>(8, b.size()); ++i)
+            u |= static_cast<std::uint64_t>(b[i]) << (8 * i);
+        if (bits < 64) {
+            u &= (std::uint64_t{1} << bits) - 1;
+            if (device::is_signed(d.type) && ((u >> (bits - 1)) & 1u)) u |= ~std::uint64_t{0} << bits;
+        }
+        return u;
+    };
+    const std::uint64_t x = decode(v);
+    if (d.type == DataType::Boolean && x > 1) return SdoAbort::ValueRange;
+    auto less = [&](std::uint64_t a, std::uint64_t b) {
+        return device::is_signed(d.type) ? static_cast<std::int64_t>(a) < static_cast<std::int64_t>(b) : a < b;
+    };
+    if (!d.minimum.empty() && less(x, decode(d.minimum))) return SdoAbort::ValueTooLow;
+    if (!d.maximum.empty() && less(decode(d.maximum), x)) return SdoAbort::ValueTooHigh;
+    return SdoAbort::None;
+}
+
+std::size_t complete_access_size(const Object& o, std::uint8_t from, std::uint8_t last) {
+    return for_each_ca_entry(o, from, last, [](const Entry&, std::size_t, unsigned) {});
+}
+
+// ---- dictionary ----
+
+ObjectDictionary::ObjectDictionary(const std::vector<device::ObjectDescription>& objects) {
+    objects_.reserve(objects.size());
+    for (const auto& o : objects)
+        objects_.emplace_back(o);
+    std::sort(objects_.begin(), objects_.end(), [](const Object& a, const Object& b) { return a.index() < b.index(); });
+    for (const auto& o : objects_) {
+        max_transfer_ = std::max(max_transfer_, complete_access_size(o, 0, o.max_subindex()));
+        for (const auto& e : o.entries())
+            max_transfer_ = std::max(max_transfer_, e.capacity());
+    }
+    undo_.resize(max_transfer_);
+}
+
+Object* ObjectDictionary::find(std::uint16_t index) {
+    auto it = std::lower_bound(objects_.begin(), objects_.end(), index,
+                               [](const Object& o, std::uint16_t i) { return o.index() < i; });
+    return it != objects_.end() && it->index() == index ? &*it : nullptr;
+}
+const Object* ObjectDictionary::find(std::uint16_t index) const {
+    return const_cast<ObjectDictionary*>(this)->find(index);
+}
+Entry* ObjectDictionary::find(std::uint16_t index, std::uint8_t sub) {
+    Object* o = find(index);
+    return o ? o->entry(sub) : nullptr;
+}
+
+SdoAbort ObjectDictionary::upload(std::uint16_t index, std::uint8_t sub, bool complete, AlState state, Bytes out,
+                                  std::size_t& len) {
+    len = 0;
+    Object* o = find(index);
+    if (!o) return SdoAbort::ObjectDoesNotExist;
+    if (!complete) {
+        Entry* e = o->entry(sub);
+        if (!e) return SdoAbort::SubindexDoesNotExist;
+        if (!e->readable(state))
+            return (e->access() & acc::ReadAll) ? SdoAbort::WrongState : SdoAbort::WriteOnly;
+        if (e->before_upload) e->before_upload(*e);
+        if (e->size() > out.size()) return SdoAbort::ObjectTooLongForMailbox;
+        std::copy_n(e->value().begin(), e->size(), out.begin());
+        len = e->size();
+        return SdoAbort::None;
+    }
+    if (sub > 1) return SdoAbort::UnsupportedAccess;
+    if (o->code() == ObjectCode::Var) return SdoAbort::UnsupportedAccess;
+    for (auto& e : o->entries()) {
+        if (device::is_variable_length(e.type())) return SdoAbort::CompleteAccessNotSupported;
+        if (!e.readable(state)) return (e.access() & acc::ReadAll) ? SdoAbort::WrongState : SdoAbort::WriteOnly;
+    }
+    for (auto& e : o->entries())
+        if (e.before_upload) e.before_upload(e);
+    const std::uint8_t last = o->complete_access_last();
+    const std::size_t n = complete_access_size(*o, sub, last);
+    if (n > out.size()) return SdoAbort::ObjectTooLongForMailbox;
+    std::fill_n(out.begin(), n, 0);
+    for_each_ca_entry(*o, sub, last, [&](const Entry& e, std::size_t bit, unsigned bits) {
+        copy_bits(out.data(), bit, e.value().data(), 0, bits);
+    });
+    len = n;
+    return SdoAbort::None;
+}
+
+SdoAbort ObjectDictionary::download_entry(Entry& e, AlState state, ConstBytes data, bool run_after) {
+    if (download_guard)
+        if (auto a = download_guard(e, state); a != SdoAbort::None) return a;
+    if (!e.writable(state)) return (e.access() & acc::WriteAll) ? SdoAbort::WrongState : SdoAbort::ReadOnly;
+    if (auto a = check_length(e, data.size()); a != SdoAbort::None) return a;
+    if (auto a = check_range(e, data); a != SdoAbort::None) return a;
+    if (e.on_download)
+        if (auto a = e.on_download(e, data); a != SdoAbort::None) return a;
+    e.assign(data);
+    if (run_after && e.after_download) e.after_download(e);
+    return SdoAbort::None;
+}
+
+SdoAbort ObjectDictionary::download(std::uint16_t index, std::uint8_t sub, bool complete, AlState state,
+                                    ConstBytes data) {
+    Object* o = find(index);
+    if (!o) return SdoAbort::ObjectDoesNotExist;
+    if (!complete) {
+        Entry* e = o->entry(sub);
+        if (!e) return SdoAbort::SubindexDoesNotExist;
+        return download_entry(*e, state, data, true);
+    }
+    if (sub > 1) return SdoAbort::UnsupportedAccess;
+    if (o->code() == ObjectCode::Var) return SdoAbort::UnsupportedAccess;
+    return download_complete(*o, sub, state, data);
+}
+
+// Complete access download (ETG.1000.6 5.6.2.2): from subindex 0, the new subindex 0 value is in the data
+// and the entries 1..n follow; from subindex 1, entries 1..current count. With a writable subindex 0 the
+// sequence is the one ETG.1020 prescribes for PDO objects: subindex 0 := 0, entries, subindex 0 := n.
+// If any entry is refused, every value is restored and the abort is returned.
+SdoAbort ObjectDictionary::download_complete(Object& o, std::uint8_t sub, AlState state, ConstBytes data) {
+    for (auto& e : o.entries())
+        if (device::is_variable_length(e.type())) return SdoAbort::CompleteAccessNotSupported;
+    Entry* s0 = o.entry(0);
+    std::uint8_t last = o.complete_access_last();
+    if (sub == 0) {
+        if (data.empty()) return SdoAbort::LengthTooLow;
+        if (data[0] > o.max_subindex()) return SdoAbort::ValueTooHigh;
+        last = data[0];
+    }
+    const std::size_t need = complete_access_size(o, sub, last);
+    if (data.size() < need) return SdoAbort::LengthTooLow;
+    if (data.size() > complete_access_size(o, sub, o.max_subindex())) return SdoAbort::LengthTooHigh;
+    const bool sub0_writable = sub == 0 && s0 && s0->writable(state);
+    if (sub == 0 && s0 && !sub0_writable && data[0] != s0->as_uint64())
+        return (s0->access() & acc::WriteAll) ? SdoAbort::WrongState : SdoAbort::ReadOnly;
+
+    // Keep the old values for the undo.
+    std::size_t undo_len = 0;
+    for (auto& e : o.entries()) {
+        std::copy_n(e.value().begin(), e.size(), undo_.begin() + static_cast<std::ptrdiff_t>(undo_len));
+        undo_len += e.capacity();
+    }
+    auto restore = [&] {
+        std::size_t off = 0;
+        for (auto& e : o.entries()) {
+            e.assign(ConstBytes(undo_.data() + off, e.size()));
+            off += e.capacity();
+        }
+        for (auto& e : o.entries())
+            if (e.after_download) e.after_download(e);
+    };
+
+    SdoAbort result = SdoAbort::None;
+    const std::uint8_t zero = 0;
+    if (sub0_writable) result = download_entry(*s0, state, ConstBytes(&zero, 1), true);
+    std::uint8_t tmp[8];
+    for_each_ca_entry(o, static_cast<std::uint8_t>(sub == 0 ? 1 : sub), last,
+                      [&](const Entry& ce, std::size_t bit, unsigned bits) {
+                          if (result != SdoAbort::None) return;
+                          Entry& e = const_cast<Entry&>(ce);
+                          // Offsets were computed from subindex 1: shift by sub 0's 16 bits if present.
+                          const std::size_t at = bit + (sub == 0 ? 16 : 0);
+                          const std::size_t nbytes = (bits + 7) / 8;
+                          if (nbytes > sizeof tmp) {
+                              result = SdoAbort::CompleteAccessNotSupported;
+                              return;
+                          }
+                          std::fill_n(tmp, sizeof tmp, 0);
+                          copy_bits(tmp, 0, data.data(), at, bits);
+                          result = download_entry(e, state, ConstBytes(tmp, nbytes), true);
+                      });
+    if (result == SdoAbort::None && sub0_writable) result = download_entry(*s0, state, ConstBytes(&data[0], 1), true);
+    if (result != SdoAbort::None) restore();
+    return result;
+}
+
+}  // namespace vecat::coe

@@ -1,0 +1,83 @@
+// PDO mapping and assignment (ETG.1000.6 5.6.7.4, ETG.1020 section 6): the objects 0x16xx/0x1Axx and
+// 0x1C12/0x1C13 with the rules for changing them in PREOP, and the process image they define.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "coe/object_dictionary.hpp"
+#include "common/bytes.hpp"
+#include "device/device_description.hpp"
+#include "esc/al_status.hpp"
+
+namespace vecat::coe {
+
+// One mapped field of the process image: an entry (nullptr for a gap) at a bit offset.
+struct MappedField {
+    Entry* entry = nullptr;
+    std::uint32_t bit_offset = 0;
+    std::uint16_t bits = 0;
+};
+
+// The decoded mapping value of a 0x16xx/0x1Axx subindex.
+struct MappingValue {
+    std::uint16_t index;
+    std::uint8_t subindex;
+    std::uint8_t bits;
+    static MappingValue decode(std::uint32_t v) {
+        return {static_cast<std::uint16_t>(v >> 16), static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v)};
+    }
+    // Index 0 and the data type indexes below 0x1000 are gaps ("dummy entries", CiA 301 7.4.8).
+    bool is_gap() const { return index < 0x1000; }
+};
+
+class ProcessDataMap {
+  public:
+    // Installs the SDO rules on the mapping and assignment objects of od.
+    ProcessDataMap(ObjectDictionary& od, const device::DeviceDescription& desc);
+    ProcessDataMap(const ProcessDataMap&) = delete;
+    ProcessDataMap& operator=(const ProcessDataMap&) = delete;
+
+    unsigned output_bytes() const { return out_bytes_; }
+    unsigned input_bytes() const { return in_bytes_; }
+    // Largest process image per direction the SyncManager layout allows (3 buffers must fit).
+    unsigned max_output_bytes() const { return max_out_; }
+    unsigned max_input_bytes() const { return max_in_; }
+    const std::vector<MappedField>& outputs() const { return out_; }
+    const std::vector<MappedField>& inputs() const { return in_; }
+
+    // NoError, or 0x0024/0x0025 when the current mapping cannot be used (checked at PREOP -> SAFEOP).
+    esc::AlStatusCode validate() const;
+
+    // Copies received outputs into the mapped entries, and the mapped entries into the inputs image.
+    void copy_outputs(ConstBytes image);
+    void copy_inputs(Bytes image) const;
+    bool is_rx_mapped(const Entry& e) const;
+
+    // Re-reads the objects (called after each change through SDO).
+    void rebuild();
+
+  private:
+    struct Direction {
+        std::uint16_t assign_index = 0;  // 0x1C12 / 0x1C13
+        std::uint16_t first_pdo = 0;     // 0x1600 / 0x1A00
+        bool rx = true;
+        unsigned max_bytes = 0;
+    };
+    void install(const Direction& d);
+    SdoAbort check_mapping_entry(const Direction& d, std::uint32_t value) const;
+    // Bits of the PDO mapping object `pdo` with count entries (or its current count), or nullopt if invalid.
+    bool pdo_bits(const Direction& d, std::uint16_t pdo, int count, unsigned& bits) const;
+    bool assigned_bits(const Direction& d, std::uint16_t changed_pdo, int changed_count, int assign_count,
+                       unsigned& bits) const;
+    bool build(const Direction& d, std::vector<MappedField>& fields, unsigned& bytes);
+
+    ObjectDictionary& od_;
+    Direction rx_, tx_;
+    std::vector<MappedField> out_, in_;
+    unsigned out_bytes_ = 0, in_bytes_ = 0;
+    unsigned max_out_ = 0, max_in_ = 0;
+    bool out_valid_ = true, in_valid_ = true;
+};
+
+}  // namespace vecat::coe

@@ -1,0 +1,539 @@
+#include "coe/sdo_server.hpp"
+
+#include <algorithm>
+
+namespace vecat::coe {
+namespace {
+
+using esc::MailboxError;
+using esc::MailboxReplySink;
+using esc::MailboxType;
+
+// Writes fixed fields into a reply payload. Every offset is checked against the buffer.
+class Reply {
+  public:
+    explicit Reply(Bytes b) : b_(b) {}
+    void u8(std::uint8_t v) {
+        if (n_ < b_.size()) b_[n_] = v;
+        ++n_;
+    }
+    void u16(std::uint16_t v) {
+        u8(static_cast<std::uint8_t>(v));
+        u8(static_cast<std::uint8_t>(v >> 8));
+    }
+    void u32(std::uint32_t v) {
+        u16(static_cast<std::uint16_t>(v));
+        u16(static_cast<std::uint16_t>(v >> 16));
+    }
+    void bytes(ConstBytes v) {
+        for (auto x : v)
+            u8(x);
+    }
+    void zeros(std::size_t k) {
+        for (std::size_t i = 0; i < k; ++i)
+            u8(0);
+    }
+    std::size_t size() const { return n_; }
+    bool fits() const { return n_ <= b_.size(); }
+    std::size_t room() const { return b_.size() > n_ ? b_.size() - n_ : 0; }
+
+  private:
+    Bytes b_;
+    std::size_t n_ = 0;
+};
+
+void mailbox_error(MailboxError e, MailboxReplySink& out) {
+    const std::size_t n = esc::make_mailbox_error(out.reply_buffer(), e);
+    out.commit(MailboxType::Error, n);
+}
+
+bool in_list(const Object& o, std::uint16_t list_type) {
+    switch (list_type) {
+        case sdo_info::ListAll:
+            return true;
+        case sdo_info::ListRxPdoMappable:
+            return std::any_of(o.entries().begin(), o.entries().end(), [](const Entry& e) { return e.rx_mappable(); });
+        case sdo_info::ListTxPdoMappable:
+            return std::any_of(o.entries().begin(), o.entries().end(), [](const Entry& e) { return e.tx_mappable(); });
+        case sdo_info::ListBackup:
+            return std::any_of(o.entries().begin(), o.entries().end(),
+                               [](const Entry& e) { return e.access() & device::access::Backup; });
+        case sdo_info::ListSettings:
+            return std::any_of(o.entries().begin(), o.entries().end(),
+                               [](const Entry& e) { return e.access() & device::access::Settings; });
+        default:
+            return false;
+    }
+}
+
+// The natural minimum/maximum of an integer type, little-endian, for entries without a declared range.
+void type_limit(const Entry& e, bool max, Reply& r) {
+    const std::size_t n = (e.bit_length() + 7) / 8;
+    const bool sig = device::is_signed(e.type());
+    for (std::size_t i = 0; i < n; ++i) {
+        std::uint8_t b = max ? 0xFF : 0x00;
+        if (sig && i + 1 == n) b = max ? 0x7F : 0x80;
+        if (device::is_real(e.type())) b = 0;
+        if (e.type() == DataType::Boolean) b = max ? 0x01 : 0x00;
+        r.u8(b);
+    }
+}
+
+void value_field(const std::vector<std::uint8_t>& v, const Entry& e, Reply& r) {
+    const std::size_t n = (e.bit_length() + 7) / 8;
+    for (std::size_t i = 0; i < n; ++i)
+        r.u8(i < v.size() ? v[i] : 0);
+}
+
+}  // namespace
+
+SdoServer::SdoServer(ObjectDictionary& od, std::function<AlState()> state) : od_(od), state_(std::move(state)) {
+    buf_.resize(std::max<std::size_t>(od_.max_transfer_size(), 64));
+    info_buf_.resize(std::max<std::size_t>(16, 2 + 2 * od_.objects().size()));
+}
+
+void SdoServer::reset() {
+    up_ = {};
+    down_ = {};
+    info_ = {};
+    emcy_head_ = emcy_count_ = 0;
+}
+
+bool SdoServer::emergency(const Emergency& e) {
+    if (emcy_count_ >= kEmergencySlots) {
+        ++counters_.emergencies_dropped;
+        return false;
+    }
+    emcy_[(emcy_head_ + emcy_count_) % kEmergencySlots] = e;
+    ++emcy_count_;
+    return true;
+}
+
+void SdoServer::poll(MailboxReplySink& out) {
+    while (info_.active && out.can_commit())
+        if (!send_info_fragment(out)) break;
+    // Emergencies go out when nothing else is waiting, so they never sit between a request and its reply.
+    while (emcy_count_ > 0 && !info_.active && out.pending() == 0 && out.can_commit()) {
+        const Emergency& e = emcy_[emcy_head_];
+        Reply r(out.reply_buffer());
+        r.u16(coe_header(CoeService::Emergency));
+        r.u16(e.error_code);
+        r.u8(e.error_register);
+        r.bytes(ConstBytes(e.data.data(), e.data.size()));
+        if (!r.fits()) break;
+        out.commit(MailboxType::CoE, r.size());
+        emcy_head_ = (emcy_head_ + 1) % kEmergencySlots;
+        --emcy_count_;
+        ++counters_.emergencies_sent;
+    }
+}
+
+void SdoServer::handle(const esc::MailboxHeader&, ConstBytes p, MailboxReplySink& out) {
+    if (p.size() < kCoeHeaderSize) {
+        mailbox_error(MailboxError::SizeTooShort, out);
+        return;
+    }
+    switch (coe_service(ld_le16(p.data()))) {
+        case CoeService::SdoRequest:
+            sdo_request(p, out);
+            return;
+        case CoeService::SdoInformation:
+            sdo_info(p, out);
+            return;
+        default:
+            // Emergencies, SDO responses and PDOs over the mailbox are not served by this slave.
+            mailbox_error(MailboxError::ServiceNotSupported, out);
+            return;
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// SDO
+
+void SdoServer::abort(std::uint16_t index, std::uint8_t sub, SdoAbort code, MailboxReplySink& out) {
+    Reply r(out.reply_buffer());
+    r.u16(coe_header(CoeService::SdoRequest));  // an abort travels as an SDO request (ETG.1000.6 5.6.2.7)
+    r.u8(sdo::AbortCommand);
+    r.u16(index);
+    r.u8(sub);
+    r.u32(static_cast<std::uint32_t>(code));
+    out.commit(MailboxType::CoE, r.size());
+    ++counters_.sdo_aborts_sent;
+}
+
+void SdoServer::sdo_request(ConstBytes p, MailboxReplySink& out) {
+    if (p.size() < kCoeHeaderSize + kSdoHeaderSize) {
+        mailbox_error(MailboxError::SizeTooShort, out);
+        return;
+    }
+    const std::uint8_t cmd = p[2];
+    const std::uint16_t index = ld_le16(p.data() + 3);
+    const std::uint8_t sub = p[5];
+    switch (sdo::ccs(cmd)) {
+        case sdo::CcsInitiateDownload:
+            up_.active = false;
+            initiate_download(cmd, index, sub, p, out);
+            return;
+        case sdo::CcsDownloadSegment:
+            download_segment(cmd, p, out);
+            return;
+        case sdo::CcsInitiateUpload:
+            down_.active = false;
+            initiate_upload(cmd, index, sub, out);
+            return;
+        case sdo::CcsUploadSegment:
+            upload_segment(cmd, out);
+            return;
+        case sdo::CcsAbort:
+            // The master aborts a transfer: no answer (CiA 301 7.2.4.3.17).
+            ++counters_.sdo_aborts_received;
+            up_.active = down_.active = false;
+            return;
+        default:
+            up_.active = down_.active = false;
+            abort(index, sub, SdoAbort::UnknownCommand, out);
+            return;
+    }
+}
+
+void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub, ConstBytes p,
+                                  MailboxReplySink& out) {
+    down_.active = false;
+    const bool complete = cmd & sdo::CompleteAccess;
+    const AlState st = state_();
+    auto respond = [&] {
+        Reply r(out.reply_buffer());
+        r.u16(coe_header(CoeService::SdoResponse));
+        r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateDownload << 5) | (complete ? sdo::CompleteAccess : 0)));
+        r.u16(index);
+        r.u8(sub);
+        r.u32(0);
+        out.commit(MailboxType::CoE, r.size());
+    };
+    if (complete && sub > 1) {
+        abort(index, sub, SdoAbort::UnsupportedAccess, out);
+        return;
+    }
+    if (cmd & sdo::Expedited) {
+        std::size_t n = 4;
+        if (cmd & sdo::SizeIndicated) {
+            n = 4 - ((cmd >> 2) & 3);
+        } else if (!complete) {
+            // Size not indicated: the entry's own size, if it fits in four bytes.
+            if (const Entry* e = od_.find(index, sub); e && e->capacity() <= 4) n = e->capacity();
+        }
+        const SdoAbort a = od_.download(index, sub, complete, st, p.subspan(6, n));
+        if (a != SdoAbort::None) {
+            abort(index, sub, a, out);
+            return;
+        }
+        ++counters_.sdo_downloads;
+        respond();
+        return;
+    }
+    // Normal transfer: complete size in bytes 6..9, the first data from byte 10 on.
+    const std::uint32_t total = ld_le32(p.data() + 6);
+    const ConstBytes first = p.subspan(10);
+    // Refuse early what cannot succeed, so that no segment is accepted for it.
+    const Object* o = od_.find(index);
+    if (!o) {
+        abort(index, sub, SdoAbort::ObjectDoesNotExist, out);
+        return;
+    }
+    if (!complete) {
+        const Entry* e = o->entry(sub);
+        if (!e) {
+            abort(index, sub, SdoAbort::SubindexDoesNotExist, out);
+            return;
+        }
+        if (!e->writable(st)) {
+            abort(index, sub, (e->access() & device::access::WriteAll) ? SdoAbort::WrongState : SdoAbort::ReadOnly,
+                  out);
+            return;
+        }
+        if (total > e->capacity()) {
+            abort(index, sub, SdoAbort::LengthTooHigh, out);
+            return;
+        }
+    }
+    if (total > buf_.size()) {
+        abort(index, sub, SdoAbort::LengthTooHigh, out);
+        return;
+    }
+    if (first.size() >= total) {
+        const SdoAbort a = od_.download(index, sub, complete, st, first.first(total));
+        if (a != SdoAbort::None) {
+            abort(index, sub, a, out);
+            return;
+        }
+        ++counters_.sdo_downloads;
+        respond();
+        return;
+    }
+    std::copy(first.begin(), first.end(), buf_.begin());
+    down_ = {true, complete, index, sub, total, first.size(), 0};
+    respond();
+}
+
+void SdoServer::download_segment(std::uint8_t cmd, ConstBytes p, MailboxReplySink& out) {
+    if (!down_.active) {
+        abort(0, 0, SdoAbort::UnknownCommand, out);
+        return;
+    }
+    const std::uint8_t toggle = cmd & sdo::Toggle;
+    if (toggle != down_.toggle) {
+        down_.active = false;
+        abort(down_.index, down_.sub, SdoAbort::ToggleBit, out);
+        return;
+    }
+    // Segment data follows the command byte; with a 10-byte mailbox the size field gives the unused bytes.
+    std::size_t n = p.size() - kCoeHeaderSize - 1;
+    if (p.size() == kCoeHeaderSize + kSdoHeaderSize) n = 7 - ((cmd >> 1) & 7);
+    if (down_.received + n > down_.total) {
+        down_.active = false;
+        abort(down_.index, down_.sub, SdoAbort::LengthTooHigh, out);
+        return;
+    }
+    std::copy_n(p.begin() + 3, n, buf_.begin() + static_cast<std::ptrdiff_t>(down_.received));
+    down_.received += n;
+    const bool last = cmd & sdo::LastSegment;
+    if (last) {
+        down_.active = false;
+        if (down_.received < down_.total) {
+            abort(down_.index, down_.sub, SdoAbort::LengthTooLow, out);
+            return;
+        }
+        const SdoAbort a = od_.download(down_.index, down_.sub, down_.complete, state_(),
+                                        ConstBytes(buf_.data(), down_.received));
+        if (a != SdoAbort::None) {
+            abort(down_.index, down_.sub, a, out);
+            return;
+        }
+        ++counters_.sdo_downloads;
+    }
+    Reply r(out.reply_buffer());
+    r.u16(coe_header(CoeService::SdoResponse));
+    r.u8(static_cast<std::uint8_t>((sdo::ScsDownloadSegment << 5) | toggle));
+    r.zeros(7);
+    out.commit(MailboxType::CoE, r.size());
+    down_.toggle ^= sdo::Toggle;
+}
+
+void SdoServer::initiate_upload(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub, MailboxReplySink& out) {
+    up_.active = false;
+    const bool complete = cmd & sdo::CompleteAccess;
+    std::size_t len = 0;
+    const SdoAbort a = od_.upload(index, sub, complete, state_(), Bytes(buf_.data(), buf_.size()), len);
+    if (a != SdoAbort::None) {
+        abort(index, sub, a, out);
+        return;
+    }
+    ++counters_.sdo_uploads;
+    const std::uint8_t ca = complete ? sdo::CompleteAccess : 0;
+    Reply r(out.reply_buffer());
+    r.u16(coe_header(CoeService::SdoResponse));
+    if (len >= 1 && len <= 4) {
+        r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateUpload << 5) | ca | ((4 - len) << 2) | sdo::Expedited |
+                                       sdo::SizeIndicated));
+        r.u16(index);
+        r.u8(sub);
+        r.bytes(ConstBytes(buf_.data(), len));
+        r.zeros(4 - len);
+        out.commit(MailboxType::CoE, r.size());
+        return;
+    }
+    r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateUpload << 5) | ca | sdo::SizeIndicated));
+    r.u16(index);
+    r.u8(sub);
+    r.u32(static_cast<std::uint32_t>(len));
+    const std::size_t first = std::min(len, r.room());
+    r.bytes(ConstBytes(buf_.data(), first));
+    out.commit(MailboxType::CoE, r.size());
+    if (first < len) up_ = {true, index, sub, len, first, 0};
+}
+
+void SdoServer::upload_segment(std::uint8_t cmd, MailboxReplySink& out) {
+    if (!up_.active) {
+        abort(0, 0, SdoAbort::UnknownCommand, out);
+        return;
+    }
+    const std::uint8_t toggle = cmd & sdo::Toggle;
+    if (toggle != up_.toggle) {
+        up_.active = false;
+        abort(up_.index, up_.sub, SdoAbort::ToggleBit, out);
+        return;
+    }
+    Reply r(out.reply_buffer());
+    r.u16(coe_header(CoeService::SdoResponse));
+    const std::size_t room = r.room() > 1 ? r.room() - 1 : 0;
+    const std::size_t n = std::min(up_.total - up_.offset, room);
+    const bool last = up_.offset + n == up_.total;
+    const std::uint8_t unused = n < 7 ? static_cast<std::uint8_t>(7 - n) : 0;
+    r.u8(static_cast<std::uint8_t>((sdo::ScsUploadSegment << 5) | toggle | (unused << 1) | (last ? 1 : 0)));
+    r.bytes(ConstBytes(buf_.data() + up_.offset, n));
+    r.zeros(unused);  // a segment carries at least 7 bytes
+    out.commit(MailboxType::CoE, r.size());
+    up_.offset += n;
+    up_.toggle ^= sdo::Toggle;
+    if (last) up_.active = false;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// SDO information
+
+void SdoServer::info_error(SdoAbort code, MailboxReplySink& out) {
+    Reply r(out.reply_buffer());
+    r.u16(coe_header(CoeService::SdoInformation));
+    r.u8(sdo_info::InfoErrorRequest);
+    r.u8(0);
+    r.u16(0);
+    r.u32(static_cast<std::uint32_t>(code));
+    out.commit(MailboxType::CoE, r.size());
+    ++counters_.sdo_aborts_sent;
+}
+
+void SdoServer::sdo_info(ConstBytes p, MailboxReplySink& out) {
+    ++counters_.info_requests;
+    if (p.size() < kCoeHeaderSize + kSdoInfoHeaderSize) {
+        mailbox_error(MailboxError::SizeTooShort, out);
+        return;
+    }
+    info_.active = false;  // a new request ends a fragmented response in progress
+    const std::uint8_t opcode = p[2] & 0x7F;
+    const ConstBytes d = p.subspan(6);
+    switch (opcode) {
+        case sdo_info::GetOdListRequest:
+            if (d.size() < 2) break;
+            od_list(ld_le16(d.data()), out);
+            return;
+        case sdo_info::GetObjectDescriptionRequest:
+            if (d.size() < 2) break;
+            object_description(ld_le16(d.data()), out);
+            return;
+        case sdo_info::GetEntryDescriptionRequest:
+            if (d.size() < 4) break;
+            entry_description(ld_le16(d.data()), d[2], d[3], out);
+            return;
+        default:
+            info_error(SdoAbort::UnknownCommand, out);
+            return;
+    }
+    mailbox_error(MailboxError::SizeTooShort, out);
+}
+
+void SdoServer::od_list(std::uint16_t list_type, MailboxReplySink& out) {
+    std::size_t n = 0;
+    auto put16 = [&](std::uint16_t v) {
+        if (n + 2 <= info_buf_.size()) st_le16(info_buf_.data() + n, v);
+        n += 2;
+    };
+    put16(list_type);
+    if (list_type == sdo_info::ListLengths) {
+        for (std::uint16_t t = sdo_info::ListAll; t <= sdo_info::ListSettings; ++t) {
+            std::uint16_t count = 0;
+            for (const auto& o : od_.objects())
+                if (in_list(o, t)) ++count;
+            put16(count);
+        }
+    } else if (list_type <= sdo_info::ListSettings) {
+        for (const auto& o : od_.objects())
+            if (in_list(o, list_type)) put16(o.index());
+    } else {
+        info_error(SdoAbort::UnsupportedAccess, out);
+        return;
+    }
+    const std::size_t per_fragment = out.max_payload() - kCoeHeaderSize - kSdoInfoHeaderSize;
+    info_ = {true, sdo_info::GetOdListResponse, std::min(n, info_buf_.size()), 0, 0};
+    info_.fragments_left = static_cast<std::uint16_t>((info_.total + per_fragment - 1) / per_fragment - 1);
+    send_info_fragment(out);
+    poll(out);  // further fragments as far as the reply queue takes them
+}
+
+bool SdoServer::send_info_fragment(MailboxReplySink& out) {
+    if (!info_.active || !out.can_commit()) return false;
+    Reply r(out.reply_buffer());
+    const std::size_t per_fragment = r.room() - kCoeHeaderSize - kSdoInfoHeaderSize;
+    const std::size_t n = std::min(per_fragment, info_.total - info_.offset);
+    const bool more = info_.offset + n < info_.total;
+    r.u16(coe_header(CoeService::SdoInformation));
+    r.u8(static_cast<std::uint8_t>(info_.opcode | (more ? sdo_info::Incomplete : 0)));
+    r.u8(0);
+    r.u16(info_.fragments_left);
+    r.bytes(ConstBytes(info_buf_.data() + info_.offset, n));
+    out.commit(MailboxType::CoE, r.size());
+    info_.offset += n;
+    if (info_.fragments_left > 0) --info_.fragments_left;
+    if (!more) info_.active = false;
+    return true;
+}
+
+void SdoServer::object_description(std::uint16_t index, MailboxReplySink& out) {
+    const Object* o = od_.find(index);
+    if (!o) {
+        info_error(SdoAbort::ObjectDoesNotExist, out);
+        return;
+    }
+    Reply r(out.reply_buffer());
+    r.u16(coe_header(CoeService::SdoInformation));
+    r.u8(sdo_info::GetObjectDescriptionResponse);
+    r.u8(0);
+    r.u16(0);
+    r.u16(index);
+    r.u16(static_cast<std::uint16_t>(o->type()));
+    r.u8(o->max_subindex());
+    r.u8(static_cast<std::uint8_t>(o->code()));
+    const auto& name = o->name();
+    const std::size_t k = std::min(name.size(), r.room());
+    r.bytes(ConstBytes(reinterpret_cast<const std::uint8_t*>(name.data()), k));
+    out.commit(MailboxType::CoE, r.size());
+}
+
+void SdoServer::entry_description(std::uint16_t index, std::uint8_t sub, std::uint8_t value_info,
+                                  MailboxReplySink& out) {
+    Object* o = od_.find(index);
+    if (!o) {
+        info_error(SdoAbort::ObjectDoesNotExist, out);
+        return;
+    }
+    const Entry* e = o->entry(sub);
+    if (!e) {
+        info_error(SdoAbort::SubindexDoesNotExist, out);
+        return;
+    }
+    // Units are not modelled: the unit type bit is cleared in the answer, so no field is expected for it.
+    const auto vi = static_cast<std::uint8_t>(value_info & ~sdo_info::ValueUnitType);
+    Reply r(out.reply_buffer());
+    r.u16(coe_header(CoeService::SdoInformation));
+    r.u8(sdo_info::GetEntryDescriptionResponse);
+    r.u8(0);
+    r.u16(0);
+    r.u16(index);
+    r.u8(sub);
+    r.u8(vi);
+    r.u16(static_cast<std::uint16_t>(e->type()));
+    r.u16(static_cast<std::uint16_t>(e->bit_length()));
+    r.u16(e->access());
+    const auto& d = e->desc();
+    if (vi & sdo_info::ValueDefault) value_field(d.default_value, *e, r);
+    if (vi & sdo_info::ValueMinimum) {
+        if (d.minimum.empty())
+            type_limit(*e, false, r);
+        else
+            value_field(d.minimum, *e, r);
+    }
+    if (vi & sdo_info::ValueMaximum) {
+        if (d.maximum.empty())
+            type_limit(*e, true, r);
+        else
+            value_field(d.maximum, *e, r);
+    }
+    if (!r.fits()) {
+        info_error(SdoAbort::ObjectTooLongForMailbox, out);
+        return;
+    }
+    const std::size_t k = std::min(d.name.size(), r.room());
+    r.bytes(ConstBytes(reinterpret_cast<const std::uint8_t*>(d.name.data()), k));
+    out.commit(MailboxType::CoE, r.size());
+}
+
+}  // namespace vecat::coe

@@ -1,0 +1,32 @@
+// Copying bit fields between byte buffers (LSB first, as EtherCAT maps process data and FMMUs do).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+
+namespace vecat {
+
+// Copies n bits from src (starting at bit src_off) to dst (starting at bit dst_off). Whole bytes at byte
+// boundaries are copied with memcpy. The caller guarantees both ranges lie inside their buffers.
+inline void copy_bits(std::uint8_t* dst, std::size_t dst_off, const std::uint8_t* src, std::size_t src_off,
+                      std::size_t n) noexcept {
+    if (n == 0) return;
+    if ((dst_off | src_off) % 8 == 0) {
+        std::memcpy(dst + dst_off / 8, src + src_off / 8, n / 8);
+        if (n % 8 == 0) return;
+        const std::size_t done = n - n % 8;
+        dst_off += done;
+        src_off += done;
+        n -= done;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t s = src_off + i;
+        const std::size_t d = dst_off + i;
+        const auto bit = static_cast<std::uint8_t>((src[s / 8] >> (s % 8)) & 1u);
+        const auto mask = static_cast<std::uint8_t>(1u << (d % 8));
+        dst[d / 8] = static_cast<std::uint8_t>(bit ? (dst[d / 8] | mask) : (dst[d / 8] & ~mask));
+    }
+}
+
+}  // namespace vecat

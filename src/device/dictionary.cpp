@@ -1,0 +1,137 @@
+// The communication area of the object dictionary (CiA 301, ETG.1000.6 5.6.7, ETG.1020), generated from
+// the device description so that it always agrees with the SII and the ESI file.
+#include <algorithm>
+
+#include "device/device_description.hpp"
+
+namespace vecat::device {
+namespace {
+
+std::uint32_t mapping_value(const PdoEntry& e) {
+    return (static_cast<std::uint32_t>(e.index) << 16) | (static_cast<std::uint32_t>(e.subindex) << 8) |
+           e.bit_length;
+}
+
+ObjectDescription pdo_mapping_object(const Pdo& p, bool rx) {
+    ObjectDescription o;
+    o.index = p.index;
+    o.name = p.name.empty() ? (rx ? "RxPDO mapping" : "TxPDO mapping") : p.name;
+    o.code = ObjectCode::Record;
+    o.type = DataType::PdoMapping;
+    const std::uint16_t acc = p.fixed ? access::RO : access::RWPreop;
+    const auto capacity = std::max<std::size_t>(p.entries.size(), p.capacity);
+    o.entries.push_back(
+        make_entry(0, "Number of entries", DataType::Unsigned8, acc, static_cast<std::int64_t>(p.entries.size())));
+    auto& sub0 = o.entries.back();
+    set_range(sub0, 0, static_cast<std::int64_t>(capacity));
+    for (std::size_t i = 0; i < capacity; ++i) {
+        const std::uint32_t v = i < p.entries.size() ? mapping_value(p.entries[i]) : 0;
+        o.entries.push_back(
+            make_entry(static_cast<std::uint8_t>(i + 1), subindex_name(static_cast<unsigned>(i + 1)), DataType::Unsigned32, acc, v));
+    }
+    return o;
+}
+
+ObjectDescription pdo_assign_object(std::uint16_t index, const std::vector<Pdo>& pdos, const char* name) {
+    ObjectDescription o;
+    o.index = index;
+    o.name = name;
+    o.code = ObjectCode::Array;
+    o.type = DataType::Unsigned16;
+    bool any_free = false;
+    std::vector<std::uint16_t> assigned;
+    for (const auto& p : pdos) {
+        if (p.assigned) assigned.push_back(p.index);
+        if (!p.fixed || !p.mandatory) any_free = true;
+    }
+    const std::uint16_t acc = any_free ? access::RWPreop : access::RO;
+    o.entries.push_back(
+        make_entry(0, "Number of assigned PDOs", DataType::Unsigned8, acc, static_cast<std::int64_t>(assigned.size())));
+    set_range(o.entries.back(), 0, static_cast<std::int64_t>(pdos.size()));
+    for (std::size_t i = 0; i < pdos.size(); ++i) {
+        const std::uint16_t v = i < assigned.size() ? assigned[i] : 0;
+        o.entries.push_back(
+            make_entry(static_cast<std::uint8_t>(i + 1), subindex_name(static_cast<unsigned>(i + 1)), DataType::Unsigned16, acc, v));
+    }
+    return o;
+}
+
+// 0x1C32 / 0x1C33: SM output / input parameter (ETG.1020 21.1).
+ObjectDescription sync_parameter_object(std::uint16_t index, const DeviceDescription& d, bool outputs) {
+    using DT = DataType;
+    bool dc = false;
+    for (const auto& m : d.dc_modes)
+        if (m.assign_activate != 0) dc = true;
+    // Bit 0 free run, bit 1 SM-synchronous, bits 2..4 = 001: DC SYNC0 (ETG.1020 Table 80).
+    const std::uint16_t supported = static_cast<std::uint16_t>(0x0003 | (dc ? 0x0004 : 0));
+    // Default synchronisation: with the SM2 event (0x1C33 reports 0x22 "synchronous with SM2 event").
+    const std::int64_t mode = outputs ? 0x0001 : 0x0022;
+    std::vector<EntryDescription> subs;
+    subs.push_back(make_entry(1, "Sync mode", DT::Unsigned16, access::RWPreop, mode));
+    subs.push_back(make_entry(2, "Cycle time", DT::Unsigned32, access::RWPreop, 1'000'000));
+    subs.push_back(make_entry(3, "Shift time", DT::Unsigned32, access::RO, 0));
+    subs.push_back(make_entry(4, "Sync modes supported", DT::Unsigned16, access::RO, supported));
+    subs.push_back(make_entry(5, "Minimum cycle time", DT::Unsigned32, access::RO, d.min_cycle_time_ns));
+    subs.push_back(make_entry(6, "Calc and copy time", DT::Unsigned32, access::RO, d.calc_copy_time_ns));
+    subs.push_back(make_entry(7, "Minimum delay time", DT::Unsigned32, access::RO, 0));
+    subs.push_back(make_entry(8, "Get cycle time", DT::Unsigned16, access::RW, 0));
+    subs.push_back(make_entry(9, "Delay time", DT::Unsigned32, access::RO, 0));
+    subs.push_back(make_entry(10, "Sync0 cycle time", DT::Unsigned32, access::RW, 0));
+    subs.push_back(make_entry(11, "SM event missed", DT::Unsigned16, access::RO, 0));
+    subs.push_back(make_entry(12, "Cycle time too small", DT::Unsigned16, access::RO, 0));
+    subs.push_back(make_entry(13, "Shift time too short", DT::Unsigned16, access::RO, 0));
+    subs.push_back(make_entry(32, "Sync error", DT::Boolean, access::RO | access::TxPdoMappable, 0));
+    return make_record(index, outputs ? "SM output parameter" : "SM input parameter", std::move(subs),
+                       DT::SyncParameter);
+}
+
+}  // namespace
+
+std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d) {
+    using DT = DataType;
+    std::vector<ObjectDescription> objs;
+    objs.push_back(make_var(0x1000, "Device type", DT::Unsigned32, access::RO, d.device_type));
+    objs.push_back(make_var(0x1001, "Error register", DT::Unsigned8, access::RO | access::TxPdoMappable, 0));
+    objs.push_back(make_string_var(0x1008, "Device name", d.name));
+    objs.push_back(make_string_var(0x1009, "Hardware version", d.hardware_version));
+    objs.push_back(make_string_var(0x100A, "Software version", d.software_version));
+    objs.push_back(make_record(
+        0x1018, "Identity",
+        {make_entry(1, "Vendor ID", DT::Unsigned32, access::RO, d.identity.vendor_id),
+         make_entry(2, "Product code", DT::Unsigned32, access::RO, d.identity.product_code),
+         make_entry(3, "Revision", DT::Unsigned32, access::RO, d.identity.revision),
+         make_entry(4, "Serial number", DT::Unsigned32, access::RO, d.identity.serial)},
+        DT::Identity));
+    objs.push_back(make_record(0x10F1, "Error settings",
+                               {make_entry(1, "Local error reaction", DT::Unsigned32, access::RW, 1),
+                                make_entry(2, "Sync error counter limit", DT::Unsigned16, access::RW, 4)}));
+    for (const auto& p : d.rx_pdos)
+        objs.push_back(pdo_mapping_object(p, true));
+    for (const auto& p : d.tx_pdos)
+        objs.push_back(pdo_mapping_object(p, false));
+
+    std::vector<std::int64_t> sm_types;
+    for (const auto& s : d.sync_managers)
+        sm_types.push_back(static_cast<std::int64_t>(s.type));
+    objs.push_back(make_array(0x1C00, "Sync manager type", DT::Unsigned8, access::RO, sm_types));
+    if (auto sm = d.sm_index_of_type(SmType::Outputs))
+        objs.push_back(pdo_assign_object(static_cast<std::uint16_t>(0x1C10 + *sm), d.rx_pdos, "RxPDO assign"));
+    if (auto sm = d.sm_index_of_type(SmType::Inputs))
+        objs.push_back(pdo_assign_object(static_cast<std::uint16_t>(0x1C10 + *sm), d.tx_pdos, "TxPDO assign"));
+    if (d.sm_index_of_type(SmType::Outputs)) objs.push_back(sync_parameter_object(0x1C32, d, true));
+    if (d.sm_index_of_type(SmType::Inputs)) objs.push_back(sync_parameter_object(0x1C33, d, false));
+
+    // Application objects; one with the index of a generated object replaces it.
+    for (const auto& o : d.objects) {
+        auto it = std::find_if(objs.begin(), objs.end(), [&](const ObjectDescription& x) { return x.index == o.index; });
+        if (it != objs.end())
+            *it = o;
+        else
+            objs.push_back(o);
+    }
+    std::sort(objs.begin(), objs.end(),
+              [](const ObjectDescription& a, const ObjectDescription& b) { return a.index < b.index; });
+    return objs;
+}
+
+}  // namespace vecat::device

@@ -1,0 +1,132 @@
+// Object dictionary entries as described data (CiA 301 / ETG.1000.6 5.6.3): index, object code, and per
+// sub-object the data type, bit length, access per AL state, PDO mappability, default, minimum, maximum
+// and name. The runtime dictionary (src/coe), the SII and the ESI file are all generated from this.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vecat::device {
+
+// CoE base data types (ETG.1000.6 Table 64), as used in PDO entries and the dictionary.
+enum class DataType : std::uint16_t {
+    Boolean = 0x0001,
+    Integer8 = 0x0002,
+    Integer16 = 0x0003,
+    Integer32 = 0x0004,
+    Unsigned8 = 0x0005,
+    Unsigned16 = 0x0006,
+    Unsigned32 = 0x0007,
+    Real32 = 0x0008,
+    VisibleString = 0x0009,
+    OctetString = 0x000A,
+    UnicodeString = 0x000B,
+    Domain = 0x000F,
+    Integer24 = 0x0010,
+    Real64 = 0x0011,
+    Integer64 = 0x0015,
+    Unsigned24 = 0x0016,
+    Unsigned64 = 0x001B,
+    // ETG.1020 structure types of the communication area.
+    PdoMapping = 0x0021,
+    Identity = 0x0023,
+    SyncParameter = 0x0029,  // ETG.1000.6: record type of 0x1C32/0x1C33
+};
+
+// Bit length of a fixed-size base type; 0 for strings, domains and structures.
+unsigned fixed_bit_length(DataType t) noexcept;
+bool is_signed(DataType t) noexcept;
+bool is_real(DataType t) noexcept;
+// Strings, octet strings and domains: values whose length may be shorter than the entry's bit length.
+bool is_variable_length(DataType t) noexcept;
+std::string_view type_name(DataType t) noexcept;  // ESI spelling: "UINT", "DINT", "STRING"...
+
+// Object code of the object description (ETG.1000.6 Table 46).
+enum class ObjectCode : std::uint8_t {
+    Domain = 0x02,
+    DefType = 0x05,
+    DefStruct = 0x06,
+    Var = 0x07,
+    Array = 0x08,
+    Record = 0x09,
+};
+
+// Object access bits as reported in the SDO information entry description (ETG.1000.6 Table 47).
+namespace access {
+inline constexpr std::uint16_t ReadPreop = 0x0001;
+inline constexpr std::uint16_t ReadSafeop = 0x0002;
+inline constexpr std::uint16_t ReadOp = 0x0004;
+inline constexpr std::uint16_t WritePreop = 0x0008;
+inline constexpr std::uint16_t WriteSafeop = 0x0010;
+inline constexpr std::uint16_t WriteOp = 0x0020;
+inline constexpr std::uint16_t RxPdoMappable = 0x0040;
+inline constexpr std::uint16_t TxPdoMappable = 0x0080;
+inline constexpr std::uint16_t Backup = 0x0100;
+inline constexpr std::uint16_t Settings = 0x0200;
+
+inline constexpr std::uint16_t ReadAll = ReadPreop | ReadSafeop | ReadOp;
+inline constexpr std::uint16_t WriteAll = WritePreop | WriteSafeop | WriteOp;
+inline constexpr std::uint16_t RO = ReadAll;                 // read only in every state
+inline constexpr std::uint16_t RW = ReadAll | WriteAll;      // read/write in every state
+inline constexpr std::uint16_t RWPreop = ReadAll | WritePreop;  // writable in PREOP only
+inline constexpr std::uint16_t RxMap = RW | RxPdoMappable;   // typical RxPDO-mappable parameter
+inline constexpr std::uint16_t TxMap = RO | TxPdoMappable;   // typical TxPDO-mappable actual value
+}  // namespace access
+
+struct EntryDescription {
+    std::uint8_t subindex = 0;
+    std::string name;
+    DataType type = DataType::Unsigned8;
+    std::uint16_t bit_length = 8;  // for strings and domains: the maximum length
+    std::uint16_t access = access::RO;
+    // Values in their little-endian wire encoding (strings: the characters). Empty: none.
+    std::vector<std::uint8_t> default_value;
+    std::vector<std::uint8_t> minimum;
+    std::vector<std::uint8_t> maximum;
+
+    bool readable_in_some_state() const { return (access & access::ReadAll) != 0; }
+};
+
+struct ObjectDescription {
+    std::uint16_t index = 0;
+    std::string name;
+    ObjectCode code = ObjectCode::Var;
+    DataType type = DataType::Unsigned8;  // object data type shown by SDO information (ARRAY: element type)
+    std::vector<EntryDescription> entries;  // VAR: exactly subindex 0; ARRAY/RECORD: subindex 0 (count) first
+
+    std::uint8_t max_subindex() const { return entries.empty() ? 0 : entries.back().subindex; }
+    const EntryDescription* entry(std::uint8_t sub) const {
+        for (const auto& e : entries)
+            if (e.subindex == sub) return &e;
+        return nullptr;
+    }
+};
+
+// Little-endian encoding of an integer value of a fixed-size type.
+std::vector<std::uint8_t> encode_integer(DataType t, std::int64_t v);
+std::vector<std::uint8_t> encode_real(DataType t, double v);
+
+// Builders for the common shapes.
+EntryDescription make_entry(std::uint8_t sub, std::string name, DataType t, std::uint16_t access,
+                            std::int64_t default_value = 0);
+EntryDescription make_string_entry(std::uint8_t sub, std::string name, std::string_view text,
+                                   std::uint16_t access = access::RO);
+ObjectDescription make_var(std::uint16_t index, std::string name, DataType t, std::uint16_t access,
+                           std::int64_t default_value = 0);
+ObjectDescription make_string_var(std::uint16_t index, std::string name, std::string_view text);
+// A RECORD whose subindex 0 (U8, read-only) holds the highest subindex.
+ObjectDescription make_record(std::uint16_t index, std::string name, std::vector<EntryDescription> subs,
+                              DataType struct_type = DataType::Unsigned8);
+// An ARRAY of n elements of one type; subindex 0 (U8) has sub0_access.
+ObjectDescription make_array(std::uint16_t index, std::string name, DataType element, std::uint16_t access,
+                             std::vector<std::int64_t> defaults, std::uint16_t sub0_access = access::RO);
+
+// "SubIndex 001": the name given to array elements and mapping entries.
+std::string subindex_name(unsigned sub);
+
+// Sets minimum and maximum of an entry from integers (encoded in the entry's type).
+void set_range(EntryDescription& e, std::int64_t min, std::int64_t max);
+
+}  // namespace vecat::device

@@ -1,0 +1,103 @@
+// The master side of the mailbox and of CoE: SDO upload/download (expedited, normal, segmented,
+// complete access), SDO information and emergency collection, over the project's Master.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "coe/coe_protocol.hpp"
+#include "coe/sdo_abort.hpp"
+#include "common/bytes.hpp"
+#include "esc/mailbox.hpp"
+#include "master/master.hpp"
+
+namespace vecat::master {
+
+struct MailboxMessage {
+    esc::MailboxHeader header;
+    std::vector<std::uint8_t> payload;  // header.length bytes after the 6-byte header
+};
+
+struct SdoResult {
+    bool transport_ok = false;       // a reply came at all
+    coe::SdoAbort abort = coe::SdoAbort::None;
+    std::vector<std::uint8_t> data;  // uploaded value
+    std::uint8_t command = 0;        // command byte of the (first) response, for layout checks
+    bool ok() const { return transport_ok && abort == coe::SdoAbort::None; }
+};
+
+struct ReceivedEmergency {
+    std::uint16_t error_code = 0;
+    std::uint8_t error_register = 0;
+    std::array<std::uint8_t, 5> data{};
+};
+
+struct ObjectInfo {
+    std::uint16_t index = 0;
+    std::uint16_t data_type = 0;
+    std::uint8_t max_subindex = 0;
+    std::uint8_t object_code = 0;
+    std::string name;
+};
+
+struct EntryInfo {
+    std::uint16_t index = 0;
+    std::uint8_t subindex = 0;
+    std::uint8_t value_info = 0;
+    std::uint16_t data_type = 0;
+    std::uint16_t bit_length = 0;
+    std::uint16_t access = 0;
+    std::vector<std::uint8_t> values;  // default/min/max as requested, concatenated
+    std::string name;
+};
+
+class CoeClient {
+  public:
+    CoeClient(Master& m, std::uint16_t station);
+
+    // Mailbox level: writes one message into SM0 (waits while it is full) / reads one from SM1.
+    bool send(esc::MailboxType type, ConstBytes payload, std::uint8_t counter);
+    std::optional<MailboxMessage> receive(std::chrono::milliseconds timeout = std::chrono::milliseconds(700));
+    // Sends and waits for the reply; emergencies that arrive in between are collected.
+    std::optional<MailboxMessage> request(esc::MailboxType type, ConstBytes payload,
+                                          std::chrono::milliseconds timeout = std::chrono::milliseconds(700));
+    std::uint8_t next_counter();
+
+    SdoResult upload(std::uint16_t index, std::uint8_t sub, bool complete = false);
+    // Chooses expedited (<= 4 bytes), normal or segmented transfer by size unless forced.
+    enum class Transfer { Auto, Expedited, Normal, Segmented };
+    SdoResult download(std::uint16_t index, std::uint8_t sub, ConstBytes data, bool complete = false,
+                       Transfer how = Transfer::Auto);
+    template <class T>
+    SdoResult download_value(std::uint16_t index, std::uint8_t sub, T v) {
+        std::uint8_t b[sizeof(T)];
+        for (std::size_t i = 0; i < sizeof(T); ++i)
+            b[i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(v) >> (8 * i));
+        return download(index, sub, ConstBytes(b, sizeof(T)));
+    }
+
+    // SDO information. nullopt on transport errors or an SDO info error (then last_abort() says which).
+    std::optional<std::vector<std::uint16_t>> od_list(std::uint16_t list_type);
+    std::optional<ObjectInfo> object_description(std::uint16_t index);
+    std::optional<EntryInfo> entry_description(std::uint16_t index, std::uint8_t sub, std::uint8_t value_info);
+    coe::SdoAbort last_abort() const { return last_abort_; }
+    int last_fragments() const { return last_fragments_; }
+
+    std::vector<ReceivedEmergency>& emergencies() { return emergencies_; }
+    std::size_t mailbox_size_out() const { return sm0_len_; }
+    std::size_t mailbox_size_in() const { return sm1_len_; }
+
+  private:
+    Master& m_;
+    std::uint16_t station_;
+    std::uint16_t sm0_ = 0, sm0_len_ = 0, sm1_ = 0, sm1_len_ = 0;
+    std::uint8_t counter_ = 0;
+    std::vector<ReceivedEmergency> emergencies_;
+    coe::SdoAbort last_abort_ = coe::SdoAbort::None;
+    int last_fragments_ = 0;
+};
+
+}  // namespace vecat::master
