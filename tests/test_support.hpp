@@ -23,7 +23,9 @@ struct Bench {
     }
     esc::Slave& slave(std::size_t i = 0) { return seg->slave(i); }
     esc::Esc& escx(std::size_t i = 0) { return seg->slave(i).esc(); }
-    coe::CoeApplication& app(std::size_t i = 0) { return dynamic_cast<coe::CoeApplication&>(seg->slave(i).app()); }
+    coe::CoeApplication& app(std::size_t i = 0) {
+        return dynamic_cast<coe::CoeApplication&>(seg->slave(i).app());
+    }
     coe::ObjectDictionary& od(std::size_t i = 0) { return app(i).dictionary(); }
     void advance(std::uint64_t ns) {
         now += ns;

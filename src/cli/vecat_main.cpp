@@ -8,8 +8,8 @@
 #include <fstream>
 #include <thread>
 
-#include "device/device_description.hpp"
 #include "coe/coe_application.hpp"
+#include "device/device_description.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
 #include "master/master.hpp"

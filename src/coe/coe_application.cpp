@@ -9,7 +9,8 @@ CoeApplication::CoeApplication(const device::DeviceDescription& d) : od_(device:
     error_code_ = od_.find(0x603F, 0);
     // An object mapped into the active RxPDOs is written by the master's outputs in SAFEOP and OP.
     od_.download_guard = [this](const Entry& e, AlState st) {
-        if ((st == AlState::SafeOp || st == AlState::Op) && map_->is_rx_mapped(e)) return SdoAbort::MappedToRxPdo;
+        if ((st == AlState::SafeOp || st == AlState::Op) && map_->is_rx_mapped(e))
+            return SdoAbort::MappedToRxPdo;
         return SdoAbort::None;
     };
 }
@@ -19,7 +20,8 @@ CoeApplication::~CoeApplication() = default;
 void CoeApplication::raise_fault(std::uint16_t code, std::uint8_t bits, std::array<std::uint8_t, 5> data) {
     std::uint8_t reg = 0;
     if (error_register_) {
-        reg = static_cast<std::uint8_t>(error_register_->get<std::uint8_t>() | bits | error_register::Generic);
+        reg =
+            static_cast<std::uint8_t>(error_register_->get<std::uint8_t>() | bits | error_register::Generic);
         error_register_->set(reg);
     }
     if (error_code_ && !(bits == error_register::Communication)) error_code_->set(code);
@@ -45,7 +47,8 @@ void CoeApplication::on_state_change(AlState, AlState to) {
 void CoeApplication::on_al_error(esc::AlStatusCode code) {
     if (code == esc::AlStatusCode::NoError) {
         // Acknowledged: the communication error is gone.
-        if (error_register_ && (error_register_->get<std::uint8_t>() & error_register::Communication)) clear_faults();
+        if (error_register_ && (error_register_->get<std::uint8_t>() & error_register::Communication))
+            clear_faults();
         return;
     }
     std::uint16_t e = emcy::Communication;
@@ -57,7 +60,8 @@ void CoeApplication::on_al_error(esc::AlStatusCode code) {
         e = emcy::SafeOpToOp;
     const auto c = static_cast<std::uint16_t>(code);
     // Manufacturer bytes: the AL status code, little-endian.
-    raise_fault(e, error_register::Communication, {static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(c >> 8), 0, 0, 0});
+    raise_fault(e, error_register::Communication,
+                {static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(c >> 8), 0, 0, 0});
 }
 
 void CoeApplication::exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) {
@@ -80,9 +84,10 @@ esc::MailboxProtocol* CoeApplication::mailbox_protocol(esc::MailboxType t) {
 
 std::unique_ptr<esc::Segment> make_coe_segment(const device::DeviceDescription& d, std::size_t n,
                                                const esc::EscConfig& cfg) {
-    return esc::make_segment(d, n, cfg, [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
-        return std::make_unique<CoeApplication>(dd);
-    });
+    return esc::make_segment(d, n, cfg,
+                             [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
+                                 return std::make_unique<CoeApplication>(dd);
+                             });
 }
 
 }  // namespace vecat::coe

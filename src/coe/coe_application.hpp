@@ -47,7 +47,8 @@ class CoeApplication : public esc::Application {
 
     // Sets 0x1001 bits and 0x603F (if present), and queues an emergency with the AL status code or
     // manufacturer data.
-    void raise_fault(std::uint16_t error_code, std::uint8_t register_bits, std::array<std::uint8_t, 5> data = {});
+    void raise_fault(std::uint16_t error_code, std::uint8_t register_bits,
+                     std::array<std::uint8_t, 5> data = {});
     // Clears 0x1001/0x603F and sends the "error reset" emergency.
     void clear_faults();
 

@@ -25,7 +25,7 @@ constexpr CoeService coe_service(std::uint16_t header) {
 }
 
 inline constexpr std::size_t kCoeHeaderSize = 2;
-inline constexpr std::size_t kSdoHeaderSize = 8;  // command, index, subindex, 4 data bytes
+inline constexpr std::size_t kSdoHeaderSize = 8;      // command, index, subindex, 4 data bytes
 inline constexpr std::size_t kSdoInfoHeaderSize = 4;  // opcode, reserved, fragments left
 
 // SDO command byte (CiA 301 7.2.4.3, ETG.1000.6 5.6.2).

@@ -133,7 +133,8 @@ std::uint8_t Object::complete_access_last() const {
 // ---- checks ----
 
 SdoAbort check_length(const Entry& e, std::size_t len) {
-    if (device::is_variable_length(e.type())) return len > e.capacity() ? SdoAbort::LengthTooHigh : SdoAbort::None;
+    if (device::is_variable_length(e.type()))
+        return len > e.capacity() ? SdoAbort::LengthTooHigh : SdoAbort::None;
     const std::size_t want = byte_size(e);
     if (len > want) return SdoAbort::LengthTooHigh;
     if (len < want) return SdoAbort::LengthTooLow;
@@ -157,7 +158,8 @@ SdoAbort check_range(const Entry& e, ConstBytes v) {
     const std::uint64_t x = decode(v);
     if (d.type == DataType::Boolean && x > 1) return SdoAbort::ValueRange;
     auto less = [&](std::uint64_t a, std::uint64_t b) {
-        return device::is_signed(d.type) ? static_cast<std::int64_t>(a) < static_cast<std::int64_t>(b) : a < b;
+        return device::is_signed(d.type) ? static_cast<std::int64_t>(a) < static_cast<std::int64_t>(b)
+                                         : a < b;
     };
     if (!d.minimum.empty() && less(x, decode(d.minimum))) return SdoAbort::ValueTooLow;
     if (!d.maximum.empty() && less(decode(d.maximum), x)) return SdoAbort::ValueTooHigh;
@@ -174,7 +176,8 @@ ObjectDictionary::ObjectDictionary(const std::vector<device::ObjectDescription>&
     objects_.reserve(objects.size());
     for (const auto& o : objects)
         objects_.emplace_back(o);
-    std::sort(objects_.begin(), objects_.end(), [](const Object& a, const Object& b) { return a.index() < b.index(); });
+    std::sort(objects_.begin(), objects_.end(),
+              [](const Object& a, const Object& b) { return a.index() < b.index(); });
     for (const auto& o : objects_) {
         max_transfer_ = std::max(max_transfer_, complete_access_size(o, 0, o.max_subindex()));
         for (const auto& e : o.entries())
@@ -196,8 +199,8 @@ Entry* ObjectDictionary::find(std::uint16_t index, std::uint8_t sub) {
     return o ? o->entry(sub) : nullptr;
 }
 
-SdoAbort ObjectDictionary::upload(std::uint16_t index, std::uint8_t sub, bool complete, AlState state, Bytes out,
-                                  std::size_t& len) {
+SdoAbort ObjectDictionary::upload(std::uint16_t index, std::uint8_t sub, bool complete, AlState state,
+                                  Bytes out, std::size_t& len) {
     len = 0;
     Object* o = find(index);
     if (!o) return SdoAbort::ObjectDoesNotExist;
@@ -216,7 +219,8 @@ SdoAbort ObjectDictionary::upload(std::uint16_t index, std::uint8_t sub, bool co
     if (o->code() == ObjectCode::Var) return SdoAbort::UnsupportedAccess;
     for (auto& e : o->entries()) {
         if (device::is_variable_length(e.type())) return SdoAbort::CompleteAccessNotSupported;
-        if (!e.readable(state)) return (e.access() & acc::ReadAll) ? SdoAbort::WrongState : SdoAbort::WriteOnly;
+        if (!e.readable(state))
+            return (e.access() & acc::ReadAll) ? SdoAbort::WrongState : SdoAbort::WriteOnly;
     }
     for (auto& e : o->entries())
         if (e.before_upload) e.before_upload(e);
@@ -314,7 +318,8 @@ SdoAbort ObjectDictionary::download_complete(Object& o, std::uint8_t sub, AlStat
                           copy_bits(tmp, 0, data.data(), at, bits);
                           result = download_entry(e, state, ConstBytes(tmp, nbytes), true);
                       });
-    if (result == SdoAbort::None && sub0_writable) result = download_entry(*s0, state, ConstBytes(&data[0], 1), true);
+    if (result == SdoAbort::None && sub0_writable)
+        result = download_entry(*s0, state, ConstBytes(&data[0], 1), true);
     if (result != SdoAbort::None) restore();
     return result;
 }

@@ -30,9 +30,11 @@ std::uint32_t u32_of(ConstBytes b) {
 
 ProcessDataMap::ProcessDataMap(ObjectDictionary& od, const device::DeviceDescription& desc) : od_(od) {
     if (auto sm = desc.sm_index_of_type(device::SmType::Outputs))
-        rx_ = {static_cast<std::uint16_t>(0x1C10 + *sm), 0x1600, true, max_sm_bytes(desc, device::SmType::Outputs)};
+        rx_ = {static_cast<std::uint16_t>(0x1C10 + *sm), 0x1600, true,
+               max_sm_bytes(desc, device::SmType::Outputs)};
     if (auto sm = desc.sm_index_of_type(device::SmType::Inputs))
-        tx_ = {static_cast<std::uint16_t>(0x1C10 + *sm), 0x1A00, false, max_sm_bytes(desc, device::SmType::Inputs)};
+        tx_ = {static_cast<std::uint16_t>(0x1C10 + *sm), 0x1A00, false,
+               max_sm_bytes(desc, device::SmType::Inputs)};
     max_out_ = rx_.max_bytes;
     max_in_ = tx_.max_bytes;
     if (rx_.assign_index) install(rx_);
@@ -133,7 +135,8 @@ void ProcessDataMap::install(const Direction& d) {
                     for (int i = 1; i <= n; ++i) {
                         const Entry* s = po->entry(static_cast<std::uint8_t>(i));
                         if (!s) return SdoAbort::ValueTooHigh;
-                        if (auto a = check_mapping_entry(d, s->get<std::uint32_t>()); a != SdoAbort::None) return a;
+                        if (auto a = check_mapping_entry(d, s->get<std::uint32_t>()); a != SdoAbort::None)
+                            return a;
                     }
                     unsigned own = 0;
                     if (!pdo_bits(d, pdo, n, own)) return SdoAbort::NotMappable;

@@ -25,7 +25,8 @@ struct MappingValue {
     std::uint8_t subindex;
     std::uint8_t bits;
     static MappingValue decode(std::uint32_t v) {
-        return {static_cast<std::uint16_t>(v >> 16), static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v)};
+        return {static_cast<std::uint16_t>(v >> 16), static_cast<std::uint8_t>(v >> 8),
+                static_cast<std::uint8_t>(v)};
     }
     // Index 0 and the data type indexes below 0x1000 are gaps ("dummy entries", CiA 301 7.4.8).
     bool is_gap() const { return index < 0x1000; }

@@ -104,7 +104,8 @@ constexpr std::string_view describe(SdoAbort a) noexcept {
         case SdoAbort::LocalControl:
             return "Data cannot be transferred or stored to the application because of local control";
         case SdoAbort::WrongState:
-            return "Data cannot be transferred or stored to the application because of the present device state";
+            return "Data cannot be transferred or stored to the application because of the present device "
+                   "state";
         case SdoAbort::NoObjectDictionary:
             return "Object dictionary dynamic generation fails or no object dictionary is present";
     }

@@ -52,9 +52,11 @@ bool in_list(const Object& o, std::uint16_t list_type) {
         case sdo_info::ListAll:
             return true;
         case sdo_info::ListRxPdoMappable:
-            return std::any_of(o.entries().begin(), o.entries().end(), [](const Entry& e) { return e.rx_mappable(); });
+            return std::any_of(o.entries().begin(), o.entries().end(),
+                               [](const Entry& e) { return e.rx_mappable(); });
         case sdo_info::ListTxPdoMappable:
-            return std::any_of(o.entries().begin(), o.entries().end(), [](const Entry& e) { return e.tx_mappable(); });
+            return std::any_of(o.entries().begin(), o.entries().end(),
+                               [](const Entry& e) { return e.tx_mappable(); });
         case sdo_info::ListBackup:
             return std::any_of(o.entries().begin(), o.entries().end(),
                                [](const Entry& e) { return e.access() & device::access::Backup; });
@@ -87,7 +89,8 @@ void value_field(const std::vector<std::uint8_t>& v, const Entry& e, Reply& r) {
 
 }  // namespace
 
-SdoServer::SdoServer(ObjectDictionary& od, std::function<AlState()> state) : od_(od), state_(std::move(state)) {
+SdoServer::SdoServer(ObjectDictionary& od, std::function<AlState()> state)
+    : od_(od), state_(std::move(state)) {
     buf_.resize(std::max<std::size_t>(od_.max_transfer_size(), 64));
     info_buf_.resize(std::max<std::size_t>(16, 2 + 2 * od_.objects().size()));
 }
@@ -204,7 +207,8 @@ void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::ui
     auto respond = [&] {
         Reply r(out.reply_buffer());
         r.u16(coe_header(CoeService::SdoResponse));
-        r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateDownload << 5) | (complete ? sdo::CompleteAccess : 0)));
+        r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateDownload << 5) |
+                                       (complete ? sdo::CompleteAccess : 0)));
         r.u16(index);
         r.u8(sub);
         r.u32(0);
@@ -247,8 +251,8 @@ void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::ui
             return;
         }
         if (!e->writable(st)) {
-            abort(index, sub, (e->access() & device::access::WriteAll) ? SdoAbort::WrongState : SdoAbort::ReadOnly,
-                  out);
+            abort(index, sub,
+                  (e->access() & device::access::WriteAll) ? SdoAbort::WrongState : SdoAbort::ReadOnly, out);
             return;
         }
         if (total > e->capacity()) {
@@ -319,7 +323,8 @@ void SdoServer::download_segment(std::uint8_t cmd, ConstBytes p, MailboxReplySin
     down_.toggle ^= sdo::Toggle;
 }
 
-void SdoServer::initiate_upload(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub, MailboxReplySink& out) {
+void SdoServer::initiate_upload(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub,
+                                MailboxReplySink& out) {
     up_.active = false;
     const bool complete = cmd & sdo::CompleteAccess;
     std::size_t len = 0;
@@ -333,8 +338,8 @@ void SdoServer::initiate_upload(std::uint8_t cmd, std::uint16_t index, std::uint
     Reply r(out.reply_buffer());
     r.u16(coe_header(CoeService::SdoResponse));
     if (len >= 1 && len <= 4) {
-        r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateUpload << 5) | ca | ((4 - len) << 2) | sdo::Expedited |
-                                       sdo::SizeIndicated));
+        r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateUpload << 5) | ca | ((4 - len) << 2) |
+                                       sdo::Expedited | sdo::SizeIndicated));
         r.u16(index);
         r.u8(sub);
         r.bytes(ConstBytes(buf_.data(), len));

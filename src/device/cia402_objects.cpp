@@ -127,13 +127,14 @@ std::vector<ObjectDescription> cia402_drive_objects() {
                             {{"Encoder increments", 1 << 20}, {"Motor revolutions", 1}}));
     o.push_back(named_array(0x6091, "Gear ratio", DT::Unsigned32, RW,
                             {{"Motor revolutions", 1}, {"Shaft revolutions", 1}}));
-    o.push_back(
-        named_array(0x6092, "Feed constant", DT::Unsigned32, RW, {{"Feed", 1 << 20}, {"Shaft revolutions", 1}}));
+    o.push_back(named_array(0x6092, "Feed constant", DT::Unsigned32, RW,
+                            {{"Feed", 1 << 20}, {"Shaft revolutions", 1}}));
 
     // Homing.
     o.push_back(ranged(0x6098, "Homing method", DT::Integer8, RWM, 35, -128, 127));
-    o.push_back(named_array(0x6099, "Homing speeds", DT::Unsigned32, RW,
-                            {{"Speed during search for switch", 100000}, {"Speed during search for zero", 10000}}));
+    o.push_back(
+        named_array(0x6099, "Homing speeds", DT::Unsigned32, RW,
+                    {{"Speed during search for switch", 100000}, {"Speed during search for zero", 10000}}));
     o.push_back(var(0x609A, "Homing acceleration", DT::Unsigned32, RWM, 1'000'000));
 
     // Cyclic modes: offsets, touch probe, interpolation period.

@@ -41,8 +41,8 @@ DeviceDescription default_drive() {
     d.group_type = "ServoDrives";
     d.group_name = "Servo drives";
     d.mailbox_protocols = mbx_proto::CoE;
-    d.coe_details = coe_details::Sdo | coe_details::SdoInfo | coe_details::PdoAssign | coe_details::PdoConfig |
-                    coe_details::CompleteAccess;
+    d.coe_details = coe_details::Sdo | coe_details::SdoInfo | coe_details::PdoAssign |
+                    coe_details::PdoConfig | coe_details::CompleteAccess;
     d.ebus_current_ma = 0;
 
     // SyncManager layout of the HIWIN D2 (drive guide, section 4): mailbox at 0x1800/0x18F6, process

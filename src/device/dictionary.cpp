@@ -20,14 +20,15 @@ ObjectDescription pdo_mapping_object(const Pdo& p, bool rx) {
     o.type = DataType::PdoMapping;
     const std::uint16_t acc = p.fixed ? access::RO : access::RWPreop;
     const auto capacity = std::max<std::size_t>(p.entries.size(), p.capacity);
-    o.entries.push_back(
-        make_entry(0, "Number of entries", DataType::Unsigned8, acc, static_cast<std::int64_t>(p.entries.size())));
+    o.entries.push_back(make_entry(0, "Number of entries", DataType::Unsigned8, acc,
+                                   static_cast<std::int64_t>(p.entries.size())));
     auto& sub0 = o.entries.back();
     set_range(sub0, 0, static_cast<std::int64_t>(capacity));
     for (std::size_t i = 0; i < capacity; ++i) {
         const std::uint32_t v = i < p.entries.size() ? mapping_value(p.entries[i]) : 0;
-        o.entries.push_back(
-            make_entry(static_cast<std::uint8_t>(i + 1), subindex_name(static_cast<unsigned>(i + 1)), DataType::Unsigned32, acc, v));
+        o.entries.push_back(make_entry(static_cast<std::uint8_t>(i + 1),
+                                       subindex_name(static_cast<unsigned>(i + 1)), DataType::Unsigned32, acc,
+                                       v));
     }
     return o;
 }
@@ -45,13 +46,14 @@ ObjectDescription pdo_assign_object(std::uint16_t index, const std::vector<Pdo>&
         if (!p.fixed || !p.mandatory) any_free = true;
     }
     const std::uint16_t acc = any_free ? access::RWPreop : access::RO;
-    o.entries.push_back(
-        make_entry(0, "Number of assigned PDOs", DataType::Unsigned8, acc, static_cast<std::int64_t>(assigned.size())));
+    o.entries.push_back(make_entry(0, "Number of assigned PDOs", DataType::Unsigned8, acc,
+                                   static_cast<std::int64_t>(assigned.size())));
     set_range(o.entries.back(), 0, static_cast<std::int64_t>(pdos.size()));
     for (std::size_t i = 0; i < pdos.size(); ++i) {
         const std::uint16_t v = i < assigned.size() ? assigned[i] : 0;
-        o.entries.push_back(
-            make_entry(static_cast<std::uint8_t>(i + 1), subindex_name(static_cast<unsigned>(i + 1)), DataType::Unsigned16, acc, v));
+        o.entries.push_back(make_entry(static_cast<std::uint8_t>(i + 1),
+                                       subindex_name(static_cast<unsigned>(i + 1)), DataType::Unsigned16, acc,
+                                       v));
     }
     return o;
 }
@@ -95,13 +97,13 @@ std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d) {
     objs.push_back(make_string_var(0x1008, "Device name", d.name));
     objs.push_back(make_string_var(0x1009, "Hardware version", d.hardware_version));
     objs.push_back(make_string_var(0x100A, "Software version", d.software_version));
-    objs.push_back(make_record(
-        0x1018, "Identity",
-        {make_entry(1, "Vendor ID", DT::Unsigned32, access::RO, d.identity.vendor_id),
-         make_entry(2, "Product code", DT::Unsigned32, access::RO, d.identity.product_code),
-         make_entry(3, "Revision", DT::Unsigned32, access::RO, d.identity.revision),
-         make_entry(4, "Serial number", DT::Unsigned32, access::RO, d.identity.serial)},
-        DT::Identity));
+    objs.push_back(
+        make_record(0x1018, "Identity",
+                    {make_entry(1, "Vendor ID", DT::Unsigned32, access::RO, d.identity.vendor_id),
+                     make_entry(2, "Product code", DT::Unsigned32, access::RO, d.identity.product_code),
+                     make_entry(3, "Revision", DT::Unsigned32, access::RO, d.identity.revision),
+                     make_entry(4, "Serial number", DT::Unsigned32, access::RO, d.identity.serial)},
+                    DT::Identity));
     objs.push_back(make_record(0x10F1, "Error settings",
                                {make_entry(1, "Local error reaction", DT::Unsigned32, access::RW, 1),
                                 make_entry(2, "Sync error counter limit", DT::Unsigned16, access::RW, 4)}));
@@ -115,15 +117,18 @@ std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d) {
         sm_types.push_back(static_cast<std::int64_t>(s.type));
     objs.push_back(make_array(0x1C00, "Sync manager type", DT::Unsigned8, access::RO, sm_types));
     if (auto sm = d.sm_index_of_type(SmType::Outputs))
-        objs.push_back(pdo_assign_object(static_cast<std::uint16_t>(0x1C10 + *sm), d.rx_pdos, "RxPDO assign"));
+        objs.push_back(
+            pdo_assign_object(static_cast<std::uint16_t>(0x1C10 + *sm), d.rx_pdos, "RxPDO assign"));
     if (auto sm = d.sm_index_of_type(SmType::Inputs))
-        objs.push_back(pdo_assign_object(static_cast<std::uint16_t>(0x1C10 + *sm), d.tx_pdos, "TxPDO assign"));
+        objs.push_back(
+            pdo_assign_object(static_cast<std::uint16_t>(0x1C10 + *sm), d.tx_pdos, "TxPDO assign"));
     if (d.sm_index_of_type(SmType::Outputs)) objs.push_back(sync_parameter_object(0x1C32, d, true));
     if (d.sm_index_of_type(SmType::Inputs)) objs.push_back(sync_parameter_object(0x1C33, d, false));
 
     // Application objects; one with the index of a generated object replaces it.
     for (const auto& o : d.objects) {
-        auto it = std::find_if(objs.begin(), objs.end(), [&](const ObjectDescription& x) { return x.index == o.index; });
+        auto it = std::find_if(objs.begin(), objs.end(),
+                               [&](const ObjectDescription& x) { return x.index == o.index; });
         if (it != objs.end())
             *it = o;
         else

@@ -197,8 +197,9 @@ ObjectDescription make_array(std::uint16_t index, std::string name, DataType ele
     o.entries.push_back(make_entry(0, "Number of entries", DataType::Unsigned8, sub0_access,
                                    static_cast<std::int64_t>(defaults.size())));
     for (std::size_t i = 0; i < defaults.size(); ++i)
-        o.entries.push_back(make_entry(static_cast<std::uint8_t>(i + 1), subindex_name(static_cast<unsigned>(i + 1)),
-                                       element, acc, defaults[i]));
+        o.entries.push_back(make_entry(static_cast<std::uint8_t>(i + 1),
+                                       subindex_name(static_cast<unsigned>(i + 1)), element, acc,
+                                       defaults[i]));
     return o;
 }
 

@@ -68,11 +68,11 @@ inline constexpr std::uint16_t Settings = 0x0200;
 
 inline constexpr std::uint16_t ReadAll = ReadPreop | ReadSafeop | ReadOp;
 inline constexpr std::uint16_t WriteAll = WritePreop | WriteSafeop | WriteOp;
-inline constexpr std::uint16_t RO = ReadAll;                 // read only in every state
-inline constexpr std::uint16_t RW = ReadAll | WriteAll;      // read/write in every state
+inline constexpr std::uint16_t RO = ReadAll;                    // read only in every state
+inline constexpr std::uint16_t RW = ReadAll | WriteAll;         // read/write in every state
 inline constexpr std::uint16_t RWPreop = ReadAll | WritePreop;  // writable in PREOP only
-inline constexpr std::uint16_t RxMap = RW | RxPdoMappable;   // typical RxPDO-mappable parameter
-inline constexpr std::uint16_t TxMap = RO | TxPdoMappable;   // typical TxPDO-mappable actual value
+inline constexpr std::uint16_t RxMap = RW | RxPdoMappable;      // typical RxPDO-mappable parameter
+inline constexpr std::uint16_t TxMap = RO | TxPdoMappable;      // typical TxPDO-mappable actual value
 }  // namespace access
 
 struct EntryDescription {
@@ -93,7 +93,7 @@ struct ObjectDescription {
     std::uint16_t index = 0;
     std::string name;
     ObjectCode code = ObjectCode::Var;
-    DataType type = DataType::Unsigned8;  // object data type shown by SDO information (ARRAY: element type)
+    DataType type = DataType::Unsigned8;    // object data type shown by SDO information (ARRAY: element type)
     std::vector<EntryDescription> entries;  // VAR: exactly subindex 0; ARRAY/RECORD: subindex 0 (count) first
 
     std::uint8_t max_subindex() const { return entries.empty() ? 0 : entries.back().subindex; }

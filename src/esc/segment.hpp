@@ -49,7 +49,7 @@ using ApplicationFactory = std::function<std::unique_ptr<Application>(const devi
 
 // Builds a segment of n slaves of the given device, each with an application from the factory (by
 // default a ProcessImageApplication without mailbox protocols).
-std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n, const EscConfig& cfg = {},
-                                      const ApplicationFactory& factory = {});
+std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n,
+                                      const EscConfig& cfg = {}, const ApplicationFactory& factory = {});
 
 }  // namespace vecat::esc

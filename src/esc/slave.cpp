@@ -97,7 +97,8 @@ class SlaveReplySink final : public MailboxReplySink {
 
     bool can_commit() const override { return s_.q_count_ < Slave::kReplySlots; }
     std::size_t pending() const override {
-        const bool in_sm = s_.sm_mbx_in_ >= 0 && s_.esc_.sm_mailbox_full(static_cast<unsigned>(s_.sm_mbx_in_));
+        const bool in_sm =
+            s_.sm_mbx_in_ >= 0 && s_.esc_.sm_mailbox_full(static_cast<unsigned>(s_.sm_mbx_in_));
         return s_.q_count_ + (in_sm ? 1 : 0);
     }
 

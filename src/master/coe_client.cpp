@@ -11,6 +11,8 @@ using namespace coe;
 using Clock = std::chrono::steady_clock;
 
 CoeClient::CoeClient(Master& m, std::uint16_t station) : m_(m), station_(station) {
+    for (auto& s : m_.slaves())
+        if (s.station == station) counter_ = &s.mailbox_counter;
     std::uint8_t b[16] = {};
     if (auto w = m_.fprd(station_, esc::sm_addr(0), Bytes(b, 16)); w && *w == 1) {
         sm0_ = ld_le16(b);
@@ -21,8 +23,8 @@ CoeClient::CoeClient(Master& m, std::uint16_t station) : m_(m), station_(station
 }
 
 std::uint8_t CoeClient::next_counter() {
-    counter_ = static_cast<std::uint8_t>(counter_ % 7 + 1);
-    return counter_;
+    *counter_ = static_cast<std::uint8_t>(*counter_ % 7 + 1);
+    return *counter_;
 }
 
 bool CoeClient::send(esc::MailboxType type, ConstBytes payload, std::uint8_t counter) {
@@ -49,7 +51,8 @@ std::optional<MailboxMessage> CoeClient::receive(std::chrono::milliseconds timeo
     std::vector<std::uint8_t> buf(sm1_len_);
     do {
         std::uint8_t st = 0;
-        auto w = m_.fprd(station_, static_cast<std::uint16_t>(esc::sm_addr(1) + esc::sm::Status), Bytes(&st, 1));
+        auto w =
+            m_.fprd(station_, static_cast<std::uint16_t>(esc::sm_addr(1) + esc::sm::Status), Bytes(&st, 1));
         if (w && *w == 1 && (st & esc::sm::StatusMailboxFull)) {
             auto r = m_.fprd(station_, sm1_, Bytes(buf.data(), buf.size()));
             if (r && *r == 1) {
@@ -76,7 +79,8 @@ std::optional<MailboxMessage> CoeClient::request(esc::MailboxType type, ConstByt
         auto msg = receive(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()));
         if (!msg) return std::nullopt;
         const bool coe = msg->header.type == static_cast<std::uint8_t>(esc::MailboxType::CoE);
-        if (coe && msg->payload.size() >= 10 && coe_service(ld_le16(msg->payload.data())) == CoeService::Emergency) {
+        if (coe && msg->payload.size() >= 10 &&
+            coe_service(ld_le16(msg->payload.data())) == CoeService::Emergency) {
             ReceivedEmergency e;
             e.error_code = ld_le16(msg->payload.data() + 2);
             e.error_register = msg->payload[4];
@@ -95,7 +99,8 @@ bool is_abort(const MailboxMessage& m) {
     return m.payload.size() >= 10 && m.payload[2] == sdo::AbortCommand;
 }
 
-std::vector<std::uint8_t> sdo_frame(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub, std::uint32_t data = 0) {
+std::vector<std::uint8_t> sdo_frame(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub,
+                                    std::uint32_t data = 0) {
     std::vector<std::uint8_t> p(10, 0);
     st_le16(p.data(), coe_header(CoeService::SdoRequest));
     p[2] = cmd;
@@ -109,8 +114,9 @@ std::vector<std::uint8_t> sdo_frame(std::uint8_t cmd, std::uint16_t index, std::
 
 SdoResult CoeClient::upload(std::uint16_t index, std::uint8_t sub, bool complete) {
     SdoResult res;
-    auto req = sdo_frame(static_cast<std::uint8_t>((sdo::CcsInitiateUpload << 5) | (complete ? sdo::CompleteAccess : 0)),
-                         index, sub);
+    auto req = sdo_frame(
+        static_cast<std::uint8_t>((sdo::CcsInitiateUpload << 5) | (complete ? sdo::CompleteAccess : 0)),
+        index, sub);
     auto rsp = request(esc::MailboxType::CoE, req);
     if (!rsp || rsp->payload.size() < 10) return res;
     res.transport_ok = true;
@@ -130,7 +136,9 @@ SdoResult CoeClient::upload(std::uint16_t index, std::uint8_t sub, bool complete
     if (res.data.size() > total) res.data.resize(total);
     std::uint8_t toggle = 0;
     while (res.data.size() < total) {
-        auto seg = request(esc::MailboxType::CoE, sdo_frame(static_cast<std::uint8_t>((sdo::CcsUploadSegment << 5) | toggle), index, sub));
+        auto seg =
+            request(esc::MailboxType::CoE,
+                    sdo_frame(static_cast<std::uint8_t>((sdo::CcsUploadSegment << 5) | toggle), index, sub));
         if (!seg || seg->payload.size() < 10) {
             res.transport_ok = false;
             return res;
@@ -142,7 +150,8 @@ SdoResult CoeClient::upload(std::uint16_t index, std::uint8_t sub, bool complete
         const std::uint8_t c = seg->payload[2];
         std::size_t n = seg->payload.size() - 3;
         if (seg->payload.size() == 10) n = 7 - ((c >> 1) & 7);
-        res.data.insert(res.data.end(), seg->payload.begin() + 3, seg->payload.begin() + 3 + static_cast<std::ptrdiff_t>(n));
+        res.data.insert(res.data.end(), seg->payload.begin() + 3,
+                        seg->payload.begin() + 3 + static_cast<std::ptrdiff_t>(n));
         toggle ^= sdo::Toggle;
         if (c & sdo::LastSegment) break;
     }
@@ -150,10 +159,12 @@ SdoResult CoeClient::upload(std::uint16_t index, std::uint8_t sub, bool complete
     return res;
 }
 
-SdoResult CoeClient::download(std::uint16_t index, std::uint8_t sub, ConstBytes data, bool complete, Transfer how) {
+SdoResult CoeClient::download(std::uint16_t index, std::uint8_t sub, ConstBytes data, bool complete,
+                              Transfer how) {
     SdoResult res;
     const std::uint8_t ca = complete ? sdo::CompleteAccess : 0;
-    if (how == Transfer::Auto) how = data.size() <= 4 && !data.empty() ? Transfer::Expedited : Transfer::Normal;
+    if (how == Transfer::Auto)
+        how = data.size() <= 4 && !data.empty() ? Transfer::Expedited : Transfer::Normal;
     auto finish = [&](const std::optional<MailboxMessage>& rsp) {
         if (!rsp || rsp->payload.size() < 10) return false;
         res.transport_ok = true;
@@ -168,8 +179,9 @@ SdoResult CoeClient::download(std::uint16_t index, std::uint8_t sub, ConstBytes 
         std::uint32_t v = 0;
         for (std::size_t i = 0; i < data.size() && i < 4; ++i)
             v |= static_cast<std::uint32_t>(data[i]) << (8 * i);
-        const auto cmd = static_cast<std::uint8_t>((sdo::CcsInitiateDownload << 5) | ca | ((4 - data.size()) << 2) |
-                                                   sdo::Expedited | sdo::SizeIndicated);
+        const auto cmd =
+            static_cast<std::uint8_t>((sdo::CcsInitiateDownload << 5) | ca | ((4 - data.size()) << 2) |
+                                      sdo::Expedited | sdo::SizeIndicated);
         finish(request(esc::MailboxType::CoE, sdo_frame(cmd, index, sub, v)));
         return res;
     }
@@ -177,8 +189,8 @@ SdoResult CoeClient::download(std::uint16_t index, std::uint8_t sub, ConstBytes 
     const std::size_t max_first = sm0_len_ - esc::kMailboxHeaderSize - 10;
     std::size_t first = std::min(data.size(), max_first);
     if (how == Transfer::Segmented) first = 0;
-    auto req = sdo_frame(static_cast<std::uint8_t>((sdo::CcsInitiateDownload << 5) | ca | sdo::SizeIndicated), index, sub,
-                         static_cast<std::uint32_t>(data.size()));
+    auto req = sdo_frame(static_cast<std::uint8_t>((sdo::CcsInitiateDownload << 5) | ca | sdo::SizeIndicated),
+                         index, sub, static_cast<std::uint32_t>(data.size()));
     req.insert(req.end(), data.begin(), data.begin() + static_cast<std::ptrdiff_t>(first));
     if (!finish(request(esc::MailboxType::CoE, req))) return res;
     std::size_t off = first;
@@ -189,7 +201,8 @@ SdoResult CoeClient::download(std::uint16_t index, std::uint8_t sub, ConstBytes 
         const bool last = off + n == data.size();
         std::vector<std::uint8_t> seg(3, 0);
         st_le16(seg.data(), coe_header(CoeService::SdoRequest));
-        std::uint8_t cmd = static_cast<std::uint8_t>((sdo::CcsDownloadSegment << 5) | toggle | (last ? 1 : 0));
+        std::uint8_t cmd =
+            static_cast<std::uint8_t>((sdo::CcsDownloadSegment << 5) | toggle | (last ? 1 : 0));
         seg.insert(seg.end(), data.begin() + static_cast<std::ptrdiff_t>(off),
                    data.begin() + static_cast<std::ptrdiff_t>(off + n));
         if (n < 7) {
@@ -218,7 +231,7 @@ std::optional<std::vector<std::uint16_t>> CoeClient::od_list(std::uint16_t list_
         const std::uint8_t op = rsp->payload[2];
         if ((op & 0x7F) == sdo_info::InfoErrorRequest) {
             last_abort_ = rsp->payload.size() >= 10 ? static_cast<SdoAbort>(ld_le32(rsp->payload.data() + 6))
-                                                   : SdoAbort::GeneralError;
+                                                    : SdoAbort::GeneralError;
             return std::nullopt;
         }
         if ((op & 0x7F) != sdo_info::GetOdListResponse) return std::nullopt;
@@ -257,7 +270,8 @@ std::optional<ObjectInfo> CoeClient::object_description(std::uint16_t index) {
     return o;
 }
 
-std::optional<EntryInfo> CoeClient::entry_description(std::uint16_t index, std::uint8_t sub, std::uint8_t value_info) {
+std::optional<EntryInfo> CoeClient::entry_description(std::uint16_t index, std::uint8_t sub,
+                                                      std::uint8_t value_info) {
     std::vector<std::uint8_t> req(10, 0);
     st_le16(req.data(), coe_header(CoeService::SdoInformation));
     req[2] = sdo_info::GetEntryDescriptionRequest;

@@ -22,7 +22,7 @@ struct MailboxMessage {
 };
 
 struct SdoResult {
-    bool transport_ok = false;       // a reply came at all
+    bool transport_ok = false;  // a reply came at all
     coe::SdoAbort abort = coe::SdoAbort::None;
     std::vector<std::uint8_t> data;  // uploaded value
     std::uint8_t command = 0;        // command byte of the (first) response, for layout checks
@@ -82,7 +82,8 @@ class CoeClient {
     // SDO information. nullopt on transport errors or an SDO info error (then last_abort() says which).
     std::optional<std::vector<std::uint16_t>> od_list(std::uint16_t list_type);
     std::optional<ObjectInfo> object_description(std::uint16_t index);
-    std::optional<EntryInfo> entry_description(std::uint16_t index, std::uint8_t sub, std::uint8_t value_info);
+    std::optional<EntryInfo> entry_description(std::uint16_t index, std::uint8_t sub,
+                                               std::uint8_t value_info);
     coe::SdoAbort last_abort() const { return last_abort_; }
     int last_fragments() const { return last_fragments_; }
 
@@ -94,7 +95,8 @@ class CoeClient {
     Master& m_;
     std::uint16_t station_;
     std::uint16_t sm0_ = 0, sm0_len_ = 0, sm1_ = 0, sm1_len_ = 0;
-    std::uint8_t counter_ = 0;
+    std::uint8_t own_counter_ = 0;
+    std::uint8_t* counter_ = &own_counter_;  // the slave's counter in the master's list when known
     std::vector<ReceivedEmergency> emergencies_;
     coe::SdoAbort last_abort_ = coe::SdoAbort::None;
     int last_fragments_ = 0;

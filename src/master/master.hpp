@@ -41,6 +41,7 @@ struct SlaveInfo {
     std::uint32_t in_logical = 0;
     std::size_t out_offset = 0;  // in the process image
     std::size_t in_offset = 0;
+    std::uint8_t mailbox_counter = 0;  // last mailbox counter used (1..7), kept per slave like real masters
 };
 
 struct DatagramRequest {
@@ -98,7 +99,7 @@ class Master {
     bool read_slave_information();  // ESC info, DL status and the whole SII of every slave
     std::optional<std::uint32_t> read_sii_dword(std::uint16_t station, std::uint32_t word);
     std::optional<std::vector<std::uint8_t>> read_sii_image(std::uint16_t station);
-    bool configure_mailboxes();     // SM0/SM1 from the SII
+    bool configure_mailboxes();  // SM0/SM1 from the SII
     // SM2/SM3 and FMMUs; lays out the process image. CoE slaves' sizes are read from their PDO assignment.
     bool configure_process_data();
     bool read_pdo_sizes_coe(SlaveInfo& s);

@@ -11,6 +11,8 @@
 #include <sstream>
 #include <thread>
 
+#include "esc/registers.hpp"
+#include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
@@ -202,6 +204,89 @@ TEST_P(Veth, MasterFindsConfiguresAndWalksTheStates) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Slaves, Veth, ::testing::Values(1u, 3u));
+
+// A master remaps the PDOs through CoE in PREOP, reaches OP with the new layout, and a wrong SM2 length
+// is refused with 0x001D (and reported by an emergency).
+TEST(VethCoe, RemapInPreOpReachesOpWithTheNewLayout) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    ++g_pair;
+    const std::string mi = "cm" + std::to_string(g_pair), si = "cs" + std::to_string(g_pair);
+    std::string why;
+    ASSERT_TRUE(net::create_veth_pair(mi, si, &why)) << why;
+    const std::string pcap =
+        (std::filesystem::temp_directory_path() / ("vecat-coe-" + std::to_string(getpid()) + ".pcapng"))
+            .string();
+    VecatProcess vecat(si, 1, pcap);
+    ASSERT_GT(vecat.pid, 0);
+    net::RawSocket sock(mi);
+    master::Master m(sock);
+    ASSERT_TRUE(m.startup(AlState::PreOp, &why)) << why;
+    const auto st = m.slaves()[0].station;
+    master::CoeClient c(m, st);
+    auto u32 = [](std::uint32_t v) { return v; };
+    // Given: RxPDO 0x1601 (controlword, target position, profile velocity) and a new TxPDO 0x1A02
+    // (statusword, position actual value, torque actual value) assigned instead of the defaults.
+    ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C12, 0, 0).ok());
+    ASSERT_TRUE(c.download_value<std::uint16_t>(0x1C12, 1, 0x1601).ok());
+    ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C12, 0, 1).ok());
+    ASSERT_TRUE(c.download_value<std::uint8_t>(0x1A02, 0, 0).ok());
+    ASSERT_TRUE(c.download_value(0x1A02, 1, u32(0x60410010)).ok());
+    ASSERT_TRUE(c.download_value(0x1A02, 2, u32(0x60640020)).ok());
+    ASSERT_TRUE(c.download_value(0x1A02, 3, u32(0x60770010)).ok());
+    ASSERT_TRUE(c.download_value<std::uint8_t>(0x1A02, 0, 3).ok());
+    // Rules of ETG.1020: entries change only while subindex 0 is 0; only mappable objects are accepted.
+    EXPECT_EQ(c.download_value(0x1A02, 1, u32(0x60410010)).abort, coe::SdoAbort::Subindex0NotZero);
+    EXPECT_EQ(c.download_value<std::uint8_t>(0x1A03, 0, 0).abort, coe::SdoAbort::None);
+    EXPECT_EQ(c.download_value(0x1A03, 1, u32(0x60400010)).abort, coe::SdoAbort::NotMappable);
+    ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C13, 0, 0).ok());
+    ASSERT_TRUE(c.download_value<std::uint16_t>(0x1C13, 1, 0x1A02).ok());
+    ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C13, 0, 1).ok());
+
+    // When: the master reads the new layout through CoE and goes to OP.
+    ASSERT_TRUE(m.configure_process_data());
+    EXPECT_EQ(m.slaves()[0].out_bytes, 10u);
+    EXPECT_EQ(m.slaves()[0].in_bytes, 8u);
+    ASSERT_TRUE(m.request_state(AlState::SafeOp));
+    auto out = m.outputs(0);
+    st_le32(out.data() + 2, 123456);  // target position
+    m.exchange_process_data();
+    ASSERT_TRUE(m.request_state(AlState::Op));
+    for (int i = 0; i < 100; ++i)
+        ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+    // Then: the drive received the target position through the new mapping, and refuses to have it
+    // written by SDO while it is mapped.
+    auto tp = c.upload(0x607A, 0);
+    ASSERT_TRUE(tp.ok());
+    EXPECT_EQ(ld_le32(tp.data.data()), 123456u);
+    EXPECT_EQ(c.download_value<std::int32_t>(0x607A, 0, 1).abort, coe::SdoAbort::MappedToRxPdo);
+    EXPECT_EQ(c.download_value<std::uint8_t>(0x1C12, 0, 0).abort, coe::SdoAbort::WrongState);
+
+    // A wrong SM2 length is refused at PREOP -> SAFEOP with 0x001D.
+    ASSERT_TRUE(m.request_state(AlState::PreOp));
+    std::uint8_t sm2[8] = {};
+    ASSERT_EQ(m.fpwr(st, esc::sm_addr(2), sm2).value_or(0), 1);  // disable, then configure 11 bytes
+    st_le16(sm2, 0x1000);
+    st_le16(sm2 + 2, 11);
+    sm2[4] = 0x64;
+    sm2[6] = 1;
+    ASSERT_EQ(m.fpwr(st, esc::sm_addr(2), sm2).value_or(0), 1);
+    EXPECT_FALSE(m.request_state(AlState::SafeOp, std::chrono::milliseconds(300)));
+    const auto r = m.read_al_status(st);
+    EXPECT_EQ(r.state(), AlState::PreOp);
+    EXPECT_TRUE(r.error());
+    EXPECT_EQ(r.code, 0x001D);
+    // The refusal is also reported by an emergency (0xA000, AL status code in the data).
+    c.emergencies().clear();
+    ASSERT_TRUE(c.upload(0x1001, 0).ok());
+    ASSERT_FALSE(c.emergencies().empty());
+    EXPECT_EQ(c.emergencies()[0].error_code, 0xA000);
+    EXPECT_EQ(ld_le16(c.emergencies()[0].data.data()), 0x001D);
+    EXPECT_EQ(vecat.stop(), 0);
+    if (system("command -v tshark >/dev/null 2>&1") == 0) {
+        EXPECT_EQ(run_capture("tshark -r " + pcap + " -V 2>/dev/null").find("Malformed"), std::string::npos);
+    }
+    std::filesystem::remove(pcap);
+}
 
 TEST(VethCli, RefusesAnInterfaceWithAnAddress) {
     if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";

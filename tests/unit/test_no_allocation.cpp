@@ -6,10 +6,10 @@
 #include <new>
 #include <thread>
 
+#include "coe/coe_application.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "net/server.hpp"
-#include "coe/coe_application.hpp"
 #include "test_support.hpp"
 
 namespace {
