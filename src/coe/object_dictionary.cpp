@@ -155,8 +155,9 @@ SdoAbort check_range(const Entry& e, ConstBytes v) {
         }
         return u;
     };
+    // A BOOLEAN travels as one byte that must be 0 or 1 (checked before masking to the 1-bit length).
+    if (d.type == DataType::Boolean && !v.empty() && v[0] > 1) return SdoAbort::ValueRange;
     const std::uint64_t x = decode(v);
-    if (d.type == DataType::Boolean && x > 1) return SdoAbort::ValueRange;
     auto less = [&](std::uint64_t a, std::uint64_t b) {
         return device::is_signed(d.type) ? static_cast<std::int64_t>(a) < static_cast<std::int64_t>(b)
                                          : a < b;
@@ -183,7 +184,15 @@ ObjectDictionary::ObjectDictionary(const std::vector<device::ObjectDescription>&
         for (const auto& e : o.entries())
             max_transfer_ = std::max(max_transfer_, e.capacity());
     }
-    undo_.resize(max_transfer_);
+    // The undo of a complete-access download keeps every entry's value at its own capacity.
+    std::size_t undo = 0;
+    for (const auto& o : objects_) {
+        std::size_t n = 0;
+        for (const auto& e : o.entries())
+            n += e.capacity();
+        undo = std::max(undo, n);
+    }
+    undo_.resize(undo);
 }
 
 Object* ObjectDictionary::find(std::uint16_t index) {
