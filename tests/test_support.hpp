@@ -2,7 +2,9 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdio>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "coe/coe_application.hpp"
@@ -39,6 +41,19 @@ struct Bench {
     master::Master master;
     std::uint64_t now = 1'000'000'000;
 };
+
+// Output of a shell command (tshark in the capture checks).
+inline std::string run_capture(const std::string& cmd) {
+    std::string out;
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return out;
+    char buf[4096];
+    std::size_t n;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0)
+        out.append(buf, n);
+    pclose(p);
+    return out;
+}
 
 inline std::uint16_t reg(esc::Reg r) {
     return esc::addr(r);

@@ -279,17 +279,25 @@ void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::ui
     respond();
 }
 
-void SdoServer::download_segment(std::uint8_t cmd, ConstBytes p, MailboxReplySink& out) {
-    if (!down_.active) {
+// A segment request needs an open transfer (else 0x05040001) and the alternating toggle bit (else the
+// transfer ends with 0x05030000).
+template <class Transfer>
+bool SdoServer::segment_acceptable(Transfer& t, std::uint8_t cmd, MailboxReplySink& out) {
+    if (!t.active) {
         abort(0, 0, SdoAbort::UnknownCommand, out);
-        return;
+        return false;
     }
+    if ((cmd & sdo::Toggle) != t.toggle) {
+        t.active = false;
+        abort(t.index, t.sub, SdoAbort::ToggleBit, out);
+        return false;
+    }
+    return true;
+}
+
+void SdoServer::download_segment(std::uint8_t cmd, ConstBytes p, MailboxReplySink& out) {
+    if (!segment_acceptable(down_, cmd, out)) return;
     const std::uint8_t toggle = cmd & sdo::Toggle;
-    if (toggle != down_.toggle) {
-        down_.active = false;
-        abort(down_.index, down_.sub, SdoAbort::ToggleBit, out);
-        return;
-    }
     // Segment data follows the command byte; with a 10-byte mailbox the size field gives the unused bytes.
     std::size_t n = p.size() - kCoeHeaderSize - 1;
     if (p.size() == kCoeHeaderSize + kSdoHeaderSize) n = 7 - ((cmd >> 1) & 7);
@@ -358,16 +366,8 @@ void SdoServer::initiate_upload(std::uint8_t cmd, std::uint16_t index, std::uint
 }
 
 void SdoServer::upload_segment(std::uint8_t cmd, MailboxReplySink& out) {
-    if (!up_.active) {
-        abort(0, 0, SdoAbort::UnknownCommand, out);
-        return;
-    }
+    if (!segment_acceptable(up_, cmd, out)) return;
     const std::uint8_t toggle = cmd & sdo::Toggle;
-    if (toggle != up_.toggle) {
-        up_.active = false;
-        abort(up_.index, up_.sub, SdoAbort::ToggleBit, out);
-        return;
-    }
     Reply r(out.reply_buffer());
     r.u16(coe_header(CoeService::SdoResponse));
     const std::size_t room = r.room() > 1 ? r.room() - 1 : 0;

@@ -53,6 +53,8 @@ class SdoServer final : public esc::MailboxProtocol {
     void download_segment(std::uint8_t cmd, ConstBytes p, esc::MailboxReplySink& out);
     void initiate_upload(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub, esc::MailboxReplySink& out);
     void upload_segment(std::uint8_t cmd, esc::MailboxReplySink& out);
+    template <class Transfer>
+    bool segment_acceptable(Transfer& t, std::uint8_t cmd, esc::MailboxReplySink& out);
     void abort(std::uint16_t index, std::uint8_t sub, SdoAbort code, esc::MailboxReplySink& out);
 
     void sdo_info(ConstBytes p, esc::MailboxReplySink& out);

@@ -218,28 +218,19 @@ SdoResult CoeClient::download(std::uint16_t index, std::uint8_t sub, ConstBytes 
 }
 
 std::optional<std::vector<std::uint16_t>> CoeClient::od_list(std::uint16_t list_type) {
-    std::vector<std::uint8_t> req(8, 0);
-    st_le16(req.data(), coe_header(CoeService::SdoInformation));
-    req[2] = sdo_info::GetOdListRequest;
-    st_le16(req.data() + 6, list_type);
-    last_abort_ = SdoAbort::None;
+    std::uint8_t arg[2];
+    st_le16(arg, list_type);
     last_fragments_ = 0;
-    auto rsp = request(esc::MailboxType::CoE, req);
+    auto rsp = info_request(sdo_info::GetOdListRequest, arg, 6);
     std::vector<std::uint8_t> data;
-    while (true) {
-        if (!rsp || rsp->payload.size() < 6) return std::nullopt;
-        const std::uint8_t op = rsp->payload[2];
-        if ((op & 0x7F) == sdo_info::InfoErrorRequest) {
-            last_abort_ = rsp->payload.size() >= 10 ? static_cast<SdoAbort>(ld_le32(rsp->payload.data() + 6))
-                                                    : SdoAbort::GeneralError;
-            return std::nullopt;
-        }
-        if ((op & 0x7F) != sdo_info::GetOdListResponse) return std::nullopt;
+    // Fragments follow while the incomplete bit is set; only the first carries the list type.
+    while (rsp && rsp->payload.size() >= 6 && (rsp->payload[2] & 0x7F) == sdo_info::GetOdListResponse) {
         ++last_fragments_;
         data.insert(data.end(), rsp->payload.begin() + 6, rsp->payload.end());
-        if (!(op & sdo_info::Incomplete)) break;
+        if (!(rsp->payload[2] & sdo_info::Incomplete)) break;
         rsp = receive();
     }
+    if (!rsp) return std::nullopt;
     if (data.size() < 2) return std::nullopt;
     std::vector<std::uint16_t> out;
     for (std::size_t i = 2; i + 1 < data.size(); i += 2)
@@ -247,20 +238,32 @@ std::optional<std::vector<std::uint16_t>> CoeClient::od_list(std::uint16_t list_
     return out;
 }
 
-std::optional<ObjectInfo> CoeClient::object_description(std::uint16_t index) {
-    std::vector<std::uint8_t> req(8, 0);
+// Sends an SDO information request (opcode + arguments) and returns the response of the next opcode, at
+// least min_len bytes long. An SDO info error sets last_abort().
+std::optional<MailboxMessage> CoeClient::info_request(std::uint8_t opcode, ConstBytes args,
+                                                      std::size_t min_len) {
+    std::vector<std::uint8_t> req(6, 0);
     st_le16(req.data(), coe_header(CoeService::SdoInformation));
-    req[2] = sdo_info::GetObjectDescriptionRequest;
-    st_le16(req.data() + 6, index);
+    req[2] = opcode;
+    req.insert(req.end(), args.begin(), args.end());
     last_abort_ = SdoAbort::None;
     auto rsp = request(esc::MailboxType::CoE, req);
-    if (!rsp || rsp->payload.size() < 10) return std::nullopt;
-    if ((rsp->payload[2] & 0x7F) == sdo_info::InfoErrorRequest) {
-        last_abort_ = static_cast<SdoAbort>(ld_le32(rsp->payload.data() + 6));
+    if (!rsp || rsp->payload.size() < 6) return std::nullopt;
+    const std::uint8_t op = rsp->payload[2] & 0x7F;
+    if (op == sdo_info::InfoErrorRequest) {
+        last_abort_ = rsp->payload.size() >= 10 ? static_cast<SdoAbort>(ld_le32(rsp->payload.data() + 6))
+                                                : SdoAbort::GeneralError;
         return std::nullopt;
     }
-    if ((rsp->payload[2] & 0x7F) != sdo_info::GetObjectDescriptionResponse || rsp->payload.size() < 12)
-        return std::nullopt;
+    if (op != opcode + 1 || rsp->payload.size() < min_len) return std::nullopt;
+    return rsp;
+}
+
+std::optional<ObjectInfo> CoeClient::object_description(std::uint16_t index) {
+    std::uint8_t arg[2];
+    st_le16(arg, index);
+    auto rsp = info_request(sdo_info::GetObjectDescriptionRequest, arg, 12);
+    if (!rsp) return std::nullopt;
     ObjectInfo o;
     o.index = ld_le16(rsp->payload.data() + 6);
     o.data_type = ld_le16(rsp->payload.data() + 8);
@@ -272,21 +275,10 @@ std::optional<ObjectInfo> CoeClient::object_description(std::uint16_t index) {
 
 std::optional<EntryInfo> CoeClient::entry_description(std::uint16_t index, std::uint8_t sub,
                                                       std::uint8_t value_info) {
-    std::vector<std::uint8_t> req(10, 0);
-    st_le16(req.data(), coe_header(CoeService::SdoInformation));
-    req[2] = sdo_info::GetEntryDescriptionRequest;
-    st_le16(req.data() + 6, index);
-    req[8] = sub;
-    req[9] = value_info;
-    last_abort_ = SdoAbort::None;
-    auto rsp = request(esc::MailboxType::CoE, req);
-    if (!rsp || rsp->payload.size() < 10) return std::nullopt;
-    if ((rsp->payload[2] & 0x7F) == sdo_info::InfoErrorRequest) {
-        last_abort_ = static_cast<SdoAbort>(ld_le32(rsp->payload.data() + 6));
-        return std::nullopt;
-    }
-    if ((rsp->payload[2] & 0x7F) != sdo_info::GetEntryDescriptionResponse || rsp->payload.size() < 16)
-        return std::nullopt;
+    std::uint8_t arg[4] = {0, 0, sub, value_info};
+    st_le16(arg, index);
+    auto rsp = info_request(sdo_info::GetEntryDescriptionRequest, arg, 16);
+    if (!rsp) return std::nullopt;
     EntryInfo e;
     const auto& p = rsp->payload;
     e.index = ld_le16(p.data() + 6);

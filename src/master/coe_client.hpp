@@ -92,6 +92,7 @@ class CoeClient {
     std::size_t mailbox_size_in() const { return sm1_len_; }
 
   private:
+    std::optional<MailboxMessage> info_request(std::uint8_t opcode, ConstBytes args, std::size_t min_len);
     Master& m_;
     std::uint16_t station_;
     std::uint16_t sm0_ = 0, sm0_len_ = 0, sm1_ = 0, sm1_len_ = 0;

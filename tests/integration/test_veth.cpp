@@ -16,6 +16,7 @@
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
+#include "test_support.hpp"
 
 extern char** environ;
 
@@ -51,18 +52,6 @@ struct VecatProcess {
         if (pid > 0) stop();
     }
 };
-
-std::string run_capture(const std::string& cmd) {
-    std::string out;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return out;
-    char buf[4096];
-    std::size_t n;
-    while ((n = fread(buf, 1, sizeof buf, p)) > 0)
-        out.append(buf, n);
-    pclose(p);
-    return out;
-}
 
 std::vector<std::string> split(const std::string& s, char c) {
     std::vector<std::string> v;
@@ -106,14 +95,14 @@ unsigned expected_wkc(unsigned cmd, unsigned adp, unsigned n, unsigned lrw_expec
 
 void check_capture(const std::string& pcap, unsigned n, unsigned lrw_expected) {
     if (system("command -v tshark >/dev/null 2>&1") != 0) GTEST_SKIP() << "tshark not installed";
-    const std::string verbose = run_capture("tshark -r " + pcap + " -V 2>/dev/null");
+    const std::string verbose = test::run_capture("tshark -r " + pcap + " -V 2>/dev/null");
     ASSERT_FALSE(verbose.empty());
     EXPECT_EQ(verbose.find("Malformed"), std::string::npos);
-    EXPECT_EQ(run_capture("tshark -r " + pcap + " -z expert,error -q 2>/dev/null").find("Error"),
+    EXPECT_EQ(test::run_capture("tshark -r " + pcap + " -z expert,error -q 2>/dev/null").find("Error"),
               std::string::npos);
-    const std::string fields =
-        run_capture("tshark -r " + pcap +
-                    " -T fields -E separator=';' -e eth.src -e ecat.cmd -e ecat.adp -e ecat.cnt 2>/dev/null");
+    const std::string fields = test::run_capture(
+        "tshark -r " + pcap +
+        " -T fields -E separator=';' -e eth.src -e ecat.cmd -e ecat.adp -e ecat.cnt 2>/dev/null");
     auto lines = split(fields, '\n');
     unsigned checked = 0;
     std::vector<std::string> request;
@@ -283,7 +272,8 @@ TEST(VethCoe, RemapInPreOpReachesOpWithTheNewLayout) {
     EXPECT_EQ(ld_le16(c.emergencies()[0].data.data()), 0x001D);
     EXPECT_EQ(vecat.stop(), 0);
     if (system("command -v tshark >/dev/null 2>&1") == 0) {
-        EXPECT_EQ(run_capture("tshark -r " + pcap + " -V 2>/dev/null").find("Malformed"), std::string::npos);
+        EXPECT_EQ(test::run_capture("tshark -r " + pcap + " -V 2>/dev/null").find("Malformed"),
+                  std::string::npos);
     }
     std::filesystem::remove(pcap);
 }
@@ -293,7 +283,8 @@ TEST(VethCli, RefusesAnInterfaceWithAnAddress) {
     std::string why;
     ASSERT_TRUE(net::create_veth_pair("ipm", "ips", &why)) << why;
     ASSERT_EQ(system("ip addr add 192.0.2.1/24 dev ips"), 0);  // documentation range, inside our namespace
-    const std::string out = run_capture(std::string(VECAT_BINARY) + " run --iface ips 2>&1; echo rc=$?");
+    const std::string out =
+        test::run_capture(std::string(VECAT_BINARY) + " run --iface ips 2>&1; echo rc=$?");
     EXPECT_NE(out.find("refusing"), std::string::npos) << out;
     EXPECT_NE(out.find("rc=2"), std::string::npos) << out;
 }

@@ -61,18 +61,6 @@ std::vector<Mailbox> mailboxes(const std::vector<std::vector<std::uint8_t>>& fra
     return out;
 }
 
-std::string run_capture(const std::string& cmd) {
-    std::string out;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return out;
-    char buf[4096];
-    std::size_t n;
-    while ((n = fread(buf, 1, sizeof buf, p)) > 0)
-        out.append(buf, n);
-    pclose(p);
-    return out;
-}
-
 }  // namespace
 
 TEST(Replay, SoemRequestsToARealAkdGetRepliesOfTheSameLayout) {
@@ -120,13 +108,13 @@ TEST(Replay, SoemRequestsToARealAkdGetRepliesOfTheSameLayout) {
         std::filesystem::remove(out);
         GTEST_SKIP() << "tshark not installed";
     }
-    const std::string verbose = run_capture("tshark -r " + out + " -V 2>/dev/null");
+    const std::string verbose = test::run_capture("tshark -r " + out + " -V 2>/dev/null");
     EXPECT_EQ(verbose.find("Malformed"), std::string::npos);
-    EXPECT_EQ(run_capture("tshark -r " + out + " -z expert,error -q 2>/dev/null").find("Error"),
+    EXPECT_EQ(test::run_capture("tshark -r " + out + " -z expert,error -q 2>/dev/null").find("Error"),
               std::string::npos);
     // Every request and reply was decoded as CoE with an SDO index.
-    const std::string sdo =
-        run_capture("tshark -r " + out + " -Y ecat_mailbox.coe.sdoidx -T fields -e frame.number 2>/dev/null");
+    const std::string sdo = test::run_capture(
+        "tshark -r " + out + " -Y ecat_mailbox.coe.sdoidx -T fields -e frame.number 2>/dev/null");
     EXPECT_GE(std::count(sdo.begin(), sdo.end(), '\n'), 70);
     std::filesystem::remove(out);
 }
