@@ -24,7 +24,8 @@ void CoeApplication::raise_fault(std::uint16_t code, std::uint8_t bits, std::arr
             static_cast<std::uint8_t>(error_register_->get<std::uint8_t>() | bits | error_register::Generic);
         error_register_->set(reg);
     }
-    if (error_code_ && !(bits == error_register::Communication)) error_code_->set(code);
+    // 0x603F holds the drive's own fault code; communication errors only show in 0x1001.
+    if (error_code_ && bits != error_register::Communication) error_code_->set(code);
     sdo_->emergency({code, reg, data});
 }
 
@@ -42,6 +43,7 @@ esc::AlStatusCode CoeApplication::check_transition(AlState from, AlState to) {
 
 void CoeApplication::on_state_change(AlState, AlState to) {
     state_ = to;
+    requested_ = to;
 }
 
 void CoeApplication::on_al_error(esc::AlStatusCode code) {
@@ -58,6 +60,7 @@ void CoeApplication::on_al_error(esc::AlStatusCode code) {
         e = emcy::PreOpToSafeOp;
     else if (requested_ == AlState::Op)
         e = emcy::SafeOpToOp;
+    requested_ = state_;  // the checked transition is over; a later refusal must not reuse it
     const auto c = static_cast<std::uint16_t>(code);
     // Manufacturer bytes: the AL status code, little-endian.
     raise_fault(e, error_register::Communication,

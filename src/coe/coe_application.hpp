@@ -74,7 +74,7 @@ class CoeApplication : public esc::Application {
     std::unique_ptr<ProcessDataMap> map_;
     std::unique_ptr<SdoServer> sdo_;
     AlState state_ = AlState::Init;
-    AlState requested_ = AlState::Init;
+    AlState requested_ = AlState::Init;  // target of the transition being checked (emergency code)
     Entry* error_register_ = nullptr;
     Entry* error_code_ = nullptr;
     std::uint64_t exchanges_ = 0;
