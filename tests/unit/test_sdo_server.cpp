@@ -1194,6 +1194,22 @@ TEST_F(Sdo, AlErrorDuringSafeOpToOpAndWatchdog) {
     EXPECT_EQ(sink.take().bytes, (Buf{0x00, 0x10, 0x30, 0x81, 0x11, 0x1B, 0x00, 0x00, 0x00, 0x00}));
 }
 
+TEST_F(Sdo, RefusalWithoutACheckedTransitionIsAGenericCommunicationError) {
+    // Given a PREOP->SAFEOP check that was refused and reported ...
+    app.check_transition(AlState::PreOp, AlState::SafeOp);
+    app.on_al_error(esc::AlStatusCode::InvalidOutputConfig);
+    app.sdo_server().poll(sink);
+    ASSERT_EQ(sink.queued(), 1u);
+    EXPECT_EQ(ld_le16(sink.take().bytes.data() + 2), 0xA000);
+    // ... a later refusal that runs no check (0x0011) does not reuse that transition's code.
+    app.on_al_error(esc::AlStatusCode::InvalidRequestedStateChange);
+    app.sdo_server().poll(sink);
+    ASSERT_EQ(sink.queued(), 1u);
+    const Buf e = sink.take().bytes;
+    EXPECT_EQ(ld_le16(e.data() + 2), 0x8100);
+    EXPECT_EQ(ld_le16(e.data() + 5), 0x0011);
+}
+
 TEST_F(Sdo, EmergencyQueueIsBounded) {
     for (std::size_t i = 0; i < SdoServer::kEmergencySlots; ++i)
         EXPECT_TRUE(app.sdo_server().emergency({static_cast<std::uint16_t>(0x5000 + i), 0x01, {}}));
