@@ -81,7 +81,7 @@ std::optional<MailboxMessage> CoeClient::request(esc::MailboxType type, ConstByt
         const bool coe = msg->header.type == static_cast<std::uint8_t>(esc::MailboxType::CoE);
         if (coe && msg->payload.size() >= 10 &&
             coe_service(ld_le16(msg->payload.data())) == CoeService::Emergency) {
-            ReceivedEmergency e;
+            coe::Emergency e;
             e.error_code = ld_le16(msg->payload.data() + 2);
             e.error_register = msg->payload[4];
             std::copy_n(msg->payload.begin() + 5, 5, e.data.begin());

@@ -10,6 +10,7 @@
 
 #include "coe/coe_protocol.hpp"
 #include "coe/sdo_abort.hpp"
+#include "coe/sdo_server.hpp"
 #include "common/bytes.hpp"
 #include "esc/mailbox.hpp"
 #include "master/master.hpp"
@@ -27,12 +28,6 @@ struct SdoResult {
     std::vector<std::uint8_t> data;  // uploaded value
     std::uint8_t command = 0;        // command byte of the (first) response, for layout checks
     bool ok() const { return transport_ok && abort == coe::SdoAbort::None; }
-};
-
-struct ReceivedEmergency {
-    std::uint16_t error_code = 0;
-    std::uint8_t error_register = 0;
-    std::array<std::uint8_t, 5> data{};
 };
 
 struct ObjectInfo {
@@ -87,7 +82,7 @@ class CoeClient {
     coe::SdoAbort last_abort() const { return last_abort_; }
     int last_fragments() const { return last_fragments_; }
 
-    std::vector<ReceivedEmergency>& emergencies() { return emergencies_; }
+    std::vector<coe::Emergency>& emergencies() { return emergencies_; }
     std::size_t mailbox_size_out() const { return sm0_len_; }
     std::size_t mailbox_size_in() const { return sm1_len_; }
 
@@ -98,7 +93,7 @@ class CoeClient {
     std::uint16_t sm0_ = 0, sm0_len_ = 0, sm1_ = 0, sm1_len_ = 0;
     std::uint8_t own_counter_ = 0;
     std::uint8_t* counter_ = &own_counter_;  // the slave's counter in the master's list when known
-    std::vector<ReceivedEmergency> emergencies_;
+    std::vector<coe::Emergency> emergencies_;
     coe::SdoAbort last_abort_ = coe::SdoAbort::None;
     int last_fragments_ = 0;
 };

@@ -99,7 +99,8 @@ TEST(BadInput, RandomCoeMessagesAlwaysGetAnAnswer) {
         for (auto& x : p)
             x = static_cast<std::uint8_t>(byte(rng));
         // Bias towards the services that exist, so the SDO and SDO info code is exercised deeply.
-        if (p.size() >= 2 && i % 3 != 0) p[1] = static_cast<std::uint8_t>((i % 2 ? 0x20 : 0x80) | (p[1] & 0x01));
+        if (p.size() >= 2 && i % 3 != 0)
+            p[1] = static_cast<std::uint8_t>((i % 2 ? 0x20 : 0x80) | (p[1] & 0x01));
         const bool master_abort = p.size() >= 3 && (p[1] >> 4) == 2 && (p[2] >> 5) == 4;
         ASSERT_TRUE(c.send(esc::MailboxType::CoE, p, c.next_counter()));
         auto r = c.receive(std::chrono::milliseconds(master_abort ? 1 : 50));
