@@ -218,6 +218,15 @@ void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::ui
         abort(index, sub, SdoAbort::UnsupportedAccess, out);
         return;
     }
+    // The whole value is here: write it, answer with the response or the abort.
+    auto store = [&](ConstBytes data) {
+        if (const SdoAbort a = od_.download(index, sub, complete, st, data); a != SdoAbort::None) {
+            abort(index, sub, a, out);
+            return;
+        }
+        ++counters_.sdo_downloads;
+        respond();
+    };
     if (cmd & sdo::Expedited) {
         std::size_t n = 4;
         if (cmd & sdo::SizeIndicated) {
@@ -226,13 +235,7 @@ void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::ui
             // Size not indicated: the entry's own size, if it fits in four bytes.
             if (const Entry* e = od_.find(index, sub); e && e->capacity() <= 4) n = e->capacity();
         }
-        const SdoAbort a = od_.download(index, sub, complete, st, p.subspan(6, n));
-        if (a != SdoAbort::None) {
-            abort(index, sub, a, out);
-            return;
-        }
-        ++counters_.sdo_downloads;
-        respond();
+        store(p.subspan(6, n));
         return;
     }
     // Normal transfer: complete size in bytes 6..9, the first data from byte 10 on.
@@ -265,13 +268,7 @@ void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::ui
         return;
     }
     if (first.size() >= total) {
-        const SdoAbort a = od_.download(index, sub, complete, st, first.first(total));
-        if (a != SdoAbort::None) {
-            abort(index, sub, a, out);
-            return;
-        }
-        ++counters_.sdo_downloads;
-        respond();
+        store(first.first(total));
         return;
     }
     std::copy(first.begin(), first.end(), buf_.begin());
