@@ -9,37 +9,17 @@ using esc::MailboxError;
 using esc::MailboxReplySink;
 using esc::MailboxType;
 
-// Writes fixed fields into a reply payload. Every offset is checked against the buffer.
-class Reply {
+// Writes the fields of a reply payload into the sink's buffer; every write is bounds-checked.
+class Reply : public LeWriter<SpanSink> {
   public:
-    explicit Reply(Bytes b) : b_(b) {}
-    void u8(std::uint8_t v) {
-        if (n_ < b_.size()) b_[n_] = v;
-        ++n_;
-    }
-    void u16(std::uint16_t v) {
-        u8(static_cast<std::uint8_t>(v));
-        u8(static_cast<std::uint8_t>(v >> 8));
-    }
-    void u32(std::uint32_t v) {
-        u16(static_cast<std::uint16_t>(v));
-        u16(static_cast<std::uint16_t>(v >> 16));
-    }
-    void bytes(ConstBytes v) {
-        for (auto x : v)
-            u8(x);
-    }
-    void zeros(std::size_t k) {
-        for (std::size_t i = 0; i < k; ++i)
-            u8(0);
-    }
-    std::size_t size() const { return n_; }
-    bool fits() const { return n_ <= b_.size(); }
-    std::size_t room() const { return b_.size() > n_ ? b_.size() - n_ : 0; }
+    explicit Reply(Bytes b) : LeWriter<SpanSink>(sink_), sink_(b) {}
+    void zeros(std::size_t k) { fill(k, 0); }
+    std::size_t size() const { return sink_.size(); }
+    bool fits() const { return sink_.fits(); }
+    std::size_t room() const { return sink_.room(); }
 
   private:
-    Bytes b_;
-    std::size_t n_ = 0;
+    SpanSink sink_;
 };
 
 void mailbox_error(MailboxError e, MailboxReplySink& out) {

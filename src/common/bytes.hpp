@@ -97,4 +97,34 @@ class LeWriter {
     Container& out_;
 };
 
+// A byte sink over a fixed span for LeWriter: bytes past the end are counted but not written, so the
+// caller sees an overflow (size() > capacity()) instead of a write out of bounds.
+class SpanSink {
+  public:
+    struct End {};
+    explicit SpanSink(Bytes b) : b_(b) {}
+    void push_back(std::uint8_t v) {
+        if (n_ < b_.size()) b_[n_] = v;
+        ++n_;
+    }
+    End end() const { return {}; }
+    template <class It>
+    void insert(End, It first, It last) {
+        for (; first != last; ++first)
+            push_back(static_cast<std::uint8_t>(*first));
+    }
+    void insert(End, std::size_t count, std::uint8_t v) {
+        for (std::size_t i = 0; i < count; ++i)
+            push_back(v);
+    }
+    std::size_t size() const { return n_; }
+    std::size_t capacity() const { return b_.size(); }
+    bool fits() const { return n_ <= b_.size(); }
+    std::size_t room() const { return b_.size() > n_ ? b_.size() - n_ : 0; }
+
+  private:
+    Bytes b_;
+    std::size_t n_ = 0;
+};
+
 }  // namespace vecat
