@@ -1,0 +1,1 @@
+#include "cia402/mechanics.hpp"

@@ -1,0 +1,1 @@
+#include "cia402/profile_generator.hpp"

@@ -1,0 +1,1 @@
+#include "cia402/state_machine.hpp"
