@@ -1,1 +1,249 @@
 #include "cia402/state_machine.hpp"
+
+#include <array>
+
+namespace vecat::cia402 {
+
+const char* to_string(State s) noexcept {
+    switch (s) {
+        case State::NotReadyToSwitchOn:
+            return "NOT READY TO SWITCH ON";
+        case State::SwitchOnDisabled:
+            return "SWITCH ON DISABLED";
+        case State::ReadyToSwitchOn:
+            return "READY TO SWITCH ON";
+        case State::SwitchedOn:
+            return "SWITCHED ON";
+        case State::OperationEnabled:
+            return "OPERATION ENABLED";
+        case State::QuickStopActive:
+            return "QUICK STOP ACTIVE";
+        case State::FaultReactionActive:
+            return "FAULT REACTION ACTIVE";
+        case State::Fault:
+            return "FAULT";
+    }
+    return "?";
+}
+
+Command decode_command(std::uint16_t cw, std::uint16_t previous) noexcept {
+    if ((cw & 0x80) && !(previous & 0x80)) return Command::FaultReset;
+    if (!(cw & 0x02)) return Command::DisableVoltage;
+    if (!(cw & 0x04)) return Command::QuickStop;
+    if (!(cw & 0x01)) return Command::Shutdown;
+    return (cw & 0x08) ? Command::EnableOperation : Command::SwitchOn;
+}
+
+namespace {
+
+using S = State;
+using C = Command;
+using O = StopOption;
+
+constexpr std::array<TransitionRow, 14> kTable{{
+    {S::SwitchOnDisabled, C::Shutdown, S::ReadyToSwitchOn, 2, O::None},
+    {S::ReadyToSwitchOn, C::SwitchOn, S::SwitchedOn, 3, O::None},
+    // 0x000F in READY TO SWITCH ON: transition 3 and then 4 (CiA 402 allows the combined command).
+    {S::ReadyToSwitchOn, C::EnableOperation, S::OperationEnabled, 4, O::None},
+    {S::SwitchedOn, C::EnableOperation, S::OperationEnabled, 4, O::None},
+    {S::OperationEnabled, C::SwitchOn, S::SwitchedOn, 5, O::DisableOperation},
+    {S::SwitchedOn, C::Shutdown, S::ReadyToSwitchOn, 6, O::None},
+    {S::ReadyToSwitchOn, C::DisableVoltage, S::SwitchOnDisabled, 7, O::None},
+    {S::ReadyToSwitchOn, C::QuickStop, S::SwitchOnDisabled, 7, O::None},
+    {S::OperationEnabled, C::Shutdown, S::ReadyToSwitchOn, 8, O::Shutdown},
+    {S::OperationEnabled, C::DisableVoltage, S::SwitchOnDisabled, 9, O::None},
+    {S::SwitchedOn, C::DisableVoltage, S::SwitchOnDisabled, 10, O::None},
+    {S::SwitchedOn, C::QuickStop, S::SwitchOnDisabled, 10, O::None},
+    {S::OperationEnabled, C::QuickStop, S::QuickStopActive, 11, O::QuickStop},
+    {S::QuickStopActive, C::DisableVoltage, S::SwitchOnDisabled, 12, O::None},
+}};
+// Transition 16 (QUICK STOP ACTIVE -> OPERATION ENABLED) depends on the quick stop option code and
+// transition 15 (fault reset) on the fault being gone; update() handles both.
+
+const TransitionRow* find(State s, Command c) {
+    for (const auto& r : kTable)
+        if (r.from == s && r.command == c) return &r;
+    return nullptr;
+}
+
+}  // namespace
+
+std::span<const TransitionRow> transition_table() noexcept {
+    return kTable;
+}
+
+StopKind stop_for(StopOption which, const OptionCodes& oc) noexcept {
+    switch (which) {
+        case StopOption::None:
+            return StopKind::None;
+        case StopOption::Shutdown:
+            return oc.shutdown == 0 ? StopKind::Coast : StopKind::SlowDownRamp;
+        case StopOption::DisableOperation:
+            return oc.disable_operation == 0 ? StopKind::Coast : StopKind::SlowDownRamp;
+        case StopOption::QuickStop:
+            switch (oc.quick_stop) {
+                case 0:
+                    return StopKind::Coast;
+                case 1:
+                case 5:
+                    return StopKind::SlowDownRamp;
+                case 3:
+                case 7:
+                    return StopKind::CurrentLimit;
+                case 4:
+                case 8:
+                    return StopKind::VoltageLimit;
+                default:
+                    return StopKind::QuickStopRamp;
+            }
+        case StopOption::FaultReaction:
+            switch (oc.fault_reaction) {
+                case 0:
+                    return StopKind::Coast;
+                case 1:
+                    return StopKind::SlowDownRamp;
+                case 3:
+                    return StopKind::CurrentLimit;
+                case 4:
+                    return StopKind::VoltageLimit;
+                default:
+                    return StopKind::QuickStopRamp;
+            }
+    }
+    return StopKind::Coast;
+}
+
+void StateMachine::go(State to, std::uint8_t number) {
+    state_ = to;
+    last_transition_ = number;
+    ++transitions_;
+}
+
+void StateMachine::raise_fault(const OptionCodes& oc) {
+    if (state_ == State::Fault || state_ == State::FaultReactionActive) return;
+    const bool torque = drive_enabled();
+    go(State::FaultReactionActive, 13);
+    stop_ = torque ? stop_for(StopOption::FaultReaction, oc) : StopKind::Coast;
+    if (stop_ == StopKind::Coast) {
+        stop_ = StopKind::None;
+        go(State::Fault, 14);
+    }
+}
+
+void StateMachine::update(std::uint16_t cw, bool fault, bool at_rest, const OptionCodes& oc) {
+    const Command cmd = decode_command(cw, previous_);
+    previous_ = cw;
+
+    if (state_ == State::NotReadyToSwitchOn) go(State::SwitchOnDisabled, 1);  // self-test passed
+    if (fault) raise_fault(oc);
+
+    switch (state_) {
+        case State::FaultReactionActive:
+            if (at_rest || stop_ == StopKind::Coast) {
+                stop_ = StopKind::None;
+                go(State::Fault, 14);
+            }
+            return;
+        case State::Fault:
+            if (cmd == Command::FaultReset && !fault) go(State::SwitchOnDisabled, 15);
+            return;
+        case State::QuickStopActive:
+            if (cmd == Command::DisableVoltage) {
+                stop_ = StopKind::None;
+                go(State::SwitchOnDisabled, 12);
+                return;
+            }
+            // Option codes 5-8 stay in QUICK STOP ACTIVE; enable operation returns (transition 16).
+            if (oc.quick_stop >= 5 && cmd == Command::EnableOperation) {
+                stop_ = StopKind::None;
+                go(State::OperationEnabled, 16);
+                return;
+            }
+            if (oc.quick_stop < 5 && (at_rest || stop_ == StopKind::Coast)) {
+                stop_ = StopKind::None;
+                go(State::SwitchOnDisabled, 12);
+            }
+            return;
+        case State::OperationEnabled:
+            if (stop_ != StopKind::None) {
+                // A slow-down of transition 5 or 8 is in progress: enable operation cancels it, other
+                // commands take over; otherwise it ends when the axis is at rest.
+                if (cmd == Command::EnableOperation) {
+                    stop_ = StopKind::None;
+                    return;
+                }
+                if (cmd != Command::SwitchOn && cmd != Command::Shutdown) break;
+                if (const TransitionRow* r = find(state_, cmd)) {
+                    after_stop_ = r->to;  // the master may change its mind between 5 and 8
+                    after_stop_number_ = r->number;
+                }
+                if (at_rest) {
+                    stop_ = StopKind::None;
+                    go(after_stop_, after_stop_number_);
+                }
+                return;
+            }
+            break;
+        default:
+            break;
+    }
+
+    const TransitionRow* row = find(state_, cmd);
+    if (!row) return;
+    StopKind stop = stop_for(row->stop, oc);
+    stop_ = StopKind::None;
+    if (row->to == State::QuickStopActive) {
+        go(State::QuickStopActive, row->number);
+        stop_ = stop;
+        if (stop == StopKind::Coast) {
+            stop_ = StopKind::None;
+            go(State::SwitchOnDisabled, 12);
+        }
+        return;
+    }
+    if (stop != StopKind::None && stop != StopKind::Coast && !at_rest) {
+        // Transitions 5 and 8 with a slow-down: stay in OPERATION ENABLED until the axis stopped.
+        stop_ = stop;
+        after_stop_ = row->to;
+        after_stop_number_ = row->number;
+        return;
+    }
+    go(row->to, row->number);
+}
+
+bool StateMachine::drive_enabled() const {
+    switch (state_) {
+        case State::OperationEnabled:
+        case State::QuickStopActive:
+            return true;
+        case State::FaultReactionActive:
+            return stop_ != StopKind::Coast && stop_ != StopKind::None;
+        default:
+            return false;
+    }
+}
+
+std::uint16_t StateMachine::statusword_bits() const {
+    constexpr std::uint16_t kVoltageEnabled = 0x0010;
+    switch (state_) {
+        case State::NotReadyToSwitchOn:
+            return 0x0000;
+        case State::SwitchOnDisabled:
+            return 0x0040 | kVoltageEnabled;
+        case State::ReadyToSwitchOn:
+            return 0x0021 | kVoltageEnabled;
+        case State::SwitchedOn:
+            return 0x0023 | kVoltageEnabled;
+        case State::OperationEnabled:
+            return 0x0027 | kVoltageEnabled;
+        case State::QuickStopActive:
+            return 0x0007 | kVoltageEnabled;
+        case State::FaultReactionActive:
+            return 0x000F | kVoltageEnabled;
+        case State::Fault:
+            return 0x0028 | kVoltageEnabled;
+    }
+    return 0;
+}
+
+}  // namespace vecat::cia402
