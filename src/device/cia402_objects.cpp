@@ -46,7 +46,37 @@ std::vector<ObjectDescription> cia402_drive_objects() {
                              make_entry(2, "Rotor inertia (g cm2)", DT::Unsigned32, RW, 120),
                              make_entry(3, "Torque constant (mNm/A)", DT::Unsigned32, RW, 600),
                              make_entry(4, "Load inertia (g cm2)", DT::Unsigned32, RW, 240),
-                             make_entry(5, "Viscous friction (uNm s/rad)", DT::Unsigned32, RW, 50)}));
+                             make_entry(5, "Viscous friction (uNm s/rad)", DT::Unsigned32, RW, 50),
+                             make_entry(6, "Coulomb friction (mNm)", DT::Unsigned32, RW, 10),
+                             make_entry(7, "Peak current (mA)", DT::Unsigned32, RW, 9000)}));
+    // Gains of the cascaded loops; 0 = tuned from the motor parameters when the drive is enabled.
+    o.push_back(make_record(0x2003, "Control loop gains",
+                            {make_entry(1, "Position loop gain (0.01/s)", DT::Unsigned32, RW, 0),
+                             make_entry(2, "Velocity loop gain (uNm s/rad)", DT::Unsigned32, RW, 0),
+                             make_entry(3, "Velocity loop integral time (us)", DT::Unsigned32, RW, 0),
+                             make_entry(4, "Current loop bandwidth (rad/s)", DT::Unsigned32, RW, 0)}));
+    // The simulated machine around the motor: switches (in increments of the machine position, which
+    // homing does not move), the index pulse, an external load, the touch probe inputs.
+    {
+        auto r = make_record(0x2100, "Simulated machine",
+                             {make_entry(1, "Negative limit switch (inc)", DT::Integer32, RW, -(100ll << 20)),
+                              make_entry(2, "Positive limit switch (inc)", DT::Integer32, RW, 100ll << 20),
+                              make_entry(3, "Home switch (inc)", DT::Integer32, RW, 5ll << 20),
+                              make_entry(4, "Index pulse offset (inc)", DT::Integer32, RW, 0),
+                              make_entry(5, "Load torque (0.1 %)", DT::Integer16, RWM, 0),
+                              make_entry(6, "Touch probe inputs", DT::Unsigned8, RWM, 0),
+                              make_entry(7, "Limit switch reaction", DT::Unsigned8, RW, 0)});
+        set_range(r.entries[7], 0, 1);
+        o.push_back(r);
+    }
+    // Fault injection: the 0x603F code of a fault condition to simulate (0 = none).
+    o.push_back(var(0x2101, "Simulated fault", DT::Unsigned16, RWM, 0));
+    // TwinCAT NC PTP online changes as manufacturer functions of the profile modes.
+    o.push_back(ranged(0x2110, "Velocity override (ppm)", DT::Unsigned32, RWM, 1'000'000, 0, 1'000'000));
+    o.push_back(make_record(0x2111, "Position compensation",
+                            {make_entry(1, "Compensation distance", DT::Integer32, RW, 0),
+                             make_entry(2, "Compensation length", DT::Unsigned32, RW, 0),
+                             make_entry(3, "Start compensation", DT::Unsigned8, RW, 0)}));
     o.push_back(var(0x2001, "Drive temperature (0.1 C)", DT::Integer16, ROM, 350));
     o.push_back(var(0x2002, "DC bus voltage (0.1 V)", DT::Unsigned16, ROM, 3250));
     {
@@ -136,6 +166,7 @@ std::vector<ObjectDescription> cia402_drive_objects() {
         named_array(0x6099, "Homing speeds", DT::Unsigned32, RW,
                     {{"Speed during search for switch", 100000}, {"Speed during search for zero", 10000}}));
     o.push_back(var(0x609A, "Homing acceleration", DT::Unsigned32, RWM, 1'000'000));
+    o.push_back(named_array(0x60A4, "Profile jerk", DT::Unsigned32, RW, {{"Profile jerk 1", 1'000'000'000}}));
 
     // Cyclic modes: offsets, touch probe, interpolation period.
     o.push_back(var(0x60B0, "Position offset", DT::Integer32, RWM));
