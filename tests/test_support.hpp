@@ -16,11 +16,16 @@
 
 namespace vecat::test {
 
-// A line of n default drives (CoE application) behind an in-process link, with a master on the other end.
+using SegmentFactory = std::unique_ptr<esc::Segment> (*)(const device::DeviceDescription&, std::size_t,
+                                                         const esc::EscConfig&);
+
+// A line of n default devices behind an in-process link, with a master on the other end. By default each
+// slave is a CoE application without drive behaviour; the drive tests pass cia402::make_drive_segment.
 struct Bench {
     explicit Bench(std::size_t n = 1, esc::EscConfig cfg = {},
-                   device::DeviceDescription dev = device::default_drive())
-        : desc(std::move(dev)), seg(coe::make_coe_segment(desc, n, cfg)), link(*seg), master(link) {
+                   device::DeviceDescription dev = device::default_drive(),
+                   SegmentFactory make = &coe::make_coe_segment)
+        : desc(std::move(dev)), seg(make(desc, n, cfg)), link(*seg), master(link) {
         link.set_time(1'000'000'000);
     }
     esc::Slave& slave(std::size_t i = 0) { return seg->slave(i); }

@@ -1,1 +1,914 @@
 #include "cia402/drive.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "cia402/homing.hpp"
+
+namespace vecat::cia402 {
+
+bool supported(Mode m) noexcept {
+    switch (m) {
+        case Mode::ProfilePosition:
+        case Mode::ProfileVelocity:
+        case Mode::ProfileTorque:
+        case Mode::Homing:
+        case Mode::CyclicPosition:
+        case Mode::CyclicVelocity:
+        case Mode::CyclicTorque:
+            return true;
+        default:
+            return false;
+    }
+}
+
+bool fault::injectable(std::uint16_t code) noexcept {
+    return code == OverCurrent || code == Encoder || code == FollowingError || code == ReferenceLimit;
+}
+
+namespace {
+
+using coe::Entry;
+
+template <class T>
+T rd(const Entry* e, T fallback = T{}) {
+    return e ? e->get<T>() : fallback;
+}
+
+template <class T>
+void wr(Entry* e, T v) {
+    if (e) e->set(v);
+}
+
+std::int32_t wrap32(std::int64_t v) {
+    return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
+}
+
+std::int32_t sat32(double v) {
+    if (!(v == v)) return 0;
+    v = std::clamp(v, -2147483648.0, 2147483647.0);
+    return static_cast<std::int32_t>(std::lround(v));
+}
+
+std::int16_t sat16(double v) {
+    if (!(v == v)) return 0;
+    return static_cast<std::int16_t>(std::lround(std::clamp(v, -32768.0, 32767.0)));
+}
+
+constexpr std::uint16_t kNewSetpoint = 1u << 4;
+constexpr std::uint16_t kChangeImmediately = 1u << 5;
+constexpr std::uint16_t kRelative = 1u << 6;
+constexpr std::uint16_t kHalt = 1u << 8;
+constexpr std::uint16_t kChangeOnSetpoint = 1u << 9;
+constexpr std::uint16_t kHomingStart = 1u << 4;
+
+}  // namespace
+
+// The dictionary entries the drive reads and writes, looked up once. A missing object (a vendor ESI
+// without it) reads as its fallback and is not written.
+struct Drive::Objects {
+    explicit Objects(coe::ObjectDictionary& od) {
+        auto f = [&](std::uint16_t i, std::uint8_t s = 0) { return od.find(i, s); };
+        controlword = f(0x6040);
+        statusword = f(0x6041);
+        quick_stop_option = f(0x605A);
+        shutdown_option = f(0x605B);
+        disable_operation_option = f(0x605C);
+        halt_option = f(0x605D);
+        fault_reaction_option = f(0x605E);
+        modes = f(0x6060);
+        modes_display = f(0x6061);
+        position_demand = f(0x6062);
+        position_internal = f(0x6063);
+        position_actual = f(0x6064);
+        following_error_window = f(0x6065);
+        following_error_timeout = f(0x6066);
+        position_window = f(0x6067);
+        position_window_time = f(0x6068);
+        velocity_demand = f(0x606B);
+        velocity_actual = f(0x606C);
+        velocity_window = f(0x606D);
+        velocity_window_time = f(0x606E);
+        velocity_threshold = f(0x606F);
+        velocity_threshold_time = f(0x6070);
+        target_torque = f(0x6071);
+        max_torque = f(0x6072);
+        torque_demand = f(0x6074);
+        rated_current = f(0x6075);
+        rated_torque = f(0x6076);
+        torque_actual = f(0x6077);
+        current_actual = f(0x6078);
+        target_position = f(0x607A);
+        home_offset = f(0x607C);
+        software_limit_min = f(0x607D, 1);
+        software_limit_max = f(0x607D, 2);
+        max_profile_velocity = f(0x607F);
+        max_motor_speed = f(0x6080);
+        profile_velocity = f(0x6081);
+        profile_acceleration = f(0x6083);
+        profile_deceleration = f(0x6084);
+        quick_stop_deceleration = f(0x6085);
+        motion_profile_type = f(0x6086);
+        torque_slope = f(0x6087);
+        encoder_increments = f(0x608F, 1);
+        encoder_revolutions = f(0x608F, 2);
+        gear_motor = f(0x6091, 1);
+        gear_shaft = f(0x6091, 2);
+        feed = f(0x6092, 1);
+        feed_shaft = f(0x6092, 2);
+        homing_method = f(0x6098);
+        homing_speed_switch = f(0x6099, 1);
+        homing_speed_zero = f(0x6099, 2);
+        homing_acceleration = f(0x609A);
+        profile_jerk = f(0x60A4, 1);
+        position_offset = f(0x60B0);
+        velocity_offset = f(0x60B1);
+        torque_offset = f(0x60B2);
+        probe_function = f(0x60B8);
+        probe_status = f(0x60B9);
+        probe1_positive = f(0x60BA);
+        probe1_negative = f(0x60BB);
+        probe2_positive = f(0x60BC);
+        probe2_negative = f(0x60BD);
+        interpolation_value = f(0x60C2, 1);
+        interpolation_index = f(0x60C2, 2);
+        max_acceleration = f(0x60C5);
+        max_deceleration = f(0x60C6);
+        positive_torque_limit = f(0x60E0);
+        negative_torque_limit = f(0x60E1);
+        following_error_actual = f(0x60F4);
+        position_demand_internal = f(0x60FC);
+        digital_inputs = f(0x60FD);
+        target_velocity = f(0x60FF);
+        for (std::uint8_t s = 1; s <= 7; ++s)
+            motor[s] = f(0x2000, s);
+        temperature = f(0x2001);
+        bus_voltage = f(0x2002);
+        for (std::uint8_t s = 1; s <= 4; ++s)
+            gains[s] = f(0x2003, s);
+        for (std::uint8_t s = 1; s <= 7; ++s)
+            machine[s] = f(0x2100, s);
+        simulated_fault = f(0x2101);
+        velocity_override = f(0x2110);
+        compensation_distance = f(0x2111, 1);
+        compensation_length = f(0x2111, 2);
+        compensation_start = f(0x2111, 3);
+    }
+    Entry *controlword, *statusword, *quick_stop_option, *shutdown_option, *disable_operation_option,
+        *halt_option, *fault_reaction_option, *modes, *modes_display, *position_demand, *position_internal,
+        *position_actual, *following_error_window, *following_error_timeout, *position_window,
+        *position_window_time, *velocity_demand, *velocity_actual, *velocity_window, *velocity_window_time,
+        *velocity_threshold, *velocity_threshold_time, *target_torque, *max_torque, *torque_demand,
+        *rated_current, *rated_torque, *torque_actual, *current_actual, *target_position, *home_offset,
+        *software_limit_min, *software_limit_max, *max_profile_velocity, *max_motor_speed, *profile_velocity,
+        *profile_acceleration, *profile_deceleration, *quick_stop_deceleration, *motion_profile_type,
+        *torque_slope, *encoder_increments, *encoder_revolutions, *gear_motor, *gear_shaft, *feed,
+        *feed_shaft, *homing_method, *homing_speed_switch, *homing_speed_zero, *homing_acceleration,
+        *profile_jerk, *position_offset, *velocity_offset, *torque_offset, *probe_function, *probe_status,
+        *probe1_positive, *probe1_negative, *probe2_positive, *probe2_negative, *interpolation_value,
+        *interpolation_index, *max_acceleration, *max_deceleration, *positive_torque_limit,
+        *negative_torque_limit, *following_error_actual, *position_demand_internal, *digital_inputs,
+        *target_velocity, *temperature, *bus_voltage, *simulated_fault, *velocity_override,
+        *compensation_distance, *compensation_length, *compensation_start;
+    Entry* motor[8] = {};
+    Entry* gains[5] = {};
+    Entry* machine[8] = {};
+};
+
+namespace {
+
+MotorParameters motor_from(const Entry* const* m, const Entry* rated_current) {
+    MotorParameters p;
+    auto u = [&](int s, double scale, double fallback) {
+        const double v = m[s] ? static_cast<double>(m[s]->get<std::uint32_t>()) * scale : 0.0;
+        return v > 0 ? v : fallback;
+    };
+    p.rotor_inertia = u(2, 1e-7, p.rotor_inertia);
+    p.torque_constant = u(3, 1e-3, p.torque_constant);
+    p.load_inertia = m[4] ? static_cast<double>(m[4]->get<std::uint32_t>()) * 1e-7 : p.load_inertia;
+    p.viscous_friction = m[5] ? static_cast<double>(m[5]->get<std::uint32_t>()) * 1e-6 : p.viscous_friction;
+    p.coulomb_friction = m[6] ? static_cast<double>(m[6]->get<std::uint32_t>()) * 1e-3 : p.coulomb_friction;
+    p.peak_current = u(7, 1e-3, p.peak_current);
+    if (rated_current && rated_current->get<std::uint32_t>() > 0)
+        p.rated_current = rated_current->get<std::uint32_t>() * 1e-3;
+    return p;
+}
+
+}  // namespace
+
+Drive::Drive(const device::DeviceDescription& d)
+    : CoeApplication(d), o_(std::make_unique<Objects>(dictionary())) {
+    read_configuration();
+    const MotorParameters mp = motor_from(o_->motor, o_->rated_current);
+    mech_ = std::make_unique<Mechanics>(mp, ControlGains{});
+    inertia_ = mp.rotor_inertia + mp.load_inertia;
+    homing_ = std::make_unique<Homing>();
+    // Fault injection is refused for codes the drive does not simulate.
+    if (o_->simulated_fault)
+        o_->simulated_fault->on_download = [](const Entry&, ConstBytes v) {
+            const std::uint16_t code = v.size() >= 2 ? ld_le16(v.data()) : 0;
+            return (code == 0 || fault::injectable(code)) ? coe::SdoAbort::None : coe::SdoAbort::ValueRange;
+        };
+    if (o_->compensation_start)
+        o_->compensation_start->after_download = [this](Entry& e) {
+            if (e.get<std::uint8_t>() == 0) return;
+            e.set(std::uint8_t{0});
+            profile_.compensate(static_cast<double>(rd<std::int32_t>(o_->compensation_distance)),
+                                static_cast<double>(rd<std::uint32_t>(o_->compensation_length)));
+        };
+    update_inputs();
+    write_feedback();
+}
+
+Drive::~Drive() = default;
+
+void Drive::tick(std::uint64_t now_ns) {
+    advance(now_ns);
+}
+
+void Drive::cycle(std::uint64_t now_ns, bool) {
+    advance(now_ns);
+}
+
+void Drive::advance(std::uint64_t now_ns) {
+    if (!started_) {
+        started_ = true;
+        sim_ns_ = now_ns;
+        return;
+    }
+    if (now_ns <= sim_ns_) return;
+    // After a long pause (a debugger, a stopped master) the simulation skips ahead instead of running
+    // thousands of steps at once.
+    constexpr std::uint64_t kMaxCatchUp = 200'000'000;
+    if (now_ns - sim_ns_ > kMaxCatchUp) sim_ns_ = now_ns - kMaxCatchUp;
+    while (now_ns - sim_ns_ >= kServoPeriodNs) {
+        sim_ns_ += kServoPeriodNs;
+        servo_step();
+    }
+}
+
+void Drive::read_configuration() {
+    options_.quick_stop = rd<std::int16_t>(o_->quick_stop_option, 2);
+    options_.shutdown = rd<std::int16_t>(o_->shutdown_option, 0);
+    options_.disable_operation = rd<std::int16_t>(o_->disable_operation_option, 1);
+    options_.halt = rd<std::int16_t>(o_->halt_option, 1);
+    options_.fault_reaction = rd<std::int16_t>(o_->fault_reaction_option, 2);
+    FactorGroup f;
+    f.encoder_increments = rd<std::uint32_t>(o_->encoder_increments, f.encoder_increments);
+    f.motor_revolutions = rd<std::uint32_t>(o_->encoder_revolutions, 1);
+    f.gear_motor_revolutions = rd<std::uint32_t>(o_->gear_motor, 1);
+    f.gear_shaft_revolutions = rd<std::uint32_t>(o_->gear_shaft, 1);
+    f.feed = rd<std::uint32_t>(o_->feed, f.feed);
+    f.feed_shaft_revolutions = rd<std::uint32_t>(o_->feed_shaft, 1);
+    if (f.valid()) factors_ = f;
+}
+
+double Drive::nm_per_permille() const {
+    const double rated = static_cast<double>(rd<std::uint32_t>(o_->rated_torque, 1000)) * 1e-3;  // Nm
+    return rated / 1000.0;
+}
+
+double Drive::max_velocity() const {
+    double v = static_cast<double>(rd<std::uint32_t>(o_->max_profile_velocity, 0xFFFFFFFFu));
+    // Max motor speed 0x6080 (rpm) converted to user units/s.
+    const double rpm = static_cast<double>(rd<std::uint32_t>(o_->max_motor_speed, 0));
+    if (rpm > 0) v = std::min(v, factors_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi));
+    return std::max(v, 1.0);
+}
+
+ProfileLimits Drive::profile_limits() const {
+    ProfileLimits l;
+    l.velocity = std::min(static_cast<double>(rd<std::uint32_t>(o_->profile_velocity, 1)), max_velocity());
+    l.acceleration = static_cast<double>(rd<std::uint32_t>(o_->profile_acceleration, 1));
+    l.deceleration = static_cast<double>(rd<std::uint32_t>(o_->profile_deceleration, 1));
+    if (o_->max_acceleration && o_->max_acceleration->get<std::uint32_t>() > 0)
+        l.acceleration =
+            std::min(l.acceleration, static_cast<double>(o_->max_acceleration->get<std::uint32_t>()));
+    if (o_->max_deceleration && o_->max_deceleration->get<std::uint32_t>() > 0)
+        l.deceleration =
+            std::min(l.deceleration, static_cast<double>(o_->max_deceleration->get<std::uint32_t>()));
+    const std::int16_t type = rd<std::int16_t>(o_->motion_profile_type, 0);
+    l.jerk = type == 0 ? 0.0 : static_cast<double>(rd<std::uint32_t>(o_->profile_jerk, 0));
+    return l;
+}
+
+double Drive::interpolation_period() const {
+    const double value = rd<std::uint8_t>(o_->interpolation_value, 1);
+    const int index = rd<std::int8_t>(o_->interpolation_index, -3);
+    const double t = value * std::pow(10.0, index);
+    return t > 0 ? std::max(t, kServoPeriodNs * 1e-9) : 1e-3;
+}
+
+bool Drive::software_limits_enabled() const {
+    const auto lo = rd<std::int32_t>(o_->software_limit_min, std::numeric_limits<std::int32_t>::min());
+    const auto hi = rd<std::int32_t>(o_->software_limit_max, std::numeric_limits<std::int32_t>::max());
+    return lo < hi;
+}
+
+double Drive::clamp_to_software_limits(double p) const {
+    if (!software_limits_enabled()) return p;
+    const double lo = rd<std::int32_t>(o_->software_limit_min);
+    const double hi = rd<std::int32_t>(o_->software_limit_max);
+    return std::clamp(p, lo, hi);
+}
+
+void Drive::update_inputs() {
+    // Machine position in increments (homing does not move it).
+    const double inc =
+        mech_ ? mech_->position() / (2.0 * std::numbers::pi) * factors_.increments_per_revolution() : 0.0;
+    auto m = [&](int s, std::int32_t fallback) { return rd<std::int32_t>(o_->machine[s], fallback); };
+    negative_limit_ = inc <= m(1, std::numeric_limits<std::int32_t>::min());
+    positive_limit_ = inc >= m(2, std::numeric_limits<std::int32_t>::max());
+    home_switch_ = inc >= m(3, std::numeric_limits<std::int32_t>::max());
+    probe_inputs_ = rd<std::uint8_t>(o_->machine[6], 0);
+    std::uint32_t di = 0;
+    if (negative_limit_) di |= 1u << 0;
+    if (positive_limit_) di |= 1u << 1;
+    if (home_switch_) di |= 1u << 2;
+    if (probe_inputs_ & 1) di |= 1u << 16;  // manufacturer bits: touch probe inputs 1 and 2
+    if (probe_inputs_ & 2) di |= 1u << 17;
+    wr(o_->digital_inputs, di);
+}
+
+void Drive::enter_fault(std::uint16_t code, std::uint8_t bits) {
+    if (active_fault_ != 0) return;
+    active_fault_ = code;
+    raise_fault(code, bits);
+}
+
+void Drive::check_faults(double dt) {
+    const std::uint16_t injected = rd<std::uint16_t>(o_->simulated_fault, 0);
+    if (injected == fault::OverCurrent) enter_fault(fault::OverCurrent, coe::error_register::Current);
+    if (injected == fault::Encoder) enter_fault(fault::Encoder, coe::error_register::Manufacturer);
+    if (injected == fault::FollowingError)
+        enter_fault(fault::FollowingError, coe::error_register::DeviceProfile);
+    if (injected == fault::ReferenceLimit)
+        enter_fault(fault::ReferenceLimit, coe::error_register::DeviceProfile);
+
+    // Following error (position loop): window 0xFFFFFFFF switches the monitoring off.
+    const std::uint32_t window = rd<std::uint32_t>(o_->following_error_window, 0xFFFFFFFFu);
+    const double timeout = rd<std::uint16_t>(o_->following_error_timeout, 0) * 1e-3;
+    if (loop_ == LoopMode::Position && window != 0xFFFFFFFFu && std::abs(following_error_) > window) {
+        following_error_time_ += dt;
+        if (following_error_time_ > timeout)
+            enter_fault(fault::FollowingError, coe::error_register::DeviceProfile);
+    } else {
+        following_error_time_ = 0;
+    }
+    // Limit switch with reaction "fault".
+    if (rd<std::uint8_t>(o_->machine[7], 0) == 1 && sm_.drive_enabled() && mode_ != Mode::Homing &&
+        (negative_limit_ || positive_limit_))
+        enter_fault(fault::ReferenceLimit, coe::error_register::DeviceProfile);
+}
+
+void Drive::on_mode_change() {
+    // A new mode starts from where the axis is.
+    profile_.reset({actual_user_, velocity_user_, 0.0});
+    demand_ = {actual_user_, velocity_user_, 0.0};
+    pp_moving_ = false;
+    pending_target_.reset();
+    setpoint_ack_ = false;
+    csp_valid_ = false;
+    pv_running_ = false;
+    torque_cmd_ = 0;
+    homing_bits_ = 0;
+}
+
+void Drive::hold_disabled() {
+    // No torque: the demand follows the actual position, so enabling starts without a jump.
+    loop_ = LoopMode::Off;
+    demand_ = {actual_user_, velocity_user_, 0.0};
+    profile_.reset(demand_);
+    velocity_cmd_ = 0;
+    torque_cmd_ = 0;
+    torque_ff_ = 0;
+    pp_moving_ = false;
+    pending_target_.reset();
+    csp_valid_ = false;
+    pv_running_ = false;
+}
+
+void Drive::run_stop(StopKind k, double dt) {
+    if (k == StopKind::Coast) {
+        hold_disabled();
+        return;
+    }
+    if (k == StopKind::CurrentLimit || k == StopKind::VoltageLimit) {
+        // Brake at the torque limit: velocity loop with a zero set-point.
+        loop_ = LoopMode::Velocity;
+        velocity_cmd_ = 0;
+        torque_ff_ = 0;
+        demand_ = {actual_user_, 0.0, 0.0};
+        profile_.reset(demand_);
+        return;
+    }
+    const double dec =
+        static_cast<double>(k == StopKind::QuickStopRamp ? rd<std::uint32_t>(o_->quick_stop_deceleration, 1)
+                                                         : rd<std::uint32_t>(o_->profile_deceleration, 1));
+    if (stopping_ != k) {
+        // Starts from the current demand in position modes, from the actual motion otherwise.
+        if (loop_ != LoopMode::Position) profile_.reset({actual_user_, velocity_user_, 0.0});
+        profile_.stop(std::max(dec, 1.0), profile_limits().jerk);
+        stopping_ = k;
+    }
+    demand_ = profile_.step(dt);
+    loop_ = LoopMode::Position;
+    velocity_cmd_ = demand_.v;
+    torque_ff_ = 0;
+}
+
+void Drive::servo_step() {
+    const double dt = kServoPeriodNs * 1e-9;
+    ++steps_;
+    read_configuration();
+    controlword_ = rd<std::uint16_t>(o_->controlword, 0);
+    update_inputs();
+    check_faults(dt);
+
+    const State before = sm_.state();
+    const bool fault_present =
+        active_fault_ != 0 && (rd<std::uint16_t>(o_->simulated_fault, 0) != 0 || sm_.state() != State::Fault);
+    const bool at_rest =
+        std::abs(velocity_user_) <= std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0) &&
+        (loop_ != LoopMode::Position || profile_.done());
+    sm_.update(controlword_, fault_present, at_rest, options_);
+    const State now = sm_.state();
+    if (now != before) {
+        if (before == State::Fault && now == State::SwitchOnDisabled) {
+            active_fault_ = 0;
+            clear_faults();
+        }
+        if (now == State::OperationEnabled) on_mode_change();
+    }
+    if (sm_.stop() == StopKind::None) stopping_ = StopKind::None;
+
+    // Modes of operation: a supported mode takes effect at once; 0x6061 shows it.
+    const auto requested = static_cast<Mode>(rd<std::int8_t>(o_->modes, 0));
+    if (requested != mode_ && supported(requested)) {
+        mode_ = requested;
+        on_mode_change();
+    }
+
+    internal_limit_ = false;
+    if (!sm_.drive_enabled()) {
+        hold_disabled();
+    } else if (sm_.stop() != StopKind::None) {
+        run_stop(sm_.stop(), dt);
+    } else {
+        run_mode(dt);
+    }
+
+    // The loops and the mechanics.
+    const double torque_limit_pos = std::min(rd<std::uint16_t>(o_->max_torque, 3000),
+                                             rd<std::uint16_t>(o_->positive_torque_limit, 3000)) *
+                                    nm_per_permille();
+    const double torque_limit_neg = std::min(rd<std::uint16_t>(o_->max_torque, 3000),
+                                             rd<std::uint16_t>(o_->negative_torque_limit, 3000)) *
+                                    nm_per_permille();
+    mech_->set_torque_limits(torque_limit_pos, torque_limit_neg);
+    mech_->set_load_torque(rd<std::int16_t>(o_->machine[5], 0) * nm_per_permille());
+    const double inertia = inertia_;
+    switch (loop_) {
+        case LoopMode::Off:
+            mech_->command(LoopMode::Off, 0, 0, 0);
+            break;
+        case LoopMode::Position:
+            mech_->command(LoopMode::Position, user_to_rad(demand_.p), user_velocity_to_rad(demand_.v),
+                           inertia * user_velocity_to_rad(demand_.a) + torque_ff_ * nm_per_permille());
+            break;
+        case LoopMode::Velocity:
+            mech_->command(LoopMode::Velocity, 0, user_velocity_to_rad(velocity_cmd_),
+                           torque_ff_ * nm_per_permille());
+            break;
+        case LoopMode::Torque:
+            mech_->command(LoopMode::Torque, 0, 0, torque_cmd_ * nm_per_permille());
+            break;
+    }
+    const double previous_inc = previous_machine_inc_;
+    mech_->step(dt);
+    const double machine_inc =
+        mech_->position() / (2.0 * std::numbers::pi) * factors_.increments_per_revolution();
+    previous_machine_inc_ = machine_inc;
+    increments_ = static_cast<std::int64_t>(std::floor(machine_inc));
+    actual_user_ = static_cast<double>(factors_.increments_to_user(increments_)) + home_shift_;
+    velocity_user_ = factors_.radians_to_user(mech_->velocity());
+    if (loop_ != LoopMode::Position)
+        demand_ = {actual_user_, loop_ == LoopMode::Velocity ? velocity_cmd_ : velocity_user_, 0.0};
+    following_error_ = loop_ == LoopMode::Position ? demand_.p - actual_user_ : 0.0;
+
+    run_touch_probe(previous_inc, machine_inc);
+    write_feedback();
+    previous_controlword_ = controlword_;
+}
+
+void Drive::run_mode(double dt) {
+    halted_ = (controlword_ & kHalt) && mode_ != Mode::CyclicTorque && mode_ != Mode::ProfileTorque;
+    switch (mode_) {
+        case Mode::ProfilePosition:
+            run_profile_position(dt);
+            break;
+        case Mode::ProfileVelocity:
+            run_profile_velocity(dt);
+            break;
+        case Mode::ProfileTorque:
+            run_torque(dt, true);
+            break;
+        case Mode::Homing:
+            run_homing(dt);
+            break;
+        case Mode::CyclicPosition:
+            run_cyclic_position(dt);
+            break;
+        case Mode::CyclicVelocity:
+            run_cyclic_velocity(dt);
+            break;
+        case Mode::CyclicTorque:
+            run_torque(dt, false);
+            break;
+        default:
+            // No mode selected yet: hold the position.
+            loop_ = LoopMode::Position;
+            demand_.v = demand_.a = 0;
+            break;
+    }
+}
+
+StopKind Drive::halt_kind() const {
+    switch (options_.halt) {
+        case 2:
+            return StopKind::QuickStopRamp;
+        case 3:
+            return StopKind::CurrentLimit;
+        case 4:
+            return StopKind::VoltageLimit;
+        default:
+            return StopKind::SlowDownRamp;
+    }
+}
+
+bool Drive::blocked(double direction) const {
+    // A hardware limit switch blocks motion towards it (motion away from it is allowed).
+    return (direction > 0 && positive_limit_) || (direction < 0 && negative_limit_);
+}
+
+void Drive::start_move(double target) {
+    pp_target_ = target;
+    pp_moving_ = true;
+    profile_.move_to(target, profile_limits());
+}
+
+void Drive::run_profile_position(double dt) {
+    const bool edge = (controlword_ & kNewSetpoint) && !(previous_controlword_ & kNewSetpoint);
+    if (edge && !pending_target_) {
+        double target = static_cast<double>(rd<std::int32_t>(o_->target_position));
+        if (controlword_ & kRelative) target += pp_target_;
+        const double clamped = clamp_to_software_limits(target);
+        if (clamped != target) internal_limit_ = true;
+        setpoint_ack_ = true;
+        if (!blocked(clamped - actual_user_)) {
+            if (!pp_moving_ || (controlword_ & kChangeImmediately) || halted_)
+                start_move(clamped);
+            else
+                pending_target_ = clamped;  // set of set-points: executed after the current one
+        }
+    }
+    // Set-point acknowledge: cleared once the master took bit 4 back and the buffer is free again.
+    if (!(controlword_ & kNewSetpoint) && !pending_target_) setpoint_ack_ = false;
+
+    if (halted_) {
+        run_stop(halt_kind(), dt);
+        return;
+    }
+    if (stopping_ != StopKind::None) {
+        // Halt released: continue to the target.
+        stopping_ = StopKind::None;
+        if (pp_moving_) start_move(pp_target_);
+    }
+    if (pending_target_ && (controlword_ & kChangeOnSetpoint)) {
+        // Change on set-point: go on to the next target without stopping at this one.
+        start_move(*pending_target_);
+        pending_target_.reset();
+    }
+    // A hardware limit switch in the direction of travel stops the move.
+    if (pp_moving_ && blocked(demand_.v) && stopping_ == StopKind::None) {
+        profile_.stop(static_cast<double>(
+                          std::max<std::uint32_t>(rd<std::uint32_t>(o_->quick_stop_deceleration, 1), 1)),
+                      profile_limits().jerk);
+        pp_target_ = profile_.target();
+        pp_moving_ = false;
+        pending_target_.reset();
+    }
+    loop_ = LoopMode::Position;
+    torque_ff_ = 0;
+    demand_ = profile_.step(dt);
+    if (pp_moving_ && profile_.done()) {
+        pp_moving_ = false;
+        if (pending_target_) {
+            start_move(*pending_target_);
+            pending_target_.reset();
+        }
+    }
+    if (positive_limit_ || negative_limit_) internal_limit_ = true;
+    if (software_limits_enabled() && (actual_user_ <= rd<std::int32_t>(o_->software_limit_min) ||
+                                      actual_user_ >= rd<std::int32_t>(o_->software_limit_max)))
+        internal_limit_ = true;
+}
+
+void Drive::run_profile_velocity(double dt) {
+    double target = static_cast<double>(rd<std::int32_t>(o_->target_velocity));
+    target = std::clamp(target, -max_velocity(), max_velocity());
+    if (halted_) {
+        run_stop(halt_kind(), dt);
+        if (loop_ == LoopMode::Position) {
+            loop_ = LoopMode::Velocity;
+            velocity_cmd_ = demand_.v;
+        }
+        pv_running_ = false;
+        return;
+    }
+    if (blocked(target)) {
+        internal_limit_ = true;
+        target = 0;
+    }
+    if (stopping_ != StopKind::None || target != pv_target_ || !pv_running_) {
+        if (stopping_ != StopKind::None) profile_.reset({actual_user_, velocity_user_, 0.0});
+        stopping_ = StopKind::None;
+        ProfileLimits l = profile_limits();
+        profile_.run_at(target, l);
+        pv_target_ = target;
+        pv_running_ = true;
+    }
+    const Kinematics k = profile_.step(dt);
+    loop_ = LoopMode::Velocity;
+    velocity_cmd_ = k.v;
+    torque_ff_ = inertia_ * user_velocity_to_rad(k.a) / nm_per_permille();
+}
+
+void Drive::run_torque(double dt, bool profile) {
+    double target = rd<std::int16_t>(o_->target_torque, 0);
+    if (!profile) target += rd<std::int16_t>(o_->torque_offset, 0);
+    const double max = rd<std::uint16_t>(o_->max_torque, 3000);
+    target = std::clamp(target, -max, max);
+    if (blocked(target)) {
+        internal_limit_ = true;
+        target = 0;
+    }
+    if (profile) {
+        // Profile torque: the demand moves to the target at the torque slope (per mille per second).
+        const double slope = std::max<double>(rd<std::uint32_t>(o_->torque_slope, 0), 1.0);
+        const double step = slope * dt;
+        torque_cmd_ += std::clamp(target - torque_cmd_, -step, step);
+    } else {
+        torque_cmd_ = target;
+    }
+    loop_ = LoopMode::Torque;
+    // Speed limit: above the maximum motor speed the velocity loop takes over at that speed, with the
+    // torque demand as the limit.
+    const double vmax = max_velocity();
+    if (std::abs(velocity_user_) > vmax && torque_cmd_ * velocity_user_ > 0) {
+        loop_ = LoopMode::Velocity;
+        velocity_cmd_ = std::copysign(vmax, velocity_user_);
+        internal_limit_ = true;
+    }
+}
+
+void Drive::run_cyclic_position(double dt) {
+    const std::int32_t raw = rd<std::int32_t>(o_->target_position);
+    const double offset = rd<std::int32_t>(o_->position_offset);
+    if (!csp_valid_ || raw != csp_raw_) {
+        csp_from_ = csp_valid_ ? demand_.p : actual_user_;
+        csp_to_ = static_cast<double>(raw) + offset;
+        csp_raw_ = raw;
+        csp_since_ = 0;
+        csp_valid_ = true;
+    }
+    if (halted_) {
+        run_stop(halt_kind(), dt);
+        csp_valid_ = false;
+        return;
+    }
+    stopping_ = StopKind::None;
+    const double period = interpolation_period();
+    csp_since_ += dt;
+    const double frac = std::min(1.0, csp_since_ / period);
+    double p = csp_from_ + (csp_to_ - csp_from_) * frac;
+    double v = frac < 1.0 ? (csp_to_ - csp_from_) / period : 0.0;
+    const double limited = clamp_to_software_limits(p);
+    if (limited != p) {
+        internal_limit_ = true;
+        p = limited;
+        v = 0;
+    }
+    if (blocked(p - demand_.p)) {
+        internal_limit_ = true;
+        p = demand_.p;
+        v = 0;
+    }
+    cyclic_following_ = !internal_limit_;
+    const double a = (v - demand_.v) / dt;
+    demand_ = {p, v, std::abs(a) < 1e12 ? a : 0.0};
+    demand_.v += rd<std::int32_t>(o_->velocity_offset);
+    loop_ = LoopMode::Position;
+    torque_ff_ = rd<std::int16_t>(o_->torque_offset);
+}
+
+void Drive::run_cyclic_velocity(double dt) {
+    if (halted_) {
+        run_stop(halt_kind(), dt);
+        if (loop_ == LoopMode::Position) {
+            loop_ = LoopMode::Velocity;
+            velocity_cmd_ = demand_.v;
+        }
+        pv_running_ = false;
+        return;
+    }
+    stopping_ = StopKind::None;
+    double v =
+        static_cast<double>(rd<std::int32_t>(o_->target_velocity)) + rd<std::int32_t>(o_->velocity_offset);
+    v = std::clamp(v, -max_velocity(), max_velocity());
+    if (blocked(v)) {
+        internal_limit_ = true;
+        v = 0;
+    }
+    cyclic_following_ = !internal_limit_;
+    loop_ = LoopMode::Velocity;
+    velocity_cmd_ = v;
+    torque_ff_ = rd<std::int16_t>(o_->torque_offset);
+}
+
+void Drive::run_homing(double dt) {
+    // Filled in with the homing module (see homing.hpp).
+    (void)dt;
+    loop_ = LoopMode::Position;
+    demand_.v = demand_.a = 0;
+}
+
+void Drive::run_touch_probe(double previous_inc, double machine_inc) {
+    const std::uint16_t fn = rd<std::uint16_t>(o_->probe_function, 0);
+    Entry* values[2][2] = {{o_->probe1_positive, o_->probe1_negative},
+                           {o_->probe2_positive, o_->probe2_negative}};
+    for (int n = 0; n < 2; ++n) {
+        const unsigned shift = 8u * static_cast<unsigned>(n);
+        const std::uint16_t f = static_cast<std::uint16_t>(fn >> shift);
+        const std::uint16_t pf = static_cast<std::uint16_t>(previous_probe_function_ >> shift);
+        std::uint16_t st = static_cast<std::uint16_t>(probe_status_ >> shift) & 0xFF;
+        if (!(f & 0x01)) {
+            st = 0;  // disabled: status cleared
+        } else {
+            st |= 0x01;
+            // Arming: enabling the probe or an edge enable bit rising clears the stored flags.
+            if (!(pf & 0x01)) st = 0x01;
+            if ((f & 0x10) && !(pf & 0x10)) st &= static_cast<std::uint16_t>(~0x02);
+            if ((f & 0x20) && !(pf & 0x20)) st &= static_cast<std::uint16_t>(~0x04);
+            const bool continuous = f & 0x02;
+            const unsigned source = (f >> 2) & 0x03;  // 0: touch probe input, 1: zero impulse (index)
+            bool rise = false, fall = false;
+            double at_inc = machine_inc;
+            if (source == 0) {
+                const bool now = probe_inputs_ & (1u << n);
+                const bool before = previous_probe_inputs_ & (1u << n);
+                rise = now && !before;
+                fall = !now && before;
+            } else if (source == 1) {
+                // Index pulse once per motor revolution at the configured offset: the exact crossing.
+                const double period = factors_.increments_per_revolution();
+                const double offset = rd<std::int32_t>(o_->machine[4], 0);
+                const double lo = std::min(previous_inc, machine_inc),
+                             hi = std::max(previous_inc, machine_inc);
+                const double k = std::ceil((lo - offset) / period);
+                const double crossing = k * period + offset;
+                if (crossing <= hi && hi > lo && crossing > lo) {
+                    rise = fall = true;
+                    at_inc = crossing;
+                }
+            }
+            const double user = static_cast<double>(factors_.increments_to_user(
+                                    static_cast<std::int64_t>(std::floor(at_inc)))) +
+                                home_shift_;
+            const std::int32_t latched = wrap32(static_cast<std::int64_t>(std::floor(user)));
+            if (rise && (f & 0x10) && (continuous || !(st & 0x02))) {
+                wr(values[n][0], latched);
+                st |= 0x02;
+            }
+            if (fall && (f & 0x20) && (continuous || !(st & 0x04))) {
+                wr(values[n][1], latched);
+                st |= 0x04;
+            }
+        }
+        probe_status_ = static_cast<std::uint16_t>((probe_status_ & ~(0xFFu << shift)) | (st << shift));
+    }
+    previous_probe_function_ = fn;
+    previous_probe_inputs_ = probe_inputs_;
+    wr(o_->probe_status, probe_status_);
+}
+
+void Drive::write_feedback() {
+    std::uint16_t status = sm_.statusword_bits() | sw::Remote;
+    const State st = sm_.state();
+    const bool enabled = st == State::OperationEnabled && sm_.stop() == StopKind::None;
+    const double dt = kServoPeriodNs * 1e-9;
+
+    // Target reached (bit 10) and the mode-specific bits 12/13.
+    bool reached = false;
+    bool bit12 = false, bit13 = false;
+    const double threshold = std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0);
+    const bool standing = std::abs(velocity_user_) <= threshold;
+    speed_zero_time_ = standing ? speed_zero_time_ + dt : 0.0;
+    const std::uint32_t fe_window = rd<std::uint32_t>(o_->following_error_window, 0xFFFFFFFFu);
+    const bool fe_exceeded = fe_window != 0xFFFFFFFFu && std::abs(following_error_) > fe_window &&
+                             following_error_time_ > rd<std::uint16_t>(o_->following_error_timeout, 0) * 1e-3;
+    if (enabled) {
+        switch (mode_) {
+            case Mode::ProfilePosition: {
+                const bool in_window =
+                    std::abs(pp_target_ - actual_user_) <= rd<std::uint32_t>(o_->position_window, 0);
+                position_window_time_ =
+                    (in_window && !pp_moving_ && profile_.done()) ? position_window_time_ + dt : 0.0;
+                reached = halted_ ? (standing && profile_.done())
+                                  : !pp_moving_ && !pending_target_ &&
+                                        position_window_time_ >=
+                                            rd<std::uint16_t>(o_->position_window_time, 0) * 1e-3;
+                bit12 = setpoint_ack_;
+                bit13 = fe_exceeded;
+                break;
+            }
+            case Mode::ProfileVelocity: {
+                const double target = rd<std::int32_t>(o_->target_velocity);
+                const bool in_window =
+                    std::abs(target - velocity_user_) <= rd<std::uint16_t>(o_->velocity_window, 0);
+                velocity_window_time_ = in_window ? velocity_window_time_ + dt : 0.0;
+                reached =
+                    halted_ ? standing
+                            : velocity_window_time_ >= rd<std::uint16_t>(o_->velocity_window_time, 0) * 1e-3;
+                bit12 = speed_zero_time_ >= rd<std::uint16_t>(o_->velocity_threshold_time, 0) * 1e-3;
+                break;
+            }
+            case Mode::ProfileTorque:
+                reached = std::abs(torque_cmd_ - rd<std::int16_t>(o_->target_torque)) < 0.5;
+                break;
+            case Mode::Homing: {
+                const std::uint16_t hb = homing_bits_;
+                reached = hb & sw::TargetReached;
+                bit12 = hb & sw::Bit12;
+                bit13 = hb & sw::Bit13;
+                break;
+            }
+            case Mode::CyclicPosition:
+                reached = std::abs(csp_to_ - actual_user_) <= rd<std::uint32_t>(o_->position_window, 0);
+                bit12 = cyclic_following_ && !halted_;
+                bit13 = fe_exceeded;
+                break;
+            case Mode::CyclicVelocity:
+            case Mode::CyclicTorque:
+                bit12 = cyclic_following_ && !halted_;
+                break;
+            default:
+                break;
+        }
+    } else if (st == State::QuickStopActive) {
+        reached = standing;  // the quick stop has ended
+    }
+    if (mode_ == Mode::Homing && !enabled) {
+        reached = homing_bits_ & sw::TargetReached;
+        bit12 = homing_bits_ & sw::Bit12;
+        bit13 = homing_bits_ & sw::Bit13;
+    }
+    if (reached) status |= sw::TargetReached;
+    if (bit12) status |= sw::Bit12;
+    if (bit13) status |= sw::Bit13;
+    if (internal_limit_ || positive_limit_ || negative_limit_) status |= sw::InternalLimit;
+    if (positive_limit_ || negative_limit_ || (enabled && mech_->torque_limited())) status |= sw::Warning;
+    target_reached_ = reached;
+
+    wr(o_->statusword, status);
+    wr(o_->modes_display, static_cast<std::int8_t>(mode_));
+    wr(o_->position_demand, sat32(demand_.p));
+    wr(o_->position_demand_internal,
+       wrap32(factors_.user_to_increments(static_cast<std::int64_t>(std::llround(demand_.p - home_shift_)))));
+    wr(o_->position_internal, wrap32(increments_));
+    wr(o_->position_actual, wrap32(static_cast<std::int64_t>(std::floor(actual_user_))));
+    wr(o_->following_error_actual, sat32(following_error_));
+    wr(o_->velocity_demand, sat32(loop_ == LoopMode::Velocity ? velocity_cmd_ : demand_.v));
+    wr(o_->velocity_actual, sat32(velocity_user_));
+    const double per = nm_per_permille();
+    wr(o_->torque_demand, sat16(loop_ == LoopMode::Torque ? torque_cmd_ : mech_->torque() / per));
+    wr(o_->torque_actual, sat16(mech_->torque() / per));
+    const double rated_a = std::max<double>(rd<std::uint32_t>(o_->rated_current, 3000), 1.0) * 1e-3;
+    wr(o_->current_actual, sat16(mech_->current() / rated_a * 1000.0));
+    // Drive temperature: 35 C plus a rise with the square of the current.
+    const double i_rel = mech_->current() / rated_a;
+    temperature_ += (350.0 + 300.0 * i_rel * i_rel - temperature_) * dt / 60.0;
+    wr(o_->temperature, sat16(temperature_));
+}
+
+std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
+                                                 const esc::EscConfig& cfg) {
+    return esc::make_segment(d, n, cfg,
+                             [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
+                                 return std::make_unique<Drive>(dd);
+                             });
+}
+
+}  // namespace vecat::cia402

@@ -1,1 +1,187 @@
+// The CiA 402 drive: the application of a CoE slave (coe::CoeApplication) that acts on its dictionary.
+// Every servo period (250 us of simulated time) it reads the controlword and the set-points from the
+// dictionary, runs the device control state machine and the active operation mode, steps the simulated
+// mechanics, and writes statusword and actual values back. Time comes from the slave (frames, SYNC0 and
+// timer ticks); the simulation advances in fixed periods, so it is deterministic for a given cycle time.
 #pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+
+#include "cia402/factor_group.hpp"
+#include "cia402/mechanics.hpp"
+#include "cia402/profile_generator.hpp"
+#include "cia402/state_machine.hpp"
+#include "coe/coe_application.hpp"
+
+namespace vecat::cia402 {
+
+class Homing;
+
+// Modes of operation (0x6060/0x6061).
+enum class Mode : std::int8_t {
+    None = 0,
+    ProfilePosition = 1,
+    ProfileVelocity = 3,
+    ProfileTorque = 4,
+    Homing = 6,
+    CyclicPosition = 8,
+    CyclicVelocity = 9,
+    CyclicTorque = 10,
+};
+bool supported(Mode m) noexcept;
+
+// 0x603F error codes the drive raises (IEC 61800-7-201 / CiA 402 error code table).
+namespace fault {
+inline constexpr std::uint16_t OverCurrent = 0x2310;     // continuous over current
+inline constexpr std::uint16_t Encoder = 0x7305;         // incremental sensor 1 fault
+inline constexpr std::uint16_t FollowingError = 0x8611;  // following error
+inline constexpr std::uint16_t ReferenceLimit = 0x8612;  // reference limit (limit switch reached)
+bool injectable(std::uint16_t code) noexcept;
+}  // namespace fault
+
+// Statusword bits besides the state (CiA 402 6.3.3).
+namespace sw {
+inline constexpr std::uint16_t Warning = 1u << 7;
+inline constexpr std::uint16_t Remote = 1u << 9;
+inline constexpr std::uint16_t TargetReached = 1u << 10;
+inline constexpr std::uint16_t InternalLimit = 1u << 11;
+inline constexpr std::uint16_t Bit12 = 1u << 12;  // PP set-point acknowledge, PV speed zero, HM attained,
+                                                  // CSx drive follows the command value
+inline constexpr std::uint16_t Bit13 = 1u << 13;  // PP/CSP following error, HM homing error
+}  // namespace sw
+
+class Drive : public coe::CoeApplication {
+  public:
+    static constexpr std::uint64_t kServoPeriodNs = 250'000;
+
+    explicit Drive(const device::DeviceDescription& d);
+    ~Drive() override;
+
+    State cia402_state() const { return sm_.state(); }
+    Mode mode() const { return mode_; }
+    const Mechanics& mechanics() const { return *mech_; }
+    // Demand and actual values in user units (as in 0x6062/0x6064, without the 32-bit wrap).
+    double position_demand() const { return demand_.p; }
+    double position_actual() const { return actual_user_; }
+    double velocity_actual() const { return velocity_user_; }
+    std::uint64_t servo_steps() const { return steps_; }
+    std::uint64_t simulated_time_ns() const { return sim_ns_; }
+
+    // esc::Application
+    void tick(std::uint64_t now_ns) override;
+
+  protected:
+    void cycle(std::uint64_t now_ns, bool outputs_applied) override;
+
+  private:
+    struct Objects;
+    void advance(std::uint64_t now_ns);
+    void servo_step();
+    void read_configuration();
+    void update_inputs();
+    void run_mode(double dt);
+    void run_profile_position(double dt);
+    void run_profile_velocity(double dt);
+    void run_torque(double dt, bool profile);
+    void run_homing(double dt);
+    void run_cyclic_position(double dt);
+    void run_cyclic_velocity(double dt);
+    void run_stop(StopKind k, double dt);
+    void run_touch_probe(double previous_inc, double machine_inc);
+    StopKind halt_kind() const;
+    bool blocked(double direction) const;
+    void start_move(double target);
+    void hold_disabled();
+    void check_faults(double dt);
+    void enter_fault(std::uint16_t code, std::uint8_t register_bits);
+    void write_feedback();
+    void on_mode_change();
+    ProfileLimits profile_limits() const;
+    double max_velocity() const;
+    double interpolation_period() const;
+    double clamp_to_software_limits(double p) const;
+    bool software_limits_enabled() const;
+    double nm_per_permille() const;
+    double user_to_rad(double user) const { return factors_.user_to_radians(user - home_shift_); }
+    double rad_to_user(double rad) const { return factors_.radians_to_user(rad) + home_shift_; }
+    double user_velocity_to_rad(double v) const { return factors_.user_to_radians(v); }
+
+    std::unique_ptr<Objects> o_;
+    StateMachine sm_;
+    OptionCodes options_;
+    FactorGroup factors_;
+    std::unique_ptr<Mechanics> mech_;
+    ProfileGenerator profile_;
+    std::unique_ptr<Homing> homing_;
+    Mode mode_ = Mode::None;
+
+    std::uint64_t sim_ns_ = 0;
+    bool started_ = false;
+    std::uint64_t steps_ = 0;
+
+    // Set-points and the demand sent to the loops.
+    Kinematics demand_;  // position demand (user units)
+    LoopMode loop_ = LoopMode::Off;
+    double velocity_cmd_ = 0;  // user units/s (velocity modes)
+    double torque_cmd_ = 0;    // per mille of rated torque (torque modes)
+    double torque_ff_ = 0;     // per mille
+
+    // Actual values.
+    double actual_user_ = 0;
+    double velocity_user_ = 0;
+    double home_shift_ = 0;  // user position = machine position (converted) + home_shift_
+    std::int64_t increments_ = 0;
+    double inertia_ = 0;          // kg m^2, for the acceleration feed-forward
+    double temperature_ = 350.0;  // 0.1 C
+
+    // Controlword edges and profile position handshake.
+    std::uint16_t controlword_ = 0;
+    std::uint16_t previous_controlword_ = 0;
+    bool setpoint_ack_ = false;
+    std::optional<double> pending_target_;  // set of set-points: buffered next target
+    bool pp_moving_ = false;
+    double pp_target_ = 0;
+    bool halted_ = false;
+    StopKind stopping_ = StopKind::None;  // the stop ramp being executed
+    double pv_target_ = 0;
+    bool pv_running_ = false;
+    bool cyclic_following_ = false;
+    std::uint16_t homing_bits_ = 0;  // statusword bits 10, 12, 13 from the homing method
+
+    // Cyclic modes: interpolation between the last two set-points.
+    double csp_from_ = 0, csp_to_ = 0;
+    std::int32_t csp_raw_ = 0;
+    double csp_since_ = 0;  // s since the latest set-point arrived
+    bool csp_valid_ = false;
+    double csv_raw_ = 0;
+
+    // Windows and timers (s).
+    double following_error_ = 0;
+    double following_error_time_ = 0;
+    double position_window_time_ = 0;
+    double velocity_window_time_ = 0;
+    double speed_zero_time_ = 0;
+    bool target_reached_ = false;
+    bool internal_limit_ = false;
+    bool limit_blocks_positive_ = false;
+    bool limit_blocks_negative_ = false;
+
+    // Switches, index pulse and touch probe.
+    bool negative_limit_ = false, positive_limit_ = false, home_switch_ = false;
+    std::uint8_t probe_inputs_ = 0, previous_probe_inputs_ = 0;
+    double previous_machine_inc_ = 0;
+    std::uint16_t probe_function_ = 0, previous_probe_function_ = 0;
+    std::uint16_t probe_status_ = 0;
+
+    // Faults.
+    std::uint16_t active_fault_ = 0;
+    std::uint16_t previous_state_bits_ = 0;
+};
+
+// A segment of n drives.
+std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
+                                                 const esc::EscConfig& cfg = {});
+
+}  // namespace vecat::cia402

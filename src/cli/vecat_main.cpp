@@ -8,7 +8,7 @@
 #include <fstream>
 #include <thread>
 
-#include "coe/coe_application.hpp"
+#include "cia402/drive.hpp"
 #include "device/device_description.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
@@ -45,7 +45,7 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
         return 2;
     }
     auto dev = vecat::device::default_drive();
-    auto seg = vecat::coe::make_coe_segment(dev, slaves);
+    auto seg = vecat::cia402::make_drive_segment(dev, slaves);
     std::unique_ptr<vecat::net::RawSocket> sock;
     try {
         sock = std::make_unique<vecat::net::RawSocket>(iface);
@@ -81,7 +81,7 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     install_signals();
 
     auto dev = vecat::device::default_drive();
-    auto seg = vecat::coe::make_coe_segment(dev, slaves);
+    auto seg = vecat::cia402::make_drive_segment(dev, slaves);
     vecat::net::RawSocket slave_sock("vecat-s");
     vecat::net::RawSocket master_sock("vecat-m");
     vecat::net::PcapngWriter pcap(pcap_path, "vecat-s");

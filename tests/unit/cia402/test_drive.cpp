@@ -1,1 +1,462 @@
+// The CiA 402 drive behind its dictionary: state machine through the controlword, every operation mode
+// against the simulated mechanics, limits, faults, touch probe and the factor group. Most tests drive the
+// dictionary directly in PREOP (the drive runs on the slave's timer ticks, like a master using SDO); the
+// cyclic modes are also tested end to end through process data in OP.
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "cia402/drive.hpp"
+#include "master/coe_client.hpp"
+#include "test_support.hpp"
+
+namespace vecat::cia402 {
+namespace {
+
+constexpr std::uint64_t kMs = 1'000'000;
+
+struct DriveTest : ::testing::Test {
+    test::Bench b{1, {}, device::default_drive(), &make_drive_segment};
+    Drive& drive() { return dynamic_cast<Drive&>(b.slave(0).app()); }
+    coe::ObjectDictionary& od() { return b.od(0); }
+    coe::Entry& e(std::uint16_t i, std::uint8_t s = 0) {
+        coe::Entry* x = od().find(i, s);
+        EXPECT_NE(x, nullptr) << std::hex << i;
+        return *x;
+    }
+    template <class T>
+    void set(std::uint16_t i, T v, std::uint8_t s = 0) {
+        e(i, s).set(v);
+    }
+    std::uint16_t statusword() { return e(0x6041).get<std::uint16_t>(); }
+    std::int32_t position() { return e(0x6064).get<std::int32_t>(); }
+    std::int32_t velocity() { return e(0x606C).get<std::int32_t>(); }
+    void run_ms(double ms) { b.advance(static_cast<std::uint64_t>(ms * 1e6)); }
+    // Runs in 1 ms steps until pred holds; the time it took (ms) or -1 after limit_ms.
+    double run_until(const std::function<bool()>& pred, double limit_ms,
+                     const std::function<void()>& each = {}) {
+        for (int t = 0; t <= limit_ms; ++t) {
+            if (pred()) return t;
+            run_ms(1);
+            if (each) each();
+        }
+        return -1;
+    }
+    void SetUp() override {
+        std::string why;
+        ASSERT_TRUE(b.master.startup(esc::AlState::PreOp, &why)) << why;
+        run_ms(1);
+    }
+    void enable(Mode m) {
+        set<std::int8_t>(0x6060, static_cast<std::int8_t>(m));
+        set<std::uint16_t>(0x6040, 0x06);
+        run_ms(1);
+        set<std::uint16_t>(0x6040, 0x07);
+        run_ms(1);
+        set<std::uint16_t>(0x6040, 0x0F);
+        run_ms(1);
+        ASSERT_EQ(statusword() & 0x6F, 0x27) << std::hex << statusword();
+        ASSERT_EQ(e(0x6061).get<std::int8_t>(), static_cast<std::int8_t>(m));
+    }
+    // A profile position move with the bit 4 / bit 12 handshake; returns the time to target reached (ms).
+    double pp_move(std::int32_t target, std::uint16_t extra_bits = 0) {
+        set<std::int32_t>(0x607A, target);
+        set<std::uint16_t>(0x6040, static_cast<std::uint16_t>(0x1F | extra_bits));
+        const double ack = run_until([&] { return statusword() & sw::Bit12; }, 10);
+        EXPECT_GE(ack, 0) << "set-point not acknowledged";
+        set<std::uint16_t>(0x6040, static_cast<std::uint16_t>(0x0F | extra_bits));
+        run_ms(1);
+        EXPECT_FALSE(statusword() & sw::Bit12);
+        return run_until([&] { return statusword() & sw::TargetReached; }, 20000) + ack + 1;
+    }
+};
+
+TEST_F(DriveTest, EnableSequenceShowsEveryStateInTheStatusword) {
+    EXPECT_EQ(statusword(), 0x0250);  // switch on disabled, voltage enabled, remote
+    set<std::uint16_t>(0x6040, 0x06);
+    run_ms(1);
+    EXPECT_EQ(statusword() & 0x027F, 0x0231);
+    set<std::uint16_t>(0x6040, 0x07);
+    run_ms(1);
+    EXPECT_EQ(statusword() & 0x027F, 0x0233);
+    set<std::uint16_t>(0x6040, 0x0F);
+    run_ms(1);
+    EXPECT_EQ(statusword() & 0x027F, 0x0237);
+    EXPECT_EQ(drive().cia402_state(), State::OperationEnabled);
+    set<std::uint16_t>(0x6040, 0x00);
+    run_ms(1);
+    EXPECT_EQ(statusword() & 0x027F, 0x0250);
+}
+
+TEST_F(DriveTest, ModesOfOperationDisplayFollowsSupportedModesOnly) {
+    for (int mi : {1, 3, 4, 6, 8, 9, 10}) {
+        const auto m = static_cast<std::int8_t>(mi);
+        set<std::int8_t>(0x6060, m);
+        run_ms(1);
+        EXPECT_EQ(e(0x6061).get<std::int8_t>(), m);
+    }
+    set<std::int8_t>(0x6060, 7);  // interpolated position: not supported, display keeps the last mode
+    run_ms(1);
+    EXPECT_EQ(e(0x6061).get<std::int8_t>(), 10);
+    EXPECT_EQ(e(0x6502).get<std::uint32_t>(), 0x3ADu);
+}
+
+TEST_F(DriveTest, ProfilePositionTrapezoidTakesTheClosedFormTime) {
+    enable(Mode::ProfilePosition);
+    const std::int32_t start = position();
+    set<std::uint32_t>(0x6081, 500'000);
+    set<std::uint32_t>(0x6083, 5'000'000);
+    set<std::uint32_t>(0x6084, 5'000'000);
+    const std::int32_t target = start + 1'000'000;
+    // Watch the demand while moving: it never exceeds V.
+    double peak_demand = 0;
+    set<std::int32_t>(0x607A, target);
+    set<std::uint16_t>(0x6040, 0x1F);
+    run_ms(1);
+    ASSERT_TRUE(statusword() & sw::Bit12);
+    set<std::uint16_t>(0x6040, 0x0F);
+    const double t = run_until(
+        [&] { return statusword() & sw::TargetReached; }, 5000,
+        [&] { peak_demand = std::max(peak_demand, std::abs(e(0x606B).get<std::int32_t>() * 1.0)); });
+    ASSERT_GT(t, 0);
+    ProfileLimits l{500'000, 5'000'000, 5'000'000, 0};
+    const double expect_ms = ProfileGenerator::rest_to_rest_duration(1'000'000, l) * 1e3;
+    EXPECT_NEAR(expect_ms, 2100.0, 1.0);  // 0.1 s ramps + 2 s cruise: d/V + V/A
+    // Reached = profile done + position window for the window time (10 ms) + settling.
+    EXPECT_GE(t + 1, expect_ms);
+    EXPECT_LE(t, expect_ms + 40);
+    EXPECT_LE(peak_demand, 500'000 * 1.0001);
+    EXPECT_LE(std::abs(position() - target), 100);
+    EXPECT_LE(std::abs(e(0x60F4).get<std::int32_t>()), 100);
+}
+
+TEST_F(DriveTest, ProfilePositionJerkLimitedNeverExceedsTheLimits) {
+    enable(Mode::ProfilePosition);
+    set<std::int16_t>(0x6086, 3);
+    set<std::uint32_t>(0x60A4, 50'000'000, 1);
+    set<std::uint32_t>(0x6081, 400'000);
+    set<std::uint32_t>(0x6083, 4'000'000);
+    set<std::uint32_t>(0x6084, 2'000'000);
+    const std::int32_t start = position();
+    std::vector<double> v;
+    set<std::int32_t>(0x607A, start + 600'000);
+    set<std::uint16_t>(0x6040, 0x1F);
+    run_ms(1);
+    set<std::uint16_t>(0x6040, 0x0F);
+    const double t = run_until([&] { return statusword() & sw::TargetReached; }, 5000,
+                               [&] { v.push_back(e(0x606B).get<std::int32_t>()); });
+    ASSERT_GT(t, 0);
+    ProfileLimits l{400'000, 4'000'000, 2'000'000, 50'000'000};
+    const double expect_ms = ProfileGenerator::rest_to_rest_duration(600'000, l) * 1e3;
+    EXPECT_GE(t + 1, expect_ms);
+    EXPECT_LE(t, expect_ms + 40);
+    for (std::size_t i = 1; i < v.size(); ++i) {
+        EXPECT_LE(v[i], 400'000 * 1.0001);
+        // Velocity demand sampled every ms: acceleration within A+ / A- (+1 count rounding per sample).
+        EXPECT_LE(v[i] - v[i - 1], 4'000'000 * 1e-3 + 2) << i;
+        EXPECT_GE(v[i] - v[i - 1], -2'000'000 * 1e-3 - 2) << i;
+    }
+    EXPECT_LE(std::abs(position() - (start + 600'000)), 100);
+}
+
+TEST_F(DriveTest, ProfilePositionRelativeAndSetOfSetPoints) {
+    enable(Mode::ProfilePosition);
+    set<std::uint32_t>(0x6081, 1'000'000);
+    const std::int32_t start = position();
+    ASSERT_GT(pp_move(start + 200'000), 0);
+    // Relative (bit 6): 0x607A is added to the previous target.
+    ASSERT_GT(pp_move(50'000, 0x40), 0);
+    EXPECT_NEAR(position(), start + 250'000, 100);
+    // Set of set-points (bit 5 = 0): a second set-point during a move is buffered; bit 12 stays set
+    // until the buffer is free again.
+    set<std::int32_t>(0x607A, start + 1'250'000);
+    set<std::uint16_t>(0x6040, 0x1F);
+    run_ms(2);
+    set<std::uint16_t>(0x6040, 0x0F);
+    run_ms(100);
+    EXPECT_FALSE(statusword() & sw::Bit12);
+    set<std::int32_t>(0x607A, start);
+    set<std::uint16_t>(0x6040, 0x1F);
+    run_ms(2);
+    set<std::uint16_t>(0x6040, 0x0F);
+    run_ms(2);
+    EXPECT_TRUE(statusword() & sw::Bit12) << "buffered set-point keeps the acknowledge";
+    // The first target is reached before the axis returns.
+    double furthest = 0;
+    const double t =
+        run_until([&] { return (statusword() & sw::TargetReached) && !(statusword() & sw::Bit12); }, 10000,
+                  [&] { furthest = std::max(furthest, drive().position_actual() - start); });
+    ASSERT_GT(t, 0);
+    EXPECT_NEAR(furthest, 1'250'000, 200);
+    EXPECT_NEAR(position(), start, 100);
+}
+
+TEST_F(DriveTest, ProfilePositionChangeImmediately) {
+    enable(Mode::ProfilePosition);
+    set<std::uint32_t>(0x6081, 1'000'000);
+    const std::int32_t start = position();
+    set<std::int32_t>(0x607A, start + 2'000'000);
+    set<std::uint16_t>(0x6040, 0x3F);
+    run_ms(2);
+    set<std::uint16_t>(0x6040, 0x2F);
+    run_ms(300);
+    // New target behind: with bit 5 the axis turns around at once.
+    set<std::int32_t>(0x607A, start + 100'000);
+    set<std::uint16_t>(0x6040, 0x3F);
+    run_ms(2);
+    set<std::uint16_t>(0x6040, 0x2F);
+    double furthest = 0;
+    ASSERT_GT(run_until([&] { return statusword() & sw::TargetReached; }, 10000,
+                        [&] { furthest = std::max(furthest, drive().position_actual() - start); }),
+              0);
+    EXPECT_LT(furthest, 1'000'000);
+    EXPECT_NEAR(position(), start + 100'000, 100);
+}
+
+TEST_F(DriveTest, ProfileVelocityReachesTheTargetAndHaltShowsSpeedZero) {
+    enable(Mode::ProfileVelocity);
+    set<std::uint32_t>(0x6083, 2'000'000);
+    set<std::uint32_t>(0x6084, 2'000'000);
+    set<std::int32_t>(0x60FF, 300'000);
+    const double t = run_until([&] { return statusword() & sw::TargetReached; }, 2000);
+    // 0.15 s ramp, then the velocity window time (10 ms).
+    EXPECT_GT(t, 140);
+    EXPECT_LT(t, 220);
+    EXPECT_NEAR(velocity(), 300'000, 1000);
+    EXPECT_FALSE(statusword() & sw::Bit12);  // speed is not zero
+    set<std::uint16_t>(0x6040, 0x10F);       // halt
+    const double stop = run_until([&] { return statusword() & sw::Bit12; }, 2000);
+    EXPECT_GT(stop, 140);
+    EXPECT_LT(stop, 230);
+    EXPECT_TRUE(statusword() & sw::TargetReached);
+    EXPECT_LT(std::abs(velocity()), 20);
+}
+
+TEST_F(DriveTest, ProfileTorqueRampsWithTheSlopeAndAcceleratesTheInertia) {
+    enable(Mode::ProfileTorque);
+    set<std::uint32_t>(0x6087, 1000);  // per mille per second
+    set<std::int16_t>(0x6071, 100);    // 10 % of 1.27 Nm
+    run_ms(50);
+    const double half = e(0x6074).get<std::int16_t>();
+    EXPECT_NEAR(half, 50, 2);
+    EXPECT_FALSE(statusword() & sw::TargetReached);
+    run_ms(60);
+    EXPECT_TRUE(statusword() & sw::TargetReached);
+    // Constant 0.127 Nm on 3.6e-5 kg m^2 (minus friction 0.01 Nm): a = 3250 rad/s^2.
+    const double v0 = drive().mechanics().velocity();
+    run_ms(10);
+    const double a = (drive().mechanics().velocity() - v0) / 0.01;
+    EXPECT_NEAR(a, (0.127 - 0.01 - 5e-5 * drive().mechanics().velocity()) / 3.6e-5, 150);
+}
+
+TEST_F(DriveTest, QuickStopDeceleratesWithTheQuickStopRampAndDisables) {
+    enable(Mode::ProfileVelocity);
+    set<std::uint32_t>(0x6083, 10'000'000);
+    set<std::int32_t>(0x60FF, 500'000);
+    run_ms(200);
+    ASSERT_NEAR(velocity(), 500'000, 2000);
+    set<std::uint32_t>(0x6085, 5'000'000);
+    set<std::uint16_t>(0x6040, 0x0B);  // quick stop
+    run_ms(1);
+    EXPECT_EQ(statusword() & 0x6F, 0x07);  // quick stop active
+    const double t = run_until([&] { return (statusword() & 0x4F) == 0x40; }, 2000);
+    EXPECT_GT(t, 90);  // 500000 / 5e6 = 100 ms
+    EXPECT_LT(t, 130);
+    EXPECT_EQ(drive().cia402_state(), State::SwitchOnDisabled);
+}
+
+TEST_F(DriveTest, SoftwareLimitStopsTheMoveAndSetsInternalLimit) {
+    enable(Mode::ProfilePosition);
+    const std::int32_t start = position();
+    set<std::int32_t>(0x607D, start - 100'000, 1);
+    set<std::int32_t>(0x607D, start + 300'000, 2);
+    set<std::uint32_t>(0x6081, 1'000'000);
+    ASSERT_GT(pp_move(start + 2'000'000), 0);
+    EXPECT_NEAR(position(), start + 300'000, 100);
+    EXPECT_TRUE(statusword() & sw::InternalLimit);
+    // Opposite direction accepted.
+    ASSERT_GT(pp_move(start), 0);
+    EXPECT_NEAR(position(), start, 100);
+    EXPECT_FALSE(statusword() & sw::InternalLimit);
+}
+
+TEST_F(DriveTest, HardwareLimitSwitchBlocksItsDirectionOnly) {
+    const std::int32_t start = position();
+    set<std::int32_t>(0x2100, start + 200'000, 2);  // positive limit switch (increments = user units here)
+    enable(Mode::ProfileVelocity);
+    set<std::uint32_t>(0x6083, 5'000'000);
+    set<std::uint32_t>(0x6085, 20'000'000);
+    set<std::int32_t>(0x60FF, 400'000);
+    ASSERT_GT(run_until([&] { return e(0x60FD).get<std::uint32_t>() & 2; }, 3000), 0);
+    run_ms(100);
+    EXPECT_LT(std::abs(velocity()), 50);
+    EXPECT_TRUE(statusword() & sw::InternalLimit);
+    EXPECT_LT(position(), start + 200'000 + 10'000);  // 400000^2 / (2 * 2e7) = 4000 past the switch
+    set<std::int32_t>(0x60FF, -400'000);
+    ASSERT_GT(run_until([&] { return !(e(0x60FD).get<std::uint32_t>() & 2); }, 3000), 0);
+    run_ms(20);
+    EXPECT_LT(velocity(), -100'000);
+    EXPECT_FALSE(statusword() & sw::InternalLimit);
+}
+
+TEST_F(DriveTest, FollowingErrorFaultsWith8611AndAnEmergency) {
+    enable(Mode::CyclicPosition);
+    set<std::uint32_t>(0x6065, 10'000);
+    set<std::uint16_t>(0x6066, 5);
+    set<std::uint16_t>(0x6072, 50);  // weak motor: it cannot follow a big step
+    set<std::int32_t>(0x607A, position() + 5'000'000);
+    ASSERT_GT(run_until([&] { return drive().cia402_state() == State::Fault; }, 500), 0);
+    EXPECT_EQ(e(0x603F).get<std::uint16_t>(), fault::FollowingError);
+    EXPECT_TRUE(e(0x1001).get<std::uint8_t>() & coe::error_register::DeviceProfile);
+    EXPECT_EQ(statusword() & 0x4F, 0x08);
+    master::CoeClient c(b.master, 0x1001);
+    c.upload(0x1000, 0);
+    bool seen = false;
+    for (const auto& em : c.emergencies())
+        seen |= em.error_code == fault::FollowingError;
+    EXPECT_TRUE(seen);
+}
+
+TEST_F(DriveTest, InjectedFaultNeedsTheCauseGoneBeforeReset) {
+    enable(Mode::ProfileVelocity);
+    master::CoeClient c(b.master, 0x1001);
+    EXPECT_EQ(c.download_value<std::uint16_t>(0x2101, 0, 0x1234).abort, coe::SdoAbort::ValueRange);
+    ASSERT_EQ(c.download_value<std::uint16_t>(0x2101, 0, fault::Encoder).abort, coe::SdoAbort::None);
+    run_ms(2);
+    EXPECT_EQ(drive().cia402_state(), State::Fault);
+    EXPECT_EQ(e(0x603F).get<std::uint16_t>(), fault::Encoder);
+    set<std::uint16_t>(0x6040, 0x80);
+    run_ms(2);
+    EXPECT_EQ(drive().cia402_state(), State::Fault) << "reset refused while the encoder is broken";
+    set<std::uint16_t>(0x6040, 0x00);
+    ASSERT_EQ(c.download_value<std::uint16_t>(0x2101, 0, 0).abort, coe::SdoAbort::None);
+    run_ms(1);
+    set<std::uint16_t>(0x6040, 0x80);
+    run_ms(2);
+    EXPECT_EQ(drive().cia402_state(), State::SwitchOnDisabled);
+    EXPECT_EQ(e(0x603F).get<std::uint16_t>(), 0);
+    EXPECT_EQ(e(0x1001).get<std::uint8_t>(), 0);
+    c.upload(0x1000, 0);
+    ASSERT_FALSE(c.emergencies().empty());
+    EXPECT_EQ(c.emergencies().back().error_code, 0x0000);
+}
+
+TEST_F(DriveTest, TouchProbeLatchesTheIndexPulseExactly) {
+    enable(Mode::ProfileVelocity);
+    // TP1 enabled, single, trigger on the zero impulse, positive edge.
+    set<std::uint16_t>(0x60B8, 0x0015);
+    set<std::int32_t>(0x60FF, 200'000);
+    const std::int32_t start = position();
+    ASSERT_GT(run_until([&] { return e(0x60B9).get<std::uint16_t>() & 0x02; }, 6000), 0);
+    const std::int32_t latched = e(0x60BA).get<std::int32_t>();
+    // The index comes once per revolution (2^20 increments, 1:1 user units).
+    EXPECT_EQ(latched % (1 << 20), 0) << latched;
+    EXPECT_GT(latched, start);
+    EXPECT_LE(latched, start + (1 << 20));
+    EXPECT_EQ(e(0x60B9).get<std::uint16_t>() & 0x07, 0x03);
+    // Single mode: the next index does not overwrite it.
+    run_ms(6000);
+    EXPECT_EQ(e(0x60BA).get<std::int32_t>(), latched);
+}
+
+TEST_F(DriveTest, TouchProbeOnTheDigitalInput) {
+    enable(Mode::ProfileVelocity);
+    set<std::uint16_t>(0x60B8, 0x0033);  // TP1 enabled, continuous, input, both edges
+    set<std::int32_t>(0x60FF, 100'000);
+    run_ms(300);
+    set<std::uint8_t>(0x2100, 1, 6);
+    run_ms(1);
+    const std::int32_t rise = e(0x60BA).get<std::int32_t>();
+    EXPECT_NEAR(rise, position(), 200);
+    EXPECT_TRUE(e(0x60FD).get<std::uint32_t>() & (1u << 16));
+    run_ms(100);
+    set<std::uint8_t>(0x2100, 0, 6);
+    run_ms(1);
+    EXPECT_NEAR(e(0x60BB).get<std::int32_t>() - rise, 10'000, 300);  // 100 ms at 100000/s
+    EXPECT_EQ(e(0x60B9).get<std::uint16_t>() & 0x07, 0x07);
+}
+
+TEST_F(DriveTest, FactorGroupConvertsUserUnitsExactly) {
+    // 1 user unit = 1 um with a 5 mm feed per revolution: 2^20 increments per 5000 units.
+    set<std::uint32_t>(0x6092, 5000, 1);
+    run_ms(1);
+    enable(Mode::ProfilePosition);
+    const std::int32_t start = position();
+    set<std::uint32_t>(0x6081, 10'000);
+    set<std::uint32_t>(0x6083, 100'000);
+    set<std::uint32_t>(0x6084, 100'000);
+    set<std::uint32_t>(0x6067, 1);
+    ASSERT_GT(pp_move(start + 5000), 0);
+    // 5000 user units = one revolution of the motor = 2^20 increments.
+    EXPECT_NEAR(e(0x6063).get<std::int32_t>() - static_cast<std::int64_t>(start) * (1 << 20) / 5000, 1 << 20,
+                210);
+    EXPECT_EQ(position(), start + 5000);
+    EXPECT_NEAR(drive().mechanics().position() / (2 * 3.14159265358979), (start + 5000) / 5000.0, 1e-4);
+}
+
+// End to end: the cyclic modes through process data in OP, as a master runs them.
+struct DriveCyclic : DriveTest {
+    void SetUp() override {
+        std::string why;
+        ASSERT_TRUE(b.master.startup(esc::AlState::Op, &why)) << why;
+    }
+    Bytes out() { return b.master.outputs(0); }
+    ConstBytes in() { return b.master.inputs(0); }
+    void cycle(std::uint16_t cw, std::int8_t mode, std::int32_t pos, std::int32_t vel = 0,
+               std::int16_t torque = 0) {
+        auto o = out();
+        st_le16(o.data(), cw);
+        o[2] = static_cast<std::uint8_t>(mode);
+        st_le32(o.data() + 4, static_cast<std::uint32_t>(pos));
+        st_le32(o.data() + 8, static_cast<std::uint32_t>(vel));
+        st_le16(o.data() + 12, static_cast<std::uint16_t>(torque));
+        ASSERT_EQ(b.master.exchange_process_data().value_or(0), b.master.expected_wkc());
+        b.advance(kMs);
+    }
+    std::uint16_t sw_in() { return ld_le16(in().data()); }
+    std::int32_t pos_in() { return static_cast<std::int32_t>(ld_le32(in().data() + 4)); }
+    std::int32_t vel_in() { return static_cast<std::int32_t>(ld_le32(in().data() + 8)); }
+};
+
+TEST_F(DriveCyclic, CyclicSynchronousPositionFollowsASineWithSmallFollowingError) {
+    cycle(0, 8, 0);
+    const std::int32_t p0 = pos_in();
+    for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
+        for (int i = 0; i < 3; ++i)
+            cycle(cw, 8, p0);
+    ASSERT_EQ(sw_in() & 0x6F, 0x27);
+    EXPECT_TRUE(sw_in() & sw::Bit12);
+    double worst = 0;
+    const double amp = 500'000, w = 2 * 3.14159265358979;  // 1 Hz, peak 3.1e6 units/s
+    for (int k = 0; k < 2000; ++k) {
+        const double t = k * 1e-3;
+        cycle(0x0F, 8, p0 + static_cast<std::int32_t>(std::lround(amp * std::sin(w * t))));
+        if (k > 10)
+            worst = std::max(
+                worst, std::abs(static_cast<double>(static_cast<std::int32_t>(ld_le32(in().data() + 14)))));
+    }
+    // One interpolation period of lag at most: peak velocity * 1 ms.
+    EXPECT_LT(worst, amp * w * 1e-3);
+    EXPECT_GT(worst, 0);
+    EXPECT_FALSE(sw_in() & sw::Bit13);
+}
+
+TEST_F(DriveCyclic, CyclicSynchronousVelocityAndTorque) {
+    cycle(0, 9, 0);
+    for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
+        for (int i = 0; i < 3; ++i)
+            cycle(cw, 9, 0, 0);
+    for (int k = 0; k < 300; ++k)
+        cycle(0x0F, 9, 0, 250'000);
+    EXPECT_NEAR(vel_in(), 250'000, 2500);
+    // CST: a negative torque brakes the axis.
+    const std::int32_t v = vel_in();
+    for (int k = 0; k < 20; ++k)
+        cycle(0x0F, 10, 0, 0, -200);
+    EXPECT_LT(vel_in(), v - 50'000);
+    EXPECT_NEAR(static_cast<std::int16_t>(ld_le16(in().data() + 12)), -200, 5);
+}
+
+}  // namespace
+}  // namespace vecat::cia402
