@@ -1,1 +1,315 @@
 #include "cia402/mechanics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace vecat::cia402 {
+
+namespace {
+
+constexpr double two_pi = 2.0 * std::numbers::pi;
+
+// g1(x) = (1 - exp(-x)) / x and g2(x) = (x - 1 + exp(-x)) / x^2 for x >= 0, given m = expm1(-x); series
+// where the closed forms cancel.
+double g1(double x, double m) {
+    if (x < 1e-5) return 1.0 - x * (0.5 - x / 6.0);
+    return -m / x;
+}
+double g2(double x, double m) {
+    if (x < 1e-2) return 0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x / 720.0)));
+    return (x + m) / (x * x);
+}
+
+double sign(double v) {
+    return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
+}
+
+}  // namespace
+
+Mechanics::Mechanics(const MotorParameters& m, const ControlGains& g) : motor_(m), gains_(g) {
+    limit_pos_ = std::numeric_limits<double>::infinity();
+    limit_neg_ = std::numeric_limits<double>::infinity();
+    derive();
+}
+
+ControlGains Mechanics::tuned_for(const MotorParameters& m, double velocity_bandwidth) {
+    ControlGains g;
+    const double wv = velocity_bandwidth;
+    g.velocity_kp = (m.rotor_inertia + m.load_inertia) * wv;
+    g.velocity_ti = 4.0 / wv;
+    g.position_kp = wv / 4.0;
+    g.current_bandwidth = 2000.0;
+    return g;
+}
+
+unsigned Mechanics::substeps(double dt) {
+    if (!(dt > 0.0)) return 1;
+    // The small relative margin keeps exact multiples (1 ms / 62.5 us) from rounding up to one more.
+    const double n = std::ceil(dt / max_substep * (1.0 - 1e-12));
+    return static_cast<unsigned>(std::clamp(n, 1.0, 1e9));
+}
+
+void Mechanics::derive() {
+    inertia_ = motor_.rotor_inertia + motor_.load_inertia;
+    a_ = std::max(motor_.viscous_friction, 0.0) / inertia_;
+    c_ = gains_.current_bandwidth > 0.0 ? gains_.current_bandwidth : 0.0;
+    peak_torque_ = std::abs(motor_.peak_current * motor_.torque_constant);
+    rad_per_count_ = std::ldexp(two_pi, -static_cast<int>(motor_.encoder_bits));
+    cached_dt_ = -1.0;
+}
+
+void Mechanics::set_gains(const ControlGains& g) {
+    gains_ = g;
+    derive();
+}
+
+void Mechanics::command(LoopMode mode, double position, double velocity_ff, double torque_ff) {
+    mode_ = mode;
+    position_cmd_ = position;
+    velocity_ff_ = velocity_ff;
+    torque_ff_ = torque_ff;
+    if (mode != LoopMode::Position && mode != LoopMode::Velocity) integral_ = 0.0;
+    if (mode == LoopMode::Off) {
+        current_cmd_ = 0.0;
+        x_.i = 0.0;
+        limited_ = false;
+    }
+}
+
+void Mechanics::set_torque_limits(double positive, double negative) {
+    if (!std::isnan(positive)) limit_pos_ = std::abs(positive);
+    if (!std::isnan(negative)) limit_neg_ = std::abs(negative);
+}
+
+void Mechanics::set_load_torque(double nm) {
+    load_ = nm;
+}
+
+double Mechanics::position() const {
+    return x_.p;
+}
+double Mechanics::velocity() const {
+    return x_.w;
+}
+double Mechanics::current() const {
+    return x_.i;
+}
+double Mechanics::torque() const {
+    return motor_.torque_constant * x_.i;
+}
+bool Mechanics::torque_limited() const {
+    return limited_;
+}
+
+std::int64_t Mechanics::count_of(double p) const {
+    // floor(p / 2 pi * 2^bits); the scaling by 2^bits is exact. Saturates instead of overflowing.
+    const double v = std::floor(std::ldexp(p / two_pi, static_cast<int>(motor_.encoder_bits)));
+    if (std::isnan(v)) return 0;
+    if (v >= 9.2e18) return std::numeric_limits<std::int64_t>::max();
+    if (v <= -9.2e18) return std::numeric_limits<std::int64_t>::min();
+    return static_cast<std::int64_t>(v);
+}
+
+std::int64_t Mechanics::encoder() const {
+    return encoder_fault_ ? frozen_count_ : count_of(x_.p);
+}
+
+void Mechanics::set_position(double rad) {
+    x_.p = rad;
+    last_count_ = encoder();
+}
+
+void Mechanics::reset() {
+    x_ = {0.0, 0.0, 0.0};
+    mode_ = LoopMode::Off;
+    position_cmd_ = velocity_ff_ = torque_ff_ = 0.0;
+    current_cmd_ = integral_ = 0.0;
+    limited_ = false;
+    encoder_fault_ = false;
+    overcurrent_injected_ = false;
+    i2t_ = 0.0;
+    last_count_ = count_of(0.0);
+    last_h_ = 0.0;
+}
+
+void Mechanics::inject_encoder_fault(bool on) {
+    if (on && !encoder_fault_) frozen_count_ = count_of(x_.p);
+    if (!on && encoder_fault_) last_count_ = count_of(x_.p);  // no velocity spike when it comes back
+    encoder_fault_ = on;
+}
+
+void Mechanics::inject_overcurrent(bool on) {
+    overcurrent_injected_ = on;
+}
+
+bool Mechanics::overcurrent() const {
+    return overcurrent_injected_ || i2t_ >= 1.0;
+}
+
+Mechanics::Span Mechanics::span(double tau) const {
+    Span s{};
+    const double xa = a_ * tau;
+    const double ma = std::expm1(-xa);
+    s.ea = 1.0 + ma;
+    s.p1 = tau * g1(xa, ma);
+    s.p2 = tau * tau * g2(xa, ma);
+    if (c_ > 0.0) {
+        const double xc = c_ * tau;
+        const double mc = std::expm1(-xc);
+        s.ec = 1.0 + mc;
+        s.q1 = g1(xc, mc);
+        s.q2 = 2.0 * g2(xc, mc);
+    }
+    return s;
+}
+
+// Motion with the friction of direction dir over the span. The current i(s) = i* + (i0 - i*) exp(-c s);
+// its torque enters the velocity through its mean (q1) and the position through its ramp-weighted mean
+// (q2), which is exact without viscous friction and off by O(a tau) of the current transient with it.
+Mechanics::State Mechanics::moving(const State& x, const Span& k, double dir) const {
+    const double kt = motor_.torque_constant;
+    const double di = x.i - current_cmd_;
+    const double base = (kt * current_cmd_ - load_ - motor_.coulomb_friction * dir) / inertia_;
+    const double g = kt * di / inertia_;
+    return {x.p + x.w * k.p1 + (base + g * k.q2) * k.p2, x.w * k.ea + (base + g * k.q1) * k.p1,
+            current_cmd_ + di * k.ec};
+}
+
+Mechanics::State Mechanics::stuck(const State& x, const Span& k) const {
+    return {x.p, 0.0, current_cmd_ + (x.i - current_cmd_) * k.ec};
+}
+
+// First time in (0, left] at which the velocity of a motion in direction dir reaches zero, knowing that it
+// has at left. Newton on w(t) (its derivative is the equation of motion), kept inside a bisection bracket.
+double Mechanics::crossing_time(const State& x, double dir, double left) const {
+    const double kt = motor_.torque_constant;
+    double lo = 0.0, hi = left;
+    const double f0 = dir * x.w;
+    const double fl = dir * moving(x, span(left), dir).w;
+    double t = f0 > 0.0 && f0 - fl > 0.0 ? left * f0 / (f0 - fl) : 0.5 * left;
+    for (int it = 0; it < 60; ++it) {
+        const State s = moving(x, span(t), dir);
+        const double f = dir * s.w;
+        const double fp = dir * (-a_ * s.w + (kt * s.i - load_ - motor_.coulomb_friction * dir) / inertia_);
+        if (f > 0.0)
+            lo = t;
+        else
+            hi = t;
+        double next = fp != 0.0 ? t - f / fp : 0.5 * (lo + hi);
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        const bool done = std::abs(next - t) <= 1e-13 * left || hi - lo <= 1e-13 * left;
+        t = next;
+        if (done) break;
+    }
+    return std::clamp(t, 0.0, left);
+}
+
+void Mechanics::control(double h) {
+    const std::int64_t count = encoder();
+    double w_enc = 0.0;
+    if (last_h_ > 0.0) w_enc = static_cast<double>(count - last_count_) * rad_per_count_ / last_h_;
+    last_count_ = count;
+    last_h_ = h;
+
+    if (mode_ == LoopMode::Off) {
+        current_cmd_ = 0.0;
+        x_.i = 0.0;
+        integral_ = 0.0;
+        limited_ = false;
+        return;
+    }
+    const double hi = std::min(limit_pos_, peak_torque_);
+    const double lo = std::min(limit_neg_, peak_torque_);
+    double t = torque_ff_;
+    if (mode_ == LoopMode::Torque) {
+        integral_ = 0.0;
+    } else {
+        double v = velocity_ff_;
+        if (mode_ == LoopMode::Position)
+            v += gains_.position_kp * (position_cmd_ - static_cast<double>(count) * rad_per_count_);
+        const double e = v - w_enc;
+        const double p = gains_.velocity_kp * e;
+        double integral = integral_;
+        if (gains_.velocity_ti > 0.0) integral += gains_.velocity_kp * h / gains_.velocity_ti * e;
+        const double u = p + integral + torque_ff_;
+        // Conditional integration: the integrator does not grow further into a saturated output.
+        const bool windup = (u > hi && e > 0.0) || (u < -lo && e < 0.0);
+        if (!windup) integral_ = integral;
+        t = p + integral_ + torque_ff_;
+    }
+    limited_ = t > hi || t < -lo;
+    t = std::clamp(t, -lo, hi);
+    current_cmd_ = t / motor_.torque_constant;
+    if (c_ <= 0.0) x_.i = current_cmd_;
+}
+
+void Mechanics::integrate(double h) {
+    const double kt = motor_.torque_constant;
+    const double tc = std::abs(motor_.coulomb_friction);
+    double left = h;
+    bool whole = true;    // left == h: the cached span applies
+    double forced = 0.0;  // direction of a break-away located inside this substep
+    for (int event = 0; event < 8 && left > 0.0; ++event) {
+        const Span k = whole ? full_ : span(left);
+        double dir = x_.w != 0.0 ? sign(x_.w) : forced;
+        if (dir == 0.0) {
+            // At rest: stick while the driving torque stays within the Coulomb friction.
+            const double t0 = kt * x_.i - load_;
+            if (std::abs(t0) > tc) {
+                dir = sign(t0);
+            } else {
+                const State end = stuck(x_, k);
+                const double t1 = kt * end.i - load_;
+                if (std::abs(t1) <= tc) {
+                    x_ = end;
+                    return;
+                }
+                // The current (monotonic in between) breaks away at tb, where kt i(tb) - load = tc dir.
+                dir = sign(t1);
+                const double ratio = ((load_ + tc * dir) / kt - current_cmd_) / (x_.i - current_cmd_);
+                double tb = 0.0;
+                if (ratio > 0.0 && ratio < 1.0 && c_ > 0.0) tb = std::min(left, -std::log(ratio) / c_);
+                x_ = stuck(x_, span(tb));
+                left -= tb;
+                whole = false;
+                forced = dir;
+                continue;
+            }
+        }
+        const State end = moving(x_, k, dir);
+        if (dir * end.w > 0.0) {
+            x_ = end;
+            return;
+        }
+        // The velocity reaches zero inside the interval: stop there, then decide stick or slip again.
+        const double tz = crossing_time(x_, dir, left);
+        x_ = moving(x_, span(tz), dir);
+        x_.w = 0.0;
+        left -= tz;
+        whole = false;
+        forced = 0.0;
+    }
+    if (left > 0.0) x_ = stuck(x_, span(left));  // event budget exhausted (degenerate): rest
+}
+
+void Mechanics::step(double dt) {
+    if (!(dt > 0.0) || !std::isfinite(dt)) return;
+    if (dt != cached_dt_) {
+        n_ = substeps(dt);
+        h_ = dt / n_;
+        full_ = span(h_);
+        cached_dt_ = dt;
+    }
+    const double ir2 = motor_.rated_current * motor_.rated_current;
+    const double den = (motor_.peak_current * motor_.peak_current - ir2) * motor_.peak_time;
+    for (unsigned k = 0; k < n_; ++k) {
+        control(h_);
+        const double i0 = x_.i;
+        integrate(h_);
+        if (den > 0.0) i2t_ = std::max(0.0, i2t_ + (0.5 * (i0 * i0 + x_.i * x_.i) - ir2) * h_ / den);
+    }
+}
+
+}  // namespace vecat::cia402
