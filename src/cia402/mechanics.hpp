@@ -100,14 +100,15 @@ class Mechanics {
         double w;  // rad/s
         double i;  // A
     };
-    // Closed-form coefficients for an interval tau.
+    // Closed-form coefficients for an interval tau: w(tau) = w0 ea + A p1 + D r1 and
+    // p(tau) = p0 + w0 p1 + A p2 + D r2 for w' = -a w + A + D exp(-c s) (a = B/J, c = current bandwidth).
     struct Span {
-        double ea;  // exp(-a tau), a = B / J
+        double ea;  // exp(-a tau)
         double p1;  // int_0^tau exp(-a s) ds
-        double p2;  // int_0^tau int_0^s exp(-a r) dr ds
-        double ec;  // exp(-c tau), c = current bandwidth (0 when ideal)
-        double q1;  // mean of exp(-c s) over [0, tau]
-        double q2;  // 2/tau^2 int_0^tau (tau - s) exp(-c s) ds
+        double p2;  // int_0^tau p1(s) ds
+        double ec;  // exp(-c tau) (0 when the current loop is ideal)
+        double r1;  // int_0^tau exp(-a (tau - s)) exp(-c s) ds
+        double r2;  // int_0^tau r1(s) ds
     };
     Span span(double tau) const;
     State moving(const State& x, const Span& k, double dir) const;
