@@ -444,6 +444,57 @@ TEST(MechanicsPositionLoop, DefaultGainsAreTheTunedGains) {
     EXPECT_LT(peak, 120.0);
 }
 
+// Amplifier off with a load above the friction (an unbraked vertical axis): it falls at (TL - Tc)/J.
+TEST(MechanicsFriction, OffWithALoadAboveFrictionFalls) {
+    MotorParameters mp = frictionless();
+    mp.coulomb_friction = 0.01;
+    Mechanics f(mp);
+    f.set_load_torque(0.05);
+    f.command(LoopMode::Off, 0, 0, 0);
+    run(f, 1e-3, 100);
+    EXPECT_NEAR(f.velocity(), -0.04 / kJ * 0.1, 1e-9 * 0.04 / kJ);
+    EXPECT_NEAR(f.position(), -0.04 / kJ * 0.01 / 2, 1e-9 * 0.04 / kJ);
+}
+
+// Each mode uses only its own set-points.
+TEST(MechanicsVelocityLoop, ModesBypassTheOuterLoops) {
+    Mechanics v;
+    v.command(LoopMode::Velocity, 1000.0, 0.0, 0.0);  // the position is not a set-point here
+    run(v, 1e-3, 100);
+    EXPECT_EQ(v.position(), 0.0);
+    EXPECT_EQ(v.torque(), 0.0);
+    Mechanics t(frictionless(), ideal_current());
+    t.command(LoopMode::Torque, 1000.0, 500.0, 0.036);  // only the torque counts: 1000 rad/s^2
+    run(t, 1e-3, 100);
+    EXPECT_NEAR(t.velocity(), 100.0, 1e-9);
+    // Leaving velocity mode clears the integrator: with a load of 0.5 Nm it holds ~0.515 Nm; after a
+    // spell in torque mode (holding the speed with 0.515 Nm) the velocity loop restarts from P alone.
+    Mechanics r(MotorParameters{}, ideal_current());
+    r.set_load_torque(0.5);
+    r.command(LoopMode::Velocity, 0, 100.0, 0);
+    run(r, 1e-3, 300);
+    ASSERT_NEAR(r.torque(), 0.515, 0.01);
+    r.command(LoopMode::Torque, 0, 0, 0.515);
+    run(r, 1e-3, 10);
+    ASSERT_NEAR(r.velocity(), 100.0, 0.1);
+    r.command(LoopMode::Velocity, 0, 100.0, 0);
+    r.step(62.5e-6);
+    EXPECT_LT(std::abs(r.torque()), 0.01);  // kp * (velocity error within 0.5 rad/s)
+    run(r, 1e-3, 300);
+    EXPECT_NEAR(r.torque(), 0.515, 0.01);  // rebuilt
+}
+
+TEST(MechanicsVelocityLoop, GainsApplyAtOnce) {
+    Mechanics m(frictionless());
+    ControlGains g = m.gains();
+    g.current_bandwidth = 500;  // tau = 2 ms
+    m.set_gains(g);
+    EXPECT_EQ(m.gains().current_bandwidth, 500);
+    m.command(LoopMode::Torque, 0, 0, 0.6);  // 1 A
+    run(m, 1e-3, 2);
+    EXPECT_NEAR(m.current(), 1 - std::exp(-1.0), 1e-12);
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Mechanics: encoder
 
