@@ -58,15 +58,17 @@ class Mechanics {
     // Set-points for the loops; feed-forwards are added to the loop outputs. Held constant during the next
     // step (zero-order hold). Leaving Position/Velocity mode clears the velocity integrator.
     void command(LoopMode mode, double position, double velocity_ff, double torque_ff);
-    void set_torque_limits(double positive, double negative);  // Nm, magnitudes
-    void set_load_torque(double nm);                           // external load
-    void step(double dt);                                      // s
-    double position() const;                                   // rad, true mechanical position (multi-turn)
-    std::int64_t encoder() const;                              // increments, quantised
-    double velocity() const;                                   // rad/s
-    double torque() const;                                     // Nm (electromagnetic)
-    double current() const;                                    // A
-    bool torque_limited() const;  // the last torque command was clamped (by a limit or the peak current)
+    // Nm, magnitudes (NaN: unchanged). Initially none but peak_current * Kt, which always applies.
+    void set_torque_limits(double positive, double negative);
+    // External load, Nm, subtracted from the motor torque (positive: pulls towards negative positions).
+    void set_load_torque(double nm);
+    void step(double dt);          // s
+    double position() const;       // rad, true mechanical position (multi-turn)
+    std::int64_t encoder() const;  // increments, quantised
+    double velocity() const;       // rad/s
+    double torque() const;         // Nm (electromagnetic)
+    double current() const;        // A
+    bool torque_limited() const;   // the last torque command was clamped (by a limit or the peak current)
 
     // Gains take effect at the next substep (the integrator keeps its value).
     void set_gains(const ControlGains& g);
