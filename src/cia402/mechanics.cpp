@@ -11,15 +11,19 @@ namespace {
 
 constexpr double two_pi = 2.0 * std::numbers::pi;
 
-// g1(x) = (1 - exp(-x)) / x and g2(x) = (x - 1 + exp(-x)) / x^2 for x >= 0, given m = expm1(-x); series
-// where the closed forms cancel.
+// For x >= 0 (g1: any x), given m = expm1(-x), with series where the closed forms cancel:
+// g1(x) = (1 - exp(-x)) / x, g2(x) = (x - 1 + exp(-x)) / x^2, h2(x) = (1 - exp(-x) (1 + x)) / x^2.
 double g1(double x, double m) {
-    if (x < 1e-5) return 1.0 - x * (0.5 - x / 6.0);
+    if (std::abs(x) < 1e-5) return 1.0 - x * (0.5 - x / 6.0);
     return -m / x;
 }
 double g2(double x, double m) {
     if (x < 1e-2) return 0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x / 720.0)));
     return (x + m) / (x * x);
+}
+double h2(double x, double m) {
+    if (x < 1e-2) return 0.5 - x * (1.0 / 3.0 - x * (1.0 / 8.0 - x * (1.0 / 30.0 - x / 144.0)));
+    return (-m - x * (1.0 + m)) / (x * x);
 }
 
 double sign(double v) {
@@ -159,21 +163,28 @@ Mechanics::Span Mechanics::span(double tau) const {
         const double xc = c_ * tau;
         const double mc = std::expm1(-xc);
         s.ec = 1.0 + mc;
-        s.q1 = g1(xc, mc);
-        s.q2 = 2.0 * g2(xc, mc);
+        // r1 = exp(-a tau) int_0^tau exp(-(c - a) s) ds; r2 = (p1(a) - p1(c)) / (c - a), which for c close
+        // to a is replaced by its value at the mean rate (error of order ((c - a) tau)^2 < 1e-6).
+        const double xd = xc - xa;
+        s.r1 = s.ea * tau * g1(xd, std::expm1(-xd));
+        if (std::abs(xd) >= 1e-3) {
+            s.r2 = tau * tau * (g1(xa, ma) - g1(xc, mc)) / xd;
+        } else {
+            const double xm = 0.5 * (xa + xc);
+            s.r2 = tau * tau * h2(xm, std::expm1(-xm));
+        }
     }
     return s;
 }
 
-// Motion with the friction of direction dir over the span. The current i(s) = i* + (i0 - i*) exp(-c s);
-// its torque enters the velocity through its mean (q1) and the position through its ramp-weighted mean
-// (q2), which is exact without viscous friction and off by O(a tau) of the current transient with it.
+// Motion with the friction of direction dir over the span, the current moving from i0 to its command
+// through the first-order lag: i(s) = i* + (i0 - i*) exp(-c s). Exact.
 Mechanics::State Mechanics::moving(const State& x, const Span& k, double dir) const {
     const double kt = motor_.torque_constant;
     const double di = x.i - current_cmd_;
-    const double base = (kt * current_cmd_ - load_ - motor_.coulomb_friction * dir) / inertia_;
-    const double g = kt * di / inertia_;
-    return {x.p + x.w * k.p1 + (base + g * k.q2) * k.p2, x.w * k.ea + (base + g * k.q1) * k.p1,
+    const double A = (kt * current_cmd_ - load_ - motor_.coulomb_friction * dir) / inertia_;
+    const double D = kt * di / inertia_;
+    return {x.p + x.w * k.p1 + A * k.p2 + D * k.r2, x.w * k.ea + A * k.p1 + D * k.r1,
             current_cmd_ + di * k.ec};
 }
 
@@ -223,6 +234,7 @@ void Mechanics::control(double h) {
     const double hi = std::min(limit_pos_, peak_torque_);
     const double lo = std::min(limit_neg_, peak_torque_);
     double t = torque_ff_;
+    bool saturated = false;
     if (mode_ == LoopMode::Torque) {
         integral_ = 0.0;
     } else {
@@ -234,12 +246,17 @@ void Mechanics::control(double h) {
         double integral = integral_;
         if (gains_.velocity_ti > 0.0) integral += gains_.velocity_kp * h / gains_.velocity_ti * e;
         const double u = p + integral + torque_ff_;
-        // Conditional integration: the integrator does not grow further into a saturated output.
-        const bool windup = (u > hi && e > 0.0) || (u < -lo && e < 0.0);
-        if (!windup) integral_ = integral;
+        // Anti-windup by clamping: the integrator grows only until the output reaches the limit.
+        saturated = (u > hi && e > 0.0) || (u < -lo && e < 0.0);
+        if (u > hi && e > 0.0)
+            integral_ = std::max(integral_, hi - p - torque_ff_);
+        else if (u < -lo && e < 0.0)
+            integral_ = std::min(integral_, -lo - p - torque_ff_);
+        else
+            integral_ = integral;
         t = p + integral_ + torque_ff_;
     }
-    limited_ = t > hi || t < -lo;
+    limited_ = saturated || t > hi || t < -lo;
     t = std::clamp(t, -lo, hi);
     current_cmd_ = t / motor_.torque_constant;
     if (c_ <= 0.0) x_.i = current_cmd_;

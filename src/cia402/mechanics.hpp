@@ -58,15 +58,17 @@ class Mechanics {
     // Set-points for the loops; feed-forwards are added to the loop outputs. Held constant during the next
     // step (zero-order hold). Leaving Position/Velocity mode clears the velocity integrator.
     void command(LoopMode mode, double position, double velocity_ff, double torque_ff);
-    void set_torque_limits(double positive, double negative);  // Nm, magnitudes
-    void set_load_torque(double nm);                           // external load
-    void step(double dt);                                      // s
-    double position() const;                                   // rad, true mechanical position (multi-turn)
-    std::int64_t encoder() const;                              // increments, quantised
-    double velocity() const;                                   // rad/s
-    double torque() const;                                     // Nm (electromagnetic)
-    double current() const;                                    // A
-    bool torque_limited() const;  // the last torque command was clamped (by a limit or the peak current)
+    // Nm, magnitudes (NaN: unchanged). Initially none but peak_current * Kt, which always applies.
+    void set_torque_limits(double positive, double negative);
+    // External load, Nm, subtracted from the motor torque (positive: pulls towards negative positions).
+    void set_load_torque(double nm);
+    void step(double dt);          // s
+    double position() const;       // rad, true mechanical position (multi-turn)
+    std::int64_t encoder() const;  // increments, quantised
+    double velocity() const;       // rad/s
+    double torque() const;         // Nm (electromagnetic)
+    double current() const;        // A
+    bool torque_limited() const;   // the last torque command was clamped (by a limit or the peak current)
 
     // Gains take effect at the next substep (the integrator keeps its value).
     void set_gains(const ControlGains& g);
@@ -100,14 +102,15 @@ class Mechanics {
         double w;  // rad/s
         double i;  // A
     };
-    // Closed-form coefficients for an interval tau.
+    // Closed-form coefficients for an interval tau: w(tau) = w0 ea + A p1 + D r1 and
+    // p(tau) = p0 + w0 p1 + A p2 + D r2 for w' = -a w + A + D exp(-c s) (a = B/J, c = current bandwidth).
     struct Span {
-        double ea;  // exp(-a tau), a = B / J
+        double ea;  // exp(-a tau)
         double p1;  // int_0^tau exp(-a s) ds
-        double p2;  // int_0^tau int_0^s exp(-a r) dr ds
-        double ec;  // exp(-c tau), c = current bandwidth (0 when ideal)
-        double q1;  // mean of exp(-c s) over [0, tau]
-        double q2;  // 2/tau^2 int_0^tau (tau - s) exp(-c s) ds
+        double p2;  // int_0^tau p1(s) ds
+        double ec;  // exp(-c tau) (0 when the current loop is ideal)
+        double r1;  // int_0^tau exp(-a (tau - s)) exp(-c s) ds
+        double r2;  // int_0^tau r1(s) ds
     };
     Span span(double tau) const;
     State moving(const State& x, const Span& k, double dir) const;
