@@ -694,7 +694,8 @@ void Drive::run_cyclic_position(double dt) {
     csp_since_ += dt;
     const double frac = std::min(1.0, csp_since_ / period);
     double p = csp_from_ + (csp_to_ - csp_from_) * frac;
-    double v = frac < 1.0 ? (csp_to_ - csp_from_) / period : 0.0;
+    // The velocity feed-forward is the demand's own change over this servo period.
+    double v = (p - demand_.p) / dt;
     const double limited = clamp_to_software_limits(p);
     if (limited != p) {
         internal_limit_ = true;
