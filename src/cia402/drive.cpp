@@ -374,6 +374,9 @@ void Drive::on_mode_change() {
     pv_running_ = false;
     torque_cmd_ = 0;
     homing_bits_ = 0;
+    homing_active_ = homing_error_ = false;
+    homing_velocity_ = 0;
+    homing_->abort();
 }
 
 void Drive::hold_disabled() {
@@ -740,10 +743,60 @@ void Drive::run_cyclic_velocity(double dt) {
 }
 
 void Drive::run_homing(double dt) {
-    // Filled in with the homing module (see homing.hpp).
-    (void)dt;
-    loop_ = LoopMode::Position;
-    demand_.v = demand_.a = 0;
+    // Bit 4 rising starts the homing method 0x6098; bit 4 falling or halt interrupts it.
+    const bool edge = (controlword_ & kHomingStart) && !(previous_controlword_ & kHomingStart);
+    if (edge) {
+        const double ipu = factors_.increments_per_user();
+        HomingParameters hp;
+        hp.speed_switch = rd<std::uint32_t>(o_->homing_speed_switch, 0);
+        hp.speed_zero = rd<std::uint32_t>(o_->homing_speed_zero, 0);
+        hp.acceleration = rd<std::uint32_t>(o_->homing_acceleration, 0);
+        hp.home_offset = rd<std::int32_t>(o_->home_offset, 0);
+        hp.index_period = factors_.increments_per_revolution() / ipu;
+        hp.index_phase = rd<std::int32_t>(o_->machine[4], 0) / ipu + home_shift_;
+        hp.standstill_velocity = std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0);
+        homing_active_ = homing_->start(rd<std::int8_t>(o_->homing_method, 0), hp, actual_user_);
+        homing_error_ = !homing_active_;
+        homing_velocity_ = 0;
+    }
+    if (homing_active_ && (!(controlword_ & kHomingStart) || halted_)) {
+        homing_->halt();
+        homing_active_ = false;
+    }
+    HomingOutput out;
+    if (homing_active_) {
+        out = homing_->update(actual_user_, velocity_user_, {negative_limit_, positive_limit_, home_switch_});
+        if (out.home_found) {
+            // The coordinate system: the home position now reads as the home offset 0x607C.
+            const double shift = homing_->position_shift();
+            home_shift_ += shift;
+            actual_user_ += shift;
+            demand_.p += shift;
+            profile_.reset(demand_);
+            homing_velocity_ = std::numeric_limits<double>::quiet_NaN();  // re-plan from the shifted state
+        }
+        if (out.status == HomingStatus::Attained && out.target_reached) homing_active_ = false;
+        if (out.status == HomingStatus::Error && out.target_reached) homing_active_ = false;
+    }
+    if (halted_ && !homing_active_) {
+        run_stop(halt_kind(), dt);
+    } else {
+        stopping_ = StopKind::None;
+        const double v = homing_active_ ? out.velocity : 0.0;
+        const double acc = (homing_active_ && out.acceleration > 0)
+                               ? out.acceleration
+                               : std::max<double>(rd<std::uint32_t>(o_->homing_acceleration, 1), 1.0);
+        if (!(v == homing_velocity_)) {
+            ProfileLimits l{std::max(std::abs(v), 1.0), acc, acc, 0.0};
+            profile_.run_at(v, l);
+            homing_velocity_ = v;
+        }
+        demand_ = profile_.step(dt);
+        loop_ = LoopMode::Position;
+        torque_ff_ = 0;
+    }
+    homing_bits_ = homing_error_ ? static_cast<std::uint16_t>(sw::Bit13 | sw::TargetReached)
+                                 : homing_->statusword_bits();
 }
 
 void Drive::run_touch_probe(double previous_inc, double machine_inc) {

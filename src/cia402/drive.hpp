@@ -149,6 +149,9 @@ class Drive : public coe::CoeApplication {
     bool pv_running_ = false;
     bool cyclic_following_ = false;
     std::uint16_t homing_bits_ = 0;  // statusword bits 10, 12, 13 from the homing method
+    bool homing_active_ = false;
+    bool homing_error_ = false;   // the method could not start (unsupported method, bad speeds)
+    double homing_velocity_ = 0;  // velocity the profile runs at for the homing method
 
     // Cyclic modes: interpolation between the last two set-points.
     double csp_from_ = 0, csp_to_ = 0;

@@ -397,6 +397,79 @@ TEST_F(DriveTest, FactorGroupConvertsUserUnitsExactly) {
     EXPECT_NEAR(drive().mechanics().position() / (2 * 3.14159265358979), (start + 5000) / 5000.0, 1e-4);
 }
 
+// Homing (0x6098) on the simulated switches and index pulse; the found home then reads as 0x607C.
+struct DriveHoming : DriveTest {
+    void home(std::int8_t method, std::int32_t offset) {
+        set<std::int8_t>(0x6098, method);
+        set<std::int32_t>(0x607C, offset);
+        set<std::uint32_t>(0x6099, 400'000, 1);
+        set<std::uint32_t>(0x6099, 50'000, 2);
+        set<std::uint32_t>(0x609A, 4'000'000);
+        enable(Mode::Homing);
+        EXPECT_EQ(statusword() & (sw::TargetReached | sw::Bit12 | sw::Bit13),
+                  sw::TargetReached);  // not started
+        set<std::uint16_t>(0x6040, 0x1F);
+        elapsed = run_until(
+            [&] {
+                return (statusword() & (sw::TargetReached | sw::Bit12)) == (sw::TargetReached | sw::Bit12) ||
+                       (statusword() & sw::Bit13);
+            },
+            30000);
+    }
+    // User position of machine increment inc after homing (1:1 factors).
+    std::int64_t user_of(std::int64_t inc) { return inc + (position() - e(0x6063).get<std::int32_t>()); }
+    double elapsed = 0;
+};
+
+TEST_F(DriveHoming, Method37TakesTheCurrentPositionAtOnce) {
+    const std::int32_t inc = e(0x6063).get<std::int32_t>();
+    home(37, 12'345);
+    EXPECT_GE(elapsed, 0);
+    EXPECT_LE(elapsed, 2);
+    EXPECT_EQ(statusword() & (sw::TargetReached | sw::Bit12 | sw::Bit13), sw::TargetReached | sw::Bit12);
+    EXPECT_EQ(user_of(inc), 12'345);
+    EXPECT_EQ(position(), 12'345);
+}
+
+TEST_F(DriveHoming, Method35IsTheSameAsMethod37) {
+    home(35, -7);
+    EXPECT_TRUE(statusword() & sw::Bit12);
+    EXPECT_EQ(position(), -7);
+}
+
+TEST_F(DriveHoming, Method1NegativeLimitSwitchAndIndexPulse) {
+    set<std::int32_t>(0x2100, -300'000, 1);  // negative limit switch (increments)
+    home(1, 1000);
+    ASSERT_GT(elapsed, 0) << std::hex << statusword();
+    EXPECT_FALSE(statusword() & sw::Bit13);
+    // The first index pulse to the right of the switch: machine increment 0 (one per 2^20).
+    EXPECT_EQ(user_of(0), 1000);
+    EXPECT_FALSE(e(0x60FD).get<std::uint32_t>() & 1) << "ends off the limit switch";
+}
+
+TEST_F(DriveHoming, Method3HomeSwitchAndIndexPulse) {
+    set<std::int32_t>(0x2100, 1'500'000, 3);  // home switch active from 1.5e6 increments up
+    home(3, 0);
+    ASSERT_GT(elapsed, 0) << std::hex << statusword();
+    EXPECT_FALSE(statusword() & sw::Bit13);
+    // Method 3: the first index pulse left of the rising edge of the positive home switch: 2^20.
+    EXPECT_EQ(user_of(1 << 20), 0);
+}
+
+TEST_F(DriveHoming, Method19HomeSwitchEdgeWithinOneSlowCycle) {
+    set<std::int32_t>(0x2100, 500'000, 3);
+    home(19, 0);
+    ASSERT_GT(elapsed, 0);
+    // The edge itself is home: found within one servo period at the zero-search speed (50000 * 250 us).
+    EXPECT_NEAR(static_cast<double>(user_of(500'000)), 0.0, 50'000 * 250e-6 + 2);
+}
+
+TEST_F(DriveHoming, UnsupportedMethodReportsAHomingError) {
+    home(15, 0);
+    EXPECT_TRUE(statusword() & sw::Bit13);
+    EXPECT_FALSE(statusword() & sw::Bit12);
+}
+
 // End to end: the cyclic modes through process data in OP, as a master runs them.
 struct DriveCyclic : DriveTest {
     void SetUp() override {
