@@ -212,15 +212,31 @@ void ProfileGenerator::plan_position() {
             return da + rb.distance(w);
         };
         Ramp ra, rb;
+        // Rounding allowed where the plan is continued at a boundary (absorbed by the final snap).
+        const double tol = 1e-12 * d + 4 * std::numeric_limits<double>::epsilon() * std::abs(target_);
         double vc = vmax, cruise_time = 0;
         const double dv = phases(vmax, full, ra, rb);
         if (dv <= d) {
             cruise_time = (d - dv) / vmax;
         } else {
             // The largest vc whose phases fit: with min(A+, A-) as the manual says, when that can stop in
-            // time.
-            const Dyn& dy = phases(0, minimal, ra, rb) <= d ? minimal : full;
-            double lo = 0, hi = vmax;
+            // time. Above the velocity reached by ramping the acceleration to 0 (v_r) the distance grows
+            // with vc; below it (braking at once) it need not, so [v_r, V] is searched when v_r fits.
+            double lo = 0, hi = 0;
+            auto bracket = [&](const Dyn& dy) {
+                const double vr =
+                    std::clamp(dy.trap ? v0 : v0 + a0 * std::abs(a0) / (2 * dy.jerk), 0.0, vmax);
+                lo = 0;
+                hi = vr;
+                if (vr < vmax && phases(vr, dy, ra, rb) <= d + tol) {
+                    lo = vr;
+                    hi = vmax;
+                    return true;
+                }
+                return phases(0, dy, ra, rb) <= d + tol;
+            };
+            const Dyn& dy = bracket(minimal) ? minimal : full;
+            if (&dy == &full) bracket(full);
             for (int i = 0; i < 200 && hi - lo > 1e-15 * hi; ++i) {
                 const double mid = 0.5 * (lo + hi);
                 if (mid <= lo || mid >= hi) break;
