@@ -215,8 +215,11 @@ Drive::Drive(const device::DeviceDescription& d)
         o_->compensation_start->after_download = [this](Entry& e) {
             if (e.get<std::uint8_t>() == 0) return;
             e.set(std::uint8_t{0});
-            profile_.compensate(static_cast<double>(rd<std::int32_t>(o_->compensation_distance)),
-                                static_cast<double>(rd<std::uint32_t>(o_->compensation_length)));
+            // The move now ends at its target plus the achievable part of the compensation.
+            if (profile_.compensate(static_cast<double>(rd<std::int32_t>(o_->compensation_distance)),
+                                    static_cast<double>(rd<std::uint32_t>(o_->compensation_length))) &&
+                pp_moving_)
+                pp_target_ = profile_.target();
         };
     update_inputs();
     write_feedback();
@@ -446,6 +449,14 @@ void Drive::servo_step() {
         if (now == State::OperationEnabled) on_mode_change();
     }
     if (sm_.stop() == StopKind::None) stopping_ = StopKind::None;
+
+    // Velocity override (TwinCAT NC PTP online change) of the profile modes, in ppm of 100 %.
+    const std::uint32_t ov =
+        std::min<std::uint32_t>(rd<std::uint32_t>(o_->velocity_override, 1'000'000), 1'000'000);
+    if (ov != override_ppm_) {
+        override_ppm_ = ov;
+        profile_.set_override(ov * 1e-6);
+    }
 
     // Modes of operation: a supported mode takes effect at once; 0x6061 shows it.
     const auto requested = static_cast<Mode>(rd<std::int8_t>(o_->modes, 0));

@@ -144,6 +144,7 @@ class Drive : public coe::CoeApplication {
     bool pp_moving_ = false;
     double pp_target_ = 0;
     bool halted_ = false;
+    std::uint32_t override_ppm_ = 1'000'000;
     StopKind stopping_ = StopKind::None;  // the stop ramp being executed
     double pv_target_ = 0;
     bool pv_running_ = false;

@@ -6,6 +6,7 @@
 #include <new>
 #include <thread>
 
+#include "cia402/drive.hpp"
 #include "coe/coe_application.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
@@ -58,6 +59,46 @@ TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
         ASSERT_TRUE(b.master.transact_frame(dg));
         ASSERT_EQ(dg[0].wkc, 12);
     }
+    EXPECT_EQ(g_allocs.load() - before, 0u);
+}
+
+// The drive's servo steps in every mode (profile planning, homing, interpolation, mechanics) allocate
+// nothing either: CSP, PP with new set-points, PV, CST and homing through process data in OP.
+TEST(NoAllocation, DriveMovingInEveryMode) {
+    Bench b(2, {}, device::default_drive(), &cia402::make_drive_segment);
+    ASSERT_TRUE(b.master.startup(esc::AlState::Op));
+    auto run = [&](int cycles, std::int8_t mode, std::uint16_t cw, std::int32_t pos, std::int32_t vel) {
+        for (int i = 0; i < cycles; ++i) {
+            for (std::size_t s = 0; s < 2; ++s) {
+                auto o = b.master.outputs(s);
+                st_le16(o.data(), cw);
+                o[2] = static_cast<std::uint8_t>(mode);
+                st_le32(o.data() + 4, static_cast<std::uint32_t>(pos + i * 1000));
+                st_le32(o.data() + 8, static_cast<std::uint32_t>(vel));
+                st_le16(o.data() + 12, 50);
+            }
+            ASSERT_EQ(b.master.exchange_process_data().value_or(0), b.master.expected_wkc());
+            b.advance(1'000'000);
+        }
+    };
+    auto all_modes = [&] {
+        run(3, 8, 0x06, 0, 0);
+        run(3, 8, 0x07, 0, 0);
+        run(200, 8, 0x0F, 0, 0);        // CSP ramp
+        run(50, 1, 0x1F, 300'000, 0);   // PP new set-point (bit 4 high)
+        run(50, 1, 0x0F, 300'000, 0);   // PP moving
+        run(50, 1, 0x3F, -200'000, 0);  // PP change immediately
+        run(100, 3, 0x0F, 0, 200'000);  // PV
+        run(50, 9, 0x0F, 0, -100'000);  // CSV
+        run(50, 10, 0x0F, 0, 0);        // CST
+        run(5, 6, 0x0F, 0, 0);          // HM: method 35 (default) ...
+        run(50, 6, 0x1F, 0, 0);         // ... started
+        run(20, 3, 0x0B, 0, 0);         // quick stop
+        run(5, 3, 0x00, 0, 0);
+    };
+    all_modes();  // the first pass may set up what it needs
+    const auto before = g_allocs.load();
+    all_modes();
     EXPECT_EQ(g_allocs.load() - before, 0u);
 }
 

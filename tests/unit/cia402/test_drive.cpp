@@ -214,6 +214,38 @@ TEST_F(DriveTest, ProfilePositionChangeImmediately) {
     EXPECT_NEAR(position(), start + 100'000, 100);
 }
 
+TEST_F(DriveTest, VelocityOverrideAndPositionCompensationOfTheProfileModes) {
+    enable(Mode::ProfilePosition);
+    set<std::uint32_t>(0x6081, 400'000);
+    set<std::uint32_t>(0x2110, 500'000);  // 50 %
+    const std::int32_t start = position();
+    double peak = 0;
+    set<std::int32_t>(0x607A, start + 800'000);
+    set<std::uint16_t>(0x6040, 0x1F);
+    run_ms(1);
+    set<std::uint16_t>(0x6040, 0x0F);
+    run_until([&] { return position() > start + 400'000; }, 5000,
+              [&] { peak = std::max(peak, e(0x606B).get<std::int32_t>() * 1.0); });
+    EXPECT_NEAR(peak, 200'000, 200);
+    // Back to 100 %: the cruise velocity returns to V.
+    set<std::uint32_t>(0x2110, 1'000'000);
+    run_ms(150);
+    EXPECT_NEAR(e(0x606B).get<std::int32_t>(), 400'000, 200);
+    ASSERT_GT(run_until([&] { return statusword() & sw::TargetReached; }, 5000), 0);
+    EXPECT_NEAR(position(), start + 800'000, 100);
+    // Position compensation: 50000 extra within a length of 400000 of a 1e6 move.
+    master::CoeClient c(b.master, 0x1001);
+    ASSERT_EQ(c.download_value<std::int32_t>(0x2111, 1, 50'000).abort, coe::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint32_t>(0x2111, 2, 400'000).abort, coe::SdoAbort::None);
+    set<std::int32_t>(0x607A, start + 1'800'000);
+    set<std::uint16_t>(0x6040, 0x1F);
+    run_ms(200);
+    set<std::uint16_t>(0x6040, 0x0F);
+    ASSERT_EQ(c.download_value<std::uint8_t>(0x2111, 3, 1).abort, coe::SdoAbort::None);
+    ASSERT_GT(run_until([&] { return statusword() & sw::TargetReached; }, 10000), 0);
+    EXPECT_NEAR(position(), start + 1'850'000, 100);
+}
+
 TEST_F(DriveTest, ProfileVelocityReachesTheTargetAndHaltShowsSpeedZero) {
     enable(Mode::ProfileVelocity);
     set<std::uint32_t>(0x6083, 2'000'000);
