@@ -343,8 +343,12 @@ void Drive::enter_fault(std::uint16_t code, std::uint8_t bits) {
 
 void Drive::check_faults(double dt) {
     const std::uint16_t injected = rd<std::uint16_t>(o_->simulated_fault, 0);
-    if (injected == fault::OverCurrent) enter_fault(fault::OverCurrent, coe::error_register::Current);
-    if (injected == fault::Encoder) enter_fault(fault::Encoder, coe::error_register::Manufacturer);
+    // Encoder and over-current faults are injected into the mechanics, which the drive then monitors
+    // (the encoder freezes; the power stage reports over-current, also from its I2t protection).
+    mech_->inject_encoder_fault(injected == fault::Encoder);
+    mech_->inject_overcurrent(injected == fault::OverCurrent);
+    if (mech_->overcurrent()) enter_fault(fault::OverCurrent, coe::error_register::Current);
+    if (!mech_->encoder_ok()) enter_fault(fault::Encoder, coe::error_register::Manufacturer);
     if (injected == fault::FollowingError)
         enter_fault(fault::FollowingError, coe::error_register::DeviceProfile);
     if (injected == fault::ReferenceLimit)
@@ -435,7 +439,8 @@ void Drive::servo_step() {
 
     const State before = sm_.state();
     const bool fault_present =
-        active_fault_ != 0 && (rd<std::uint16_t>(o_->simulated_fault, 0) != 0 || sm_.state() != State::Fault);
+        active_fault_ != 0 && (rd<std::uint16_t>(o_->simulated_fault, 0) != 0 || mech_->overcurrent() ||
+                               !mech_->encoder_ok() || sm_.state() != State::Fault);
     const bool at_rest =
         std::abs(velocity_user_) <= std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0) &&
         (loop_ != LoopMode::Position || profile_.done());

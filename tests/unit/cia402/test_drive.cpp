@@ -377,6 +377,18 @@ TEST_F(DriveTest, InjectedFaultNeedsTheCauseGoneBeforeReset) {
     EXPECT_EQ(c.emergencies().back().error_code, 0x0000);  // error reset
 }
 
+TEST_F(DriveTest, StalledMotorAtFullTorqueTripsTheOverCurrentProtection) {
+    // A load that holds the motor: 300 % torque (6.35 A, over twice the rated 3 A) against a 300 % load.
+    set<std::int16_t>(0x2100, 3000, 5);
+    enable(Mode::CyclicTorque);
+    set<std::int16_t>(0x6071, 3000);
+    const double t = run_until([&] { return drive().cia402_state() == State::Fault; }, 10000);
+    // I2t: (i^2 - rated^2) t = (peak^2 - rated^2) * 1 s  ->  t = 72 / (6.35^2 - 9) = 2.34 s.
+    EXPECT_NEAR(t, 2340, 60);
+    EXPECT_EQ(e(0x603F).get<std::uint16_t>(), fault::OverCurrent);
+    EXPECT_TRUE(e(0x1001).get<std::uint8_t>() & coe::error_register::Current);
+}
+
 TEST_F(DriveTest, TouchProbeLatchesTheIndexPulseExactly) {
     enable(Mode::ProfileVelocity);
     // TP1 enabled, single, trigger on the zero impulse, positive edge.
