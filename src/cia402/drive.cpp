@@ -252,6 +252,17 @@ void Drive::advance(std::uint64_t now_ns) {
     }
 }
 
+void Drive::apply_gains() {
+    // 0x2003: a non-zero entry replaces the gain tuned from the motor parameters.
+    ControlGains g = Mechanics::tuned_for(mech_->parameters());
+    auto u = [&](int s) { return static_cast<double>(rd<std::uint32_t>(o_->gains[s], 0)); };
+    if (u(1) > 0) g.position_kp = u(1) * 0.01;
+    if (u(2) > 0) g.velocity_kp = u(2) * 1e-6;
+    if (u(3) > 0) g.velocity_ti = u(3) * 1e-6;
+    if (u(4) > 0) g.current_bandwidth = u(4);
+    mech_->set_gains(g);
+}
+
 void Drive::read_configuration() {
     options_.quick_stop = rd<std::int16_t>(o_->quick_stop_option, 2);
     options_.shutdown = rd<std::int16_t>(o_->shutdown_option, 0);
@@ -451,7 +462,10 @@ void Drive::servo_step() {
             active_fault_ = 0;
             clear_faults();
         }
-        if (now == State::OperationEnabled) on_mode_change();
+        if (now == State::OperationEnabled) {
+            apply_gains();
+            on_mode_change();
+        }
     }
     if (sm_.stop() == StopKind::None) stopping_ = StopKind::None;
 

@@ -80,6 +80,7 @@ class Drive : public coe::CoeApplication {
     void advance(std::uint64_t now_ns);
     void servo_step();
     void read_configuration();
+    void apply_gains();
     void update_inputs();
     void run_mode(double dt);
     void run_profile_position(double dt);
