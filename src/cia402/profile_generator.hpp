@@ -12,7 +12,9 @@
 // - Position move: phase A = velocity change to a cruise velocity vc <= V (decelerating first when the
 //   current speed is above V), a cruise at vc, phase B = braking from vc to rest (the brake phase). vc = V
 //   when the distance allows it; otherwise, as the manual says, the largest vc is found with the symmetric
-//   A+ = A- = min(A+, A-) (by bisection on vc, the distance of phases A+B being continuous in vc).
+//   A+ = A- = min(A+, A-) (falling back to A+/A- when that cannot stop in time from the current state), by
+//   regula falsi (Illinois) on the distance of phases A+B, which is continuous in vc and grows with vc
+//   above the velocity v_r reached by ramping the acceleration to 0 (that range is searched first).
 // - New target behind the current position, or one the axis cannot stop before, or moving away from it:
 //   stop (A-, J), then a move from rest back to the target, both in the same table.
 // - No jerk rescaling is ever needed: a table exists for every J > 0 (the stop-and-return covers every
