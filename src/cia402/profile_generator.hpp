@@ -78,12 +78,14 @@ class ProfileGenerator {
     void set_override(double fraction);
     double override_fraction() const;
     // Position compensation (TwinCAT NC PTP 2.5): an extra distance d travelled within a length l of the
-    // basic move. false when it cannot start (no move, stop phase, already compensating); when d is not
-    // fully achievable the maximum possible compensation is carried out. The two-argument form uses the
+    // basic move, both counted along its direction (d > 0 travels further, d < 0 less; L > the rest of the
+    // move is cut to the rest). false when it cannot start (no move, stop, already compensating); when d is
+    // not fully achievable the maximum possible compensation is carried out. The two-argument form uses the
     // move's limits as the compensation's limits (VK = V, AK+ = A+, AK- = A-, VP = cruise velocity).
     bool compensate(double d, double l);
     bool compensate(double d, double l, const CompensationLimits& c);
-    // Signed extra distance of the compensation in progress (the achievable part of d); 0 when none.
+    // The extra distance of the compensation in progress along the path (the achievable part of d); 0 when
+    // none.
     double compensation() const;
     bool compensating() const { return comp_.active; }
     // Forget every plan and stand at k (the drive follows the actual position while disabled). Until the
