@@ -237,15 +237,32 @@ void ProfileGenerator::plan_position() {
             };
             const Dyn& dy = bracket(minimal) ? minimal : full;
             if (&dy == &full) bracket(full);
-            for (int i = 0; i < 200 && hi - lo > 1e-15 * hi; ++i) {
-                const double mid = 0.5 * (lo + hi);
-                if (mid <= lo || mid >= hi) break;
-                if (phases(mid, dy, ra, rb) <= d)
-                    lo = mid;
-                else
-                    hi = mid;
+            // Regula falsi (Illinois) on D(vc) - d, keeping D(lo) <= d < D(hi); bisection as fallback.
+            double flo = phases(lo, dy, ra, rb) - d, fhi = phases(hi, dy, ra, rb) - d;
+            int side = 0;
+            vc = fhi <= 0 ? hi : lo;
+            for (int i = 0; i < 200 && flo < 0 && fhi > 0 && hi - lo > 1e-15 * hi; ++i) {
+                double x = (lo * fhi - hi * flo) / (fhi - flo);
+                if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+                if (x <= lo || x >= hi) break;
+                const double fx = phases(x, dy, ra, rb) - d;
+                if (fx <= 0) {
+                    lo = x;
+                    flo = fx;
+                    if (side == -1) fhi /= 2;
+                    side = -1;
+                } else {
+                    hi = x;
+                    fhi = fx;
+                    if (side == 1) flo /= 2;
+                    side = 1;
+                }
+                vc = lo;
+                if (std::abs(fx) <= tol) {
+                    vc = x;  // close enough: the snap at the end absorbs the rest
+                    break;
+                }
             }
-            vc = lo;
             phases(vc, dy, ra, rb);  // the residual distance (tiny) is absorbed by the final snap
         }
         push_ramp(ra, s);

@@ -12,7 +12,9 @@
 // - Position move: phase A = velocity change to a cruise velocity vc <= V (decelerating first when the
 //   current speed is above V), a cruise at vc, phase B = braking from vc to rest (the brake phase). vc = V
 //   when the distance allows it; otherwise, as the manual says, the largest vc is found with the symmetric
-//   A+ = A- = min(A+, A-) (by bisection on vc, the distance of phases A+B being continuous in vc).
+//   A+ = A- = min(A+, A-) (falling back to A+/A- when that cannot stop in time from the current state), by
+//   regula falsi (Illinois) on the distance of phases A+B, which is continuous in vc and grows with vc
+//   above the velocity v_r reached by ramping the acceleration to 0 (that range is searched first).
 // - New target behind the current position, or one the axis cannot stop before, or moving away from it:
 //   stop (A-, J), then a move from rest back to the target, both in the same table.
 // - No jerk rescaling is ever needed: a table exists for every J > 0 (the stop-and-return covers every
@@ -76,12 +78,14 @@ class ProfileGenerator {
     void set_override(double fraction);
     double override_fraction() const;
     // Position compensation (TwinCAT NC PTP 2.5): an extra distance d travelled within a length l of the
-    // basic move. false when it cannot start (no move, stop phase, already compensating); when d is not
-    // fully achievable the maximum possible compensation is carried out. The two-argument form uses the
+    // basic move, both counted along its direction (d > 0 travels further, d < 0 less; L > the rest of the
+    // move is cut to the rest). false when it cannot start (no move, stop, already compensating); when d is
+    // not fully achievable the maximum possible compensation is carried out. The two-argument form uses the
     // move's limits as the compensation's limits (VK = V, AK+ = A+, AK- = A-, VP = cruise velocity).
     bool compensate(double d, double l);
     bool compensate(double d, double l, const CompensationLimits& c);
-    // Signed extra distance of the compensation in progress (the achievable part of d); 0 when none.
+    // The extra distance of the compensation in progress along the path (the achievable part of d); 0 when
+    // none.
     double compensation() const;
     bool compensating() const { return comp_.active; }
     // Forget every plan and stand at k (the drive follows the actual position while disabled). Until the

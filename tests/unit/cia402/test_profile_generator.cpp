@@ -630,6 +630,66 @@ TEST(ProfileCompensation, RefusalsAndDefaults) {
     EXPECT_NEAR(s.state().p, s.target(), 1e-9);
 }
 
+TEST(ProfileCompensation, FollowsOverrideZero) {
+    // Linear path control: with the basic move held by override 0 the compensation holds too, and it
+    // completes once the basic move has travelled L after all.
+    const ProfileLimits lim = limits(2000, 1000, 1000, 10000);
+    ProfileGenerator g = at_rest();
+    ASSERT_TRUE(g.move_to(10000, lim));
+    g.step(2.5);
+    ASSERT_TRUE(g.compensate(250, 5000, {300, 500, 1000, 2000}));
+    g.step(0.8);
+    g.set_override(0);
+    EXPECT_GT(run_to_end(g, 1e-3, 3000), -2);  // held: not done
+    EXPECT_EQ(g.state().v, 0);
+    EXPECT_TRUE(g.compensating());
+    const double held = g.state().p;
+    g.step(1);
+    EXPECT_EQ(g.state().p, held);
+    g.set_override(1);
+    EXPECT_GT(run_to_end(g, 1e-3, 100000), 0);
+    EXPECT_EQ(g.state().p, 10250);
+}
+
+TEST(ProfileRandom, Compensations) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0, 1);
+    int ran = 0;
+    for (int n = 0; n < 300; ++n) {
+        SCOPED_TRACE(::testing::Message() << "case " << n);
+        const ProfileLimits lim = limits(1000 * (0.5 + u(rng)), 2000 * (0.5 + u(rng)), 2000 * (0.5 + u(rng)),
+                                         u(rng) < 0.2 ? 0 : 20000 * (0.5 + u(rng)));
+        const double dir = u(rng) < 0.5 ? -1 : 1;
+        ProfileGenerator g = at_rest();
+        ASSERT_TRUE(g.move_to(dir * 5000, lim));
+        g.step(u(rng) * 4);
+        const double d = (2 * u(rng) - 1) * 300, l = 100 + u(rng) * 6000;
+        const CompensationLimits c{50 + 300 * u(rng), 100 + 1000 * u(rng), 100 + 1000 * u(rng), 0};
+        if (!g.compensate(d, l, c)) continue;  // e.g. ended already
+        ++ran;
+        const double promised = g.compensation();
+        EXPECT_LE(std::abs(promised), std::abs(d) * (1 + 1e-12));
+        EXPECT_GE(promised * d, 0);
+        EXPECT_NEAR(g.target(), dir * (5000 + promised), 1e-9);  // d counts along the path
+        const double dt = u(rng) < 0.5 ? 1e-3 : 4e-3;
+        Kinematics prev = g.state();
+        bool finite = true, continuous = true;
+        while (!g.done()) {
+            const Kinematics& k = g.step(dt);
+            finite = finite && std::isfinite(k.p) && std::isfinite(k.v) && std::isfinite(k.a);
+            // Velocity bounded by V + VK (ratio of the basic velocity to VP is at most 1 here).
+            continuous =
+                continuous && std::abs(k.p - prev.p) <= (lim.velocity + c.velocity) * dt * (1 + 1e-9);
+            prev = k;
+        }
+        EXPECT_TRUE(finite);
+        EXPECT_TRUE(continuous);
+        EXPECT_NEAR(g.state().p, dir * (5000 + promised), 1e-9);
+        EXPECT_EQ(g.state().v, 0);
+    }
+    EXPECT_GT(ran, 200);
+}
+
 // ---- Numerics -------------------------------------------------------------------------------------------
 
 TEST(ProfileNumerics, DegenerateInputs) {
