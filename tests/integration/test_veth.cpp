@@ -278,6 +278,66 @@ TEST(VethCoe, RemapInPreOpReachesOpWithTheNewLayout) {
     std::filesystem::remove(pcap);
 }
 
+// The real binary's drives move: the master enables two drives (6, 7, 15) and runs CSP with a ramp of
+// set-points every millisecond of real time; both follow and stop at the last set-point.
+TEST(VethDrive, TwoDrivesEnableAndFollowCyclicPositions) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    ++g_pair;
+    const std::string mi = "dm" + std::to_string(g_pair), si = "ds" + std::to_string(g_pair);
+    std::string why;
+    ASSERT_TRUE(net::create_veth_pair(mi, si, &why)) << why;
+    const std::string pcap =
+        (std::filesystem::temp_directory_path() / ("vecat-drive-" + std::to_string(getpid()) + ".pcapng"))
+            .string();
+    VecatProcess vecat(si, 2, pcap);
+    ASSERT_GT(vecat.pid, 0);
+    net::RawSocket sock(mi);
+    master::Master m(sock);
+    ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+    // Default mapping: controlword, mode, pad, target position, ... / statusword, mode display, pad,
+    // position actual value, velocity actual value, torque, following error.
+    auto next = std::chrono::steady_clock::now();
+    auto cycle = [&](std::uint16_t cw, std::int32_t p0, std::int32_t p1) {
+        for (std::size_t s = 0; s < 2; ++s) {
+            auto o = m.outputs(s);
+            st_le16(o.data(), cw);
+            o[2] = 8;  // CSP
+            st_le32(o.data() + 4, static_cast<std::uint32_t>(s == 0 ? p0 : p1));
+        }
+        const auto wkc = m.exchange_process_data();
+        next += std::chrono::milliseconds(1);
+        std::this_thread::sleep_until(next);
+        return wkc.value_or(0) == m.expected_wkc();
+    };
+    auto sw = [&](std::size_t s) { return ld_le16(m.inputs(s).data()); };
+    auto pos = [&](std::size_t s) { return static_cast<std::int32_t>(ld_le32(m.inputs(s).data() + 4)); };
+    ASSERT_TRUE(cycle(0, 0, 0));
+    const std::int32_t a0 = pos(0), b0 = pos(1);
+    int misses = 0;
+    for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
+        for (int i = 0; i < 20; ++i)
+            misses += !cycle(cw, a0, b0);
+    EXPECT_EQ(sw(0) & 0x6F, 0x27) << std::hex << sw(0);
+    EXPECT_EQ(sw(1) & 0x6F, 0x27) << std::hex << sw(1);
+    // 1000 cycles: drive 0 ramps forward at 500000 units/s, drive 1 backward at 250000 units/s.
+    for (int k = 1; k <= 1000; ++k)
+        misses += !cycle(0x0F, a0 + 500 * k, b0 - 250 * k);
+    for (int k = 0; k < 300; ++k)
+        misses += !cycle(0x0F, a0 + 500'000, b0 - 250'000);
+    EXPECT_EQ(misses, 0);
+    // Settled within the position window 0x6067 (100) against Coulomb friction.
+    EXPECT_NEAR(pos(0), a0 + 500'000, 100);
+    EXPECT_NEAR(pos(1), b0 - 250'000, 100);
+    EXPECT_TRUE(sw(0) & (1u << 12)) << "drive follows the command value";
+    EXPECT_FALSE(sw(0) & (1u << 13)) << "no following error";
+    for (int i = 0; i < 5; ++i)
+        cycle(0x00, a0 + 500'000, b0 - 250'000);
+    EXPECT_EQ(sw(0) & 0x4F, 0x40);  // disable voltage: switch on disabled
+    ASSERT_TRUE(m.request_state(AlState::Init));
+    EXPECT_EQ(vecat.stop(), 0);
+    std::filesystem::remove(pcap);
+}
+
 TEST(VethCli, RefusesAnInterfaceWithAnAddress) {
     if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
     std::string why;
