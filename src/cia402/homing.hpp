@@ -44,9 +44,13 @@
 // switch (7-14, 23-30) is an error too.
 //
 // Home offset (0x607C): CiA 402 calls it "the difference between the zero position for the application and
-// the machine home position". This model follows the reading most EtherCAT drives implement: once homing
-// is attained, the position actual value at the home position reads as the home offset, i.e.
+// the machine home position" and says the zero position is found "by adding the home offset to the home
+// position". Taken literally that puts the zero at home + offset, so the home position would read as
+// -offset; drive manuals are not consistent about the sign. This model uses the other reading, the one in
+// the project's brief: once homing is attained, the position actual value at the home position reads as the
+// home offset, so the value a user writes to 0x607C is the value 0x6064 shows at the reference point:
 //   position_after_homing = raw_position - home_position + home_offset  (see position_shift()).
+// The sign lives in position_shift() only.
 // The drive applies the shift; Homing ignores positions once the home position is found, so the drive may
 // switch its coordinates in the very cycle in which HomingOutput::home_found is set.
 #pragma once
@@ -87,7 +91,8 @@ enum class HomingFault : std::uint8_t {
     None,
     LimitSwitch,         // a limit switch was reached where the method does not allow it
     HomeSwitchNotFound,  // 7-14, 23-30: both directions searched up to the limit switches
-    IndexNotFound,       // no index pulse within 2 index periods after the edge
+    IndexNotFound,       // no index pulse within 2 index periods after the edge (a guard: with pulses
+                         // computed from index_period it cannot happen)
 };
 
 // What the drive should do this cycle.
