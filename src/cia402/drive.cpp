@@ -69,112 +69,98 @@ constexpr std::uint16_t kHomingStart = 1u << 4;
 // The dictionary entries the drive reads and writes, looked up once. A missing object (a vendor ESI
 // without it) reads as its fallback and is not written.
 struct Drive::Objects {
-    explicit Objects(coe::ObjectDictionary& od) {
-        auto f = [&](std::uint16_t i, std::uint8_t s = 0) { return od.find(i, s); };
-        controlword = f(0x6040);
-        statusword = f(0x6041);
-        quick_stop_option = f(0x605A);
-        shutdown_option = f(0x605B);
-        disable_operation_option = f(0x605C);
-        halt_option = f(0x605D);
-        fault_reaction_option = f(0x605E);
-        modes = f(0x6060);
-        modes_display = f(0x6061);
-        position_demand = f(0x6062);
-        position_internal = f(0x6063);
-        position_actual = f(0x6064);
-        following_error_window = f(0x6065);
-        following_error_timeout = f(0x6066);
-        position_window = f(0x6067);
-        position_window_time = f(0x6068);
-        velocity_demand = f(0x606B);
-        velocity_actual = f(0x606C);
-        velocity_window = f(0x606D);
-        velocity_window_time = f(0x606E);
-        velocity_threshold = f(0x606F);
-        velocity_threshold_time = f(0x6070);
-        target_torque = f(0x6071);
-        max_torque = f(0x6072);
-        torque_demand = f(0x6074);
-        rated_current = f(0x6075);
-        rated_torque = f(0x6076);
-        torque_actual = f(0x6077);
-        current_actual = f(0x6078);
-        target_position = f(0x607A);
-        home_offset = f(0x607C);
-        software_limit_min = f(0x607D, 1);
-        software_limit_max = f(0x607D, 2);
-        max_profile_velocity = f(0x607F);
-        max_motor_speed = f(0x6080);
-        profile_velocity = f(0x6081);
-        profile_acceleration = f(0x6083);
-        profile_deceleration = f(0x6084);
-        quick_stop_deceleration = f(0x6085);
-        motion_profile_type = f(0x6086);
-        torque_slope = f(0x6087);
-        encoder_increments = f(0x608F, 1);
-        encoder_revolutions = f(0x608F, 2);
-        gear_motor = f(0x6091, 1);
-        gear_shaft = f(0x6091, 2);
-        feed = f(0x6092, 1);
-        feed_shaft = f(0x6092, 2);
-        homing_method = f(0x6098);
-        homing_speed_switch = f(0x6099, 1);
-        homing_speed_zero = f(0x6099, 2);
-        homing_acceleration = f(0x609A);
-        profile_jerk = f(0x60A4, 1);
-        position_offset = f(0x60B0);
-        velocity_offset = f(0x60B1);
-        torque_offset = f(0x60B2);
-        probe_function = f(0x60B8);
-        probe_status = f(0x60B9);
-        probe1_positive = f(0x60BA);
-        probe1_negative = f(0x60BB);
-        probe2_positive = f(0x60BC);
-        probe2_negative = f(0x60BD);
-        interpolation_value = f(0x60C2, 1);
-        interpolation_index = f(0x60C2, 2);
-        max_acceleration = f(0x60C5);
-        max_deceleration = f(0x60C6);
-        positive_torque_limit = f(0x60E0);
-        negative_torque_limit = f(0x60E1);
-        following_error_actual = f(0x60F4);
-        position_demand_internal = f(0x60FC);
-        digital_inputs = f(0x60FD);
-        target_velocity = f(0x60FF);
-        for (std::uint8_t s = 1; s <= 7; ++s)
-            motor[s] = f(0x2000, s);
-        temperature = f(0x2001);
-        bus_voltage = f(0x2002);
+    explicit Objects(coe::ObjectDictionary& d) : od(d) {
+        for (std::uint8_t s = 1; s <= 7; ++s) {
+            motor[s] = at(0x2000, s);
+            machine[s] = at(0x2100, s);
+        }
         for (std::uint8_t s = 1; s <= 4; ++s)
-            gains[s] = f(0x2003, s);
-        for (std::uint8_t s = 1; s <= 7; ++s)
-            machine[s] = f(0x2100, s);
-        simulated_fault = f(0x2101);
-        velocity_override = f(0x2110);
-        compensation_distance = f(0x2111, 1);
-        compensation_length = f(0x2111, 2);
-        compensation_start = f(0x2111, 3);
+            gains[s] = at(0x2003, s);
     }
-    Entry *controlword, *statusword, *quick_stop_option, *shutdown_option, *disable_operation_option,
-        *halt_option, *fault_reaction_option, *modes, *modes_display, *position_demand, *position_internal,
-        *position_actual, *following_error_window, *following_error_timeout, *position_window,
-        *position_window_time, *velocity_demand, *velocity_actual, *velocity_window, *velocity_window_time,
-        *velocity_threshold, *velocity_threshold_time, *target_torque, *max_torque, *torque_demand,
-        *rated_current, *rated_torque, *torque_actual, *current_actual, *target_position, *home_offset,
-        *software_limit_min, *software_limit_max, *max_profile_velocity, *max_motor_speed, *profile_velocity,
-        *profile_acceleration, *profile_deceleration, *quick_stop_deceleration, *motion_profile_type,
-        *torque_slope, *encoder_increments, *encoder_revolutions, *gear_motor, *gear_shaft, *feed,
-        *feed_shaft, *homing_method, *homing_speed_switch, *homing_speed_zero, *homing_acceleration,
-        *profile_jerk, *position_offset, *velocity_offset, *torque_offset, *probe_function, *probe_status,
-        *probe1_positive, *probe1_negative, *probe2_positive, *probe2_negative, *interpolation_value,
-        *interpolation_index, *max_acceleration, *max_deceleration, *positive_torque_limit,
-        *negative_torque_limit, *following_error_actual, *position_demand_internal, *digital_inputs,
-        *target_velocity, *temperature, *bus_voltage, *simulated_fault, *velocity_override,
-        *compensation_distance, *compensation_length, *compensation_start;
-    Entry* motor[8] = {};
-    Entry* gains[5] = {};
-    Entry* machine[8] = {};
+    Entry* at(std::uint16_t index, std::uint8_t sub = 0) { return od.find(index, sub); }
+
+    coe::ObjectDictionary& od;
+    Entry* controlword = at(0x6040);
+    Entry* statusword = at(0x6041);
+    Entry* quick_stop_option = at(0x605A);
+    Entry* shutdown_option = at(0x605B);
+    Entry* disable_operation_option = at(0x605C);
+    Entry* halt_option = at(0x605D);
+    Entry* fault_reaction_option = at(0x605E);
+    Entry* modes = at(0x6060);
+    Entry* modes_display = at(0x6061);
+    Entry* position_demand = at(0x6062);
+    Entry* position_internal = at(0x6063);
+    Entry* position_actual = at(0x6064);
+    Entry* following_error_window = at(0x6065);
+    Entry* following_error_timeout = at(0x6066);
+    Entry* position_window = at(0x6067);
+    Entry* position_window_time = at(0x6068);
+    Entry* velocity_demand = at(0x606B);
+    Entry* velocity_actual = at(0x606C);
+    Entry* velocity_window = at(0x606D);
+    Entry* velocity_window_time = at(0x606E);
+    Entry* velocity_threshold = at(0x606F);
+    Entry* velocity_threshold_time = at(0x6070);
+    Entry* target_torque = at(0x6071);
+    Entry* max_torque = at(0x6072);
+    Entry* torque_demand = at(0x6074);
+    Entry* rated_current = at(0x6075);
+    Entry* rated_torque = at(0x6076);
+    Entry* torque_actual = at(0x6077);
+    Entry* current_actual = at(0x6078);
+    Entry* target_position = at(0x607A);
+    Entry* home_offset = at(0x607C);
+    Entry* software_limit_min = at(0x607D, 1);
+    Entry* software_limit_max = at(0x607D, 2);
+    Entry* max_profile_velocity = at(0x607F);
+    Entry* max_motor_speed = at(0x6080);
+    Entry* profile_velocity = at(0x6081);
+    Entry* profile_acceleration = at(0x6083);
+    Entry* profile_deceleration = at(0x6084);
+    Entry* quick_stop_deceleration = at(0x6085);
+    Entry* motion_profile_type = at(0x6086);
+    Entry* torque_slope = at(0x6087);
+    Entry* encoder_increments = at(0x608F, 1);
+    Entry* encoder_revolutions = at(0x608F, 2);
+    Entry* gear_motor = at(0x6091, 1);
+    Entry* gear_shaft = at(0x6091, 2);
+    Entry* feed = at(0x6092, 1);
+    Entry* feed_shaft = at(0x6092, 2);
+    Entry* homing_method = at(0x6098);
+    Entry* homing_speed_switch = at(0x6099, 1);
+    Entry* homing_speed_zero = at(0x6099, 2);
+    Entry* homing_acceleration = at(0x609A);
+    Entry* profile_jerk = at(0x60A4, 1);
+    Entry* position_offset = at(0x60B0);
+    Entry* velocity_offset = at(0x60B1);
+    Entry* torque_offset = at(0x60B2);
+    Entry* probe_function = at(0x60B8);
+    Entry* probe_status = at(0x60B9);
+    Entry* probe1_positive = at(0x60BA);
+    Entry* probe1_negative = at(0x60BB);
+    Entry* probe2_positive = at(0x60BC);
+    Entry* probe2_negative = at(0x60BD);
+    Entry* interpolation_value = at(0x60C2, 1);
+    Entry* interpolation_index = at(0x60C2, 2);
+    Entry* max_acceleration = at(0x60C5);
+    Entry* max_deceleration = at(0x60C6);
+    Entry* positive_torque_limit = at(0x60E0);
+    Entry* negative_torque_limit = at(0x60E1);
+    Entry* following_error_actual = at(0x60F4);
+    Entry* position_demand_internal = at(0x60FC);
+    Entry* digital_inputs = at(0x60FD);
+    Entry* target_velocity = at(0x60FF);
+    Entry* temperature = at(0x2001);
+    Entry* bus_voltage = at(0x2002);
+    Entry* simulated_fault = at(0x2101);
+    Entry* velocity_override = at(0x2110);
+    Entry* compensation_distance = at(0x2111, 1);
+    Entry* compensation_length = at(0x2111, 2);
+    Entry* compensation_start = at(0x2111, 3);
+    Entry* motor[8] = {};    // 0x2000:1-7
+    Entry* gains[5] = {};    // 0x2003:1-4
+    Entry* machine[8] = {};  // 0x2100:1-7
 };
 
 namespace {
