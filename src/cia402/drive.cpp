@@ -554,19 +554,6 @@ void Drive::run_mode(double dt) {
     }
 }
 
-StopKind Drive::halt_kind() const {
-    switch (options_.halt) {
-        case 2:
-            return StopKind::QuickStopRamp;
-        case 3:
-            return StopKind::CurrentLimit;
-        case 4:
-            return StopKind::VoltageLimit;
-        default:
-            return StopKind::SlowDownRamp;
-    }
-}
-
 bool Drive::blocked(double direction) const {
     // A hardware limit switch blocks motion towards it (motion away from it is allowed).
     return (direction > 0 && positive_limit_) || (direction < 0 && negative_limit_);
@@ -597,7 +584,7 @@ void Drive::run_profile_position(double dt) {
     if (!(controlword_ & kNewSetpoint) && !pending_target_) setpoint_ack_ = false;
 
     if (halted_) {
-        run_stop(halt_kind(), dt);
+        run_stop(stop_for(StopOption::Halt, options_), dt);
         return;
     }
     if (stopping_ != StopKind::None) {
@@ -639,7 +626,7 @@ void Drive::run_profile_velocity(double dt) {
     double target = static_cast<double>(rd<std::int32_t>(o_->target_velocity));
     target = std::clamp(target, -max_velocity(), max_velocity());
     if (halted_) {
-        run_stop(halt_kind(), dt);
+        run_stop(stop_for(StopOption::Halt, options_), dt);
         if (loop_ == LoopMode::Position) {
             loop_ = LoopMode::Velocity;
             velocity_cmd_ = demand_.v;
@@ -704,7 +691,7 @@ void Drive::run_cyclic_position(double dt) {
         csp_valid_ = true;
     }
     if (halted_) {
-        run_stop(halt_kind(), dt);
+        run_stop(stop_for(StopOption::Halt, options_), dt);
         csp_valid_ = false;
         return;
     }
@@ -736,7 +723,7 @@ void Drive::run_cyclic_position(double dt) {
 
 void Drive::run_cyclic_velocity(double dt) {
     if (halted_) {
-        run_stop(halt_kind(), dt);
+        run_stop(stop_for(StopOption::Halt, options_), dt);
         if (loop_ == LoopMode::Position) {
             loop_ = LoopMode::Velocity;
             velocity_cmd_ = demand_.v;
@@ -795,7 +782,7 @@ void Drive::run_homing(double dt) {
         if (out.status == HomingStatus::Error && out.target_reached) homing_active_ = false;
     }
     if (halted_ && !homing_active_) {
-        run_stop(halt_kind(), dt);
+        run_stop(stop_for(StopOption::Halt, options_), dt);
     } else {
         stopping_ = StopKind::None;
         const double v = homing_active_ ? out.velocity : 0.0;

@@ -91,7 +91,6 @@ class Drive : public coe::CoeApplication {
     void run_cyclic_velocity(double dt);
     void run_stop(StopKind k, double dt);
     void run_touch_probe(double previous_inc, double machine_inc);
-    StopKind halt_kind() const;
     bool blocked(double direction) const;
     void start_move(double target);
     void hold_disabled();

@@ -96,6 +96,18 @@ StopKind stop_for(StopOption which, const OptionCodes& oc) noexcept {
                 default:
                     return StopKind::QuickStopRamp;
             }
+        case StopOption::Halt:
+            // 0x605D: 1 slow down ramp, 2 quick stop ramp, 3 current limit, 4 voltage limit.
+            switch (oc.halt) {
+                case 2:
+                    return StopKind::QuickStopRamp;
+                case 3:
+                    return StopKind::CurrentLimit;
+                case 4:
+                    return StopKind::VoltageLimit;
+                default:
+                    return StopKind::SlowDownRamp;
+            }
         case StopOption::FaultReaction:
             switch (oc.fault_reaction) {
                 case 0:

@@ -44,7 +44,7 @@ enum class StopKind : std::uint8_t {
 };
 
 // Which option code governs the stop of a transition.
-enum class StopOption : std::uint8_t { None, Shutdown, DisableOperation, QuickStop, FaultReaction };
+enum class StopOption : std::uint8_t { None, Shutdown, DisableOperation, QuickStop, FaultReaction, Halt };
 
 struct TransitionRow {
     State from;

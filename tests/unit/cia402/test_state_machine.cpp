@@ -287,6 +287,12 @@ TEST(Cia402StateMachine, StopKindsFromOptionCodes) {
                                  StopKind::CurrentLimit, StopKind::VoltageLimit};
         EXPECT_EQ(k, want[c]);
     }
+    const StopKind halts[] = {StopKind::SlowDownRamp, StopKind::QuickStopRamp, StopKind::CurrentLimit,
+                              StopKind::VoltageLimit};
+    for (int c = 1; c <= 4; ++c) {
+        oc.halt = static_cast<std::int16_t>(c);
+        EXPECT_EQ(stop_for(StopOption::Halt, oc), halts[c - 1]);
+    }
     oc.disable_operation = -1;  // manufacturer specific: slow down
     EXPECT_EQ(stop_for(StopOption::DisableOperation, oc), StopKind::SlowDownRamp);
 }
