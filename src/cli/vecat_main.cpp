@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -106,20 +107,41 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
                 "bytes\n",
                 s.position, s.station, s.sii.device_name(), s.sii.identity.vendor_id,
                 s.sii.identity.product_code, s.sii.identity.revision, s.out_bytes, s.in_bytes);
-        fmt::print("  all slaves in OP; exchanging process data every 1 ms\n");
+        fmt::print("  all slaves in OP; enabling the drives (6, 7, 15) in CSP and moving them, 1 ms cycle\n");
+        // Default mapping: controlword, mode of operation, pad, target position / statusword, mode
+        // display, pad, position actual value, velocity actual value.
         unsigned misses = 0;
+        std::vector<std::int32_t> start(m.slaves().size(), 0);
         auto next = std::chrono::steady_clock::now();
         for (unsigned c = 0; c < cycles && !g_stop; ++c) {
             next += std::chrono::milliseconds(1);
+            const std::uint16_t cw = c < 10 ? 0x06 : c < 20 ? 0x07 : (c + 20 < cycles ? 0x0F : 0x00);
+            // From cycle 30 on each drive travels half a revolution and back (2^19 increments), 0.5 Hz.
+            const double t = c < 30 ? 0.0 : (c - 30) * 1e-3;
+            const double travel = (1 << 19) * 0.5 * (1 - std::cos(3.14159265358979 * t));
             for (std::size_t i = 0; i < m.slaves().size(); ++i) {
                 auto out = m.outputs(i);
-                if (out.size() >= 2) vecat::st_le16(out.data(), static_cast<std::uint16_t>(c));
+                auto in = m.inputs(i);
+                if (out.size() < 8 || in.size() < 12) continue;
+                if (c == 1) start[i] = static_cast<std::int32_t>(vecat::ld_le32(in.data() + 4));
+                vecat::st_le16(out.data(), cw);
+                out[2] = 8;
+                const double dir = (i % 2) ? -1.0 : 1.0;
+                vecat::st_le32(out.data() + 4, static_cast<std::uint32_t>(
+                                                   start[i] + static_cast<std::int32_t>(dir * travel)));
             }
             auto w = m.exchange_process_data();
             if (!w || *w != m.expected_wkc()) ++misses;
-            if (c % 250 == 0 || c + 1 == cycles)
-                fmt::print("\r  cycle {:5}/{}  working counter {}/{}  misses {}", c + 1, cycles, w ? *w : 0,
+            if (c % 250 == 0 || c + 1 == cycles) {
+                fmt::print("\r  cycle {:5}/{}  WKC {}/{}  misses {}", c + 1, cycles, w ? *w : 0,
                            m.expected_wkc(), misses);
+                for (std::size_t i = 0; i < m.slaves().size() && i < 4; ++i) {
+                    auto in = m.inputs(i);
+                    if (in.size() >= 12)
+                        fmt::print("  drive {}: status 0x{:04X} pos {:8}", i, vecat::ld_le16(in.data()),
+                                   static_cast<std::int32_t>(vecat::ld_le32(in.data() + 4)));
+                }
+            }
             std::fflush(stdout);
             std::this_thread::sleep_until(next);
         }
