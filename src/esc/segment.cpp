@@ -1,5 +1,6 @@
 #include "esc/segment.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 #include "esc/datagram.hpp"
@@ -53,6 +54,13 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
 void Segment::tick(std::uint64_t now_ns) {
     for (auto& s : slaves_)
         s->run(now_ns);
+}
+
+std::uint64_t Segment::next_event_ns() const {
+    std::uint64_t t = DistributedClock::kNever;
+    for (const auto& s : slaves_)
+        t = std::min(t, s->esc().dc().next_pulse_host_ns());
+    return t;
 }
 
 std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n, const EscConfig& cfg,
