@@ -34,7 +34,9 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
         for (std::size_t k = 0; k < n; ++k) {
             FrameTiming t;
             t.port0_ns = now_ns + k * hop_delay_ns;
-            t.port1_ns = now_ns + (2 * (n - 1) - k) * hop_delay_ns + hop_delay_ns / 2;
+            // Back at port 1 after the slaves behind it (same delay per hop both ways; the last slave loops
+            // the frame back through its closed port 1 without delay), so masters compute exact delays.
+            t.port1_ns = now_ns + (2 * (n - 1) - k) * hop_delay_ns;
             Esc& esc = slaves_[k]->esc();
             for (std::size_t i = 0; i < pf.count; ++i)
                 esc.process(pf.datagram(frame, i), t);
