@@ -42,6 +42,7 @@ esc::AlStatusCode CoeApplication::check_transition(AlState from, AlState to) {
         const auto code = map_->validate();
         return code != esc::AlStatusCode::NoError ? code : sync_->check_safeop();
     }
+    if (from == AlState::SafeOp && to == AlState::Op) return sync_->check_op();
     return esc::AlStatusCode::NoError;
 }
 

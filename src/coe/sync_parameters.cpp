@@ -60,6 +60,8 @@ SyncParameters::SyncParameters(ObjectDictionary& od, const device::DeviceDescrip
     for (const auto& m : d.dc_modes)
         if (m.assign_activate != 0) dc_supported_ = true;
     slave_cycle_value_ = static_cast<std::uint32_t>(get(kOutPar, sub::CycleTime));
+    requested_ = static_cast<SyncMode>(get(kOutPar, sub::SyncMode));
+    mode_ = requested_;
     // 0x1C32:01 takes the modes this device has; anything else is refused when written.
     if (Entry* e = od_.find(kOutPar, sub::SyncMode)) {
         e->on_download = [this](const Entry&, ConstBytes v) {
@@ -70,6 +72,10 @@ SyncParameters::SyncParameters(ObjectDictionary& od, const device::DeviceDescrip
                 m == static_cast<std::uint16_t>(SyncMode::SmSynchronous) || (dc && dc_supported_))
                 return SdoAbort::None;
             return SdoAbort::ValueRange;
+        };
+        e->after_download = [this](Entry& en) {
+            mode_written_ = true;
+            requested_ = static_cast<SyncMode>(en.get<std::uint16_t>());
         };
     }
     // 0x1C32:08 "Get cycle time": 2 resets the error counters (ETG.1020 Table 78).
@@ -121,7 +127,7 @@ AlStatusCode SyncParameters::check_safeop() {
     const bool cyclic = act & esc::dc_act::CyclicOperation;
     const bool s0 = act & esc::dc_act::Sync0;
     const bool s1 = act & esc::dc_act::Sync1;
-    const auto requested = static_cast<SyncMode>(get(kOutPar, sub::SyncMode));
+    const SyncMode requested = requested_;
     const auto written_cycle = static_cast<std::uint32_t>(get(kOutPar, sub::CycleTime));
     const bool cycle_written = written_cycle != slave_cycle_value_ && written_cycle != 0;
     const bool wants_dc = requested == SyncMode::DcSync0 || requested == SyncMode::DcSync1;
@@ -153,6 +159,18 @@ AlStatusCode SyncParameters::check_safeop() {
     mode_ = requested;
     app_cycle_ns_ = 0;
     checked_cycle0_ns_ = 0;
+    return AlStatusCode::NoError;
+}
+
+AlStatusCode SyncParameters::check_op() {
+    if (dc_mode() || mode_written_ || !slave_) return AlStatusCode::NoError;
+    const std::uint8_t act = slave_->esc().peek(esc::addr(esc::Reg::DcActivation));
+    if (!(act & (esc::dc_act::Sync0 | esc::dc_act::Sync1))) return AlStatusCode::NoError;
+    const AlStatusCode code = check_safeop();
+    if (code != AlStatusCode::NoError) return code;
+    publish();
+    sync_events_ = 0;
+    error_counter_ = 0;
     return AlStatusCode::NoError;
 }
 
@@ -203,8 +221,7 @@ void SyncParameters::on_state_change(AlState from, AlState to) {
                 sm_out_ >= 0 ? slave_->esc().sm_buffer_writes(static_cast<unsigned>(sm_out_)) : 0;
         }
     }
-    if (to == AlState::PreOp || to == AlState::Init)
-        mode_ = static_cast<SyncMode>(get(kOutPar, sub::SyncMode));
+    if (to == AlState::PreOp || to == AlState::Init) mode_ = requested_;
     if (to == AlState::Op) {
         error_counter_ = 0;
         faulted_ = false;

@@ -16,7 +16,8 @@
 //  - 0x0028 synchronisation not supported: a mode this device does not have (0x1C32:04);
 //  - 0x002D no sync error: SAFEOP -> OP in DC mode and SYNC0 does not run within kSyncWaitNs;
 //  - 0x0032 PLL error: the SYNC0 cycle time changed after it was checked (the drive cannot lock on it);
-//  - 0x002C fatal sync error: in OP, SYNC0 stopped, or the sync error counter passed 0x10F1:02.
+//  - 0x002C fatal sync error: in OP, SYNC0 stopped, or the sync error counter passed 0x10F1:02 (+3 per
+//    SYNC event without new outputs, -1 per good one, ETG.1020; a limit of 0 disables the check).
 #pragma once
 
 #include <cstdint>
@@ -56,6 +57,9 @@ class SyncParameters {
 
     // PREOP -> SAFEOP: chooses the mode from 0x1C32:01 and the DC activation (0x0981); NoError or the code.
     esc::AlStatusCode check_safeop();
+    // SAFEOP -> OP: a master that activated SYNC0 only in SAFEOP (SOEM's ecx_dcsync0 after ecx_config_map)
+    // without choosing a mode in 0x1C32:01 gets DC mode now, with the same checks as at PREOP -> SAFEOP.
+    esc::AlStatusCode check_op();
     // Entering SAFEOP from PREOP publishes the mode and cycle (0x1C32/0x1C33, 0x60C2) and resets the
     // counters.
     void on_state_change(esc::AlState from, esc::AlState to);
@@ -99,6 +103,8 @@ class SyncParameters {
     std::uint64_t not_delivered_at_last_ = 0;
     std::uint16_t error_counter_ = 0;
     bool faulted_ = false;
+    bool mode_written_ = false;                     // the master wrote 0x1C32:01
+    SyncMode requested_ = SyncMode::SmSynchronous;  // 0x1C32:01 as configured (the slave overwrites it)
     SyncCounters counters_;
 };
 

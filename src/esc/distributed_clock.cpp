@@ -37,11 +37,12 @@ std::uint16_t latch_time(unsigned unit, bool positive) {
 // its 10 ns clock, N coming from the speed counter (start value 0x0930, adapted within +-(0x0930 - 0x7F) and
 // shown in 0x0932). Modelled here as a PI controller on the rate:
 //  - proportional part: diff / Tp, limited to the correction of the start value, 1 ns per (0x0930 x 10 ns);
-//    Tp = 0x0930 x 50 us, so the proportional region is +-5 us whatever the start value (0x1000: Tp 205 ms,
-//    limit 24.4 ppm);
-//  - integral part (the adapted speed counter): integrates the difference (clipped to the proportional
-//    region) with Ti = Tp x 2^(0x0935 - 10), at least Tp (0x0C: Ti = 4 Tp, critically damped); limited to
-//    the fastest speed counter, 1 ns per 0x7F x 10 ns (787 ppm);
+//    Tp = 0x0930 x 12.5 us, so the proportional region is +-1.25 us whatever the start value (0x1000: Tp
+//    51 ms, limit 24.4 ppm);
+//  - integral part (the adapted speed counter): integrates the difference (clipped to +-20 us) with
+//    Ti = Tp x 2^(0x0935 - 10), at least Tp (0x0C: Ti = 4 Tp, critically damped); limited to the fastest
+//    speed counter, 1 ns per 0x7F x 10 ns (787 ppm). 100 ppm are caught within ~0.6 s (peak ~8 us) with a
+//    write every 1 ms, 500 ppm within ~2.5 s;
 //  - 0x092C shows the mean of the differences over 2^(0x0934) writes (sign in bit 31: 1 = local copy
 //    smaller than the received time).
 // This is a model of the loop's behaviour, not of its gates: it converges to the reference clock's rate, it
@@ -138,7 +139,7 @@ void DistributedClock::system_time_written(const std::array<std::uint8_t, 8>& va
     if (have_write_) {
         const std::uint64_t dt =
             host_ns > last_write_host_ ? std::min(host_ns - last_write_host_, kMaxLoopStepNs) : 0;
-        const double e = std::clamp(static_cast<double>(diff), -kLinearRangeNs, kLinearRangeNs);
+        const double e = std::clamp(static_cast<double>(diff), -kIntegratorRangeNs, kIntegratorRangeNs);
         freq_ = std::clamp(freq_ + e * static_cast<double>(dt) / (tp * ti), -f_max, f_max);
     }
     phase_ = std::clamp(static_cast<double>(diff) / tp, -p_max, p_max);
@@ -164,7 +165,9 @@ void DistributedClock::before_read(std::uint16_t lo, std::uint16_t hi, std::uint
     if (overlaps(lo, hi, addr(Reg::DcActivationStatus), 1)) {
         std::uint8_t s = reg(Reg::DcActivationStatus) & dc_act::StatusStartTimeImplausible;
         const std::uint8_t act = reg(Reg::DcActivation);
-        if (cyclic_active_ && sync0_pending_ && (act & dc_act::Sync0)) s |= dc_act::StatusSync0Pending;
+        const bool first_due = next_sync0_ != kNever && next_sync0_ <= system_time(host_ns);
+        if (cyclic_active_ && sync0_pending_ && !first_due && (act & dc_act::Sync0))
+            s |= dc_act::StatusSync0Pending;
         if (cyclic_active_ && sync1_pending_ && (act & dc_act::Sync1)) s |= dc_act::StatusSync1Pending;
         reg(Reg::DcActivationStatus) = s;
     }
@@ -181,7 +184,8 @@ void DistributedClock::before_read(std::uint16_t lo, std::uint16_t hi, std::uint
         }
     }
     if (overlaps(lo, hi, addr(Reg::DcStartTimeCyclic), 8))
-        st_le64(&regs_[addr(Reg::DcStartTimeCyclic)], cyclic_active_ ? next_sync0_ : start_written_);
+        st_le64(&regs_[addr(Reg::DcStartTimeCyclic)],
+                cyclic_active_ ? projected_next_sync0(system_time(host_ns)) : start_written_);
     if (overlaps(lo, hi, addr(Reg::DcNextSync1Pulse), 8))
         st_le64(&regs_[addr(Reg::DcNextSync1Pulse)],
                 cyclic_active_ && next_sync1_ != kNever ? next_sync1_ : 0);
@@ -273,6 +277,12 @@ void DistributedClock::activate(std::uint64_t host_ns) {
     sync0_pending_ = true;
     sync1_pending_ = true;
     status_latched_[0] = status_latched_[1] = false;
+}
+
+std::uint64_t DistributedClock::projected_next_sync0(std::uint64_t sys) const {
+    const std::uint32_t cycle0 = ld_le32(&regs_[addr(Reg::DcSync0CycleTime)]);
+    if (next_sync0_ == kNever || next_sync0_ > sys || cycle0 == 0) return next_sync0_;
+    return next_sync0_ + ((sys - next_sync0_) / cycle0 + 1) * cycle0;
 }
 
 void DistributedClock::deactivate() {

@@ -110,7 +110,10 @@ class DistributedClock {
 
     // Loop constants (see distributed_clock.cpp).
     static constexpr std::uint16_t kMinSpeedCounter = 0x7F;
-    static constexpr double kLinearRangeNs = 5000.0;  // proportional region of the control loop
+    static constexpr double kLinearRangeNs = 1250.0;       // proportional region of the control loop
+    static constexpr double kIntegratorRangeNs = 20000.0;  // differences beyond count as this much
+    // Next SYNC0 time as the silicon shows it at system time sys, also when the firmware did not poll yet.
+    std::uint64_t projected_next_sync0(std::uint64_t sys) const;
 
   private:
     void reanchor(std::uint64_t host_ns);

@@ -31,6 +31,9 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
         return false;
     } else {
         const std::size_t n = slaves_.size();
+        // SYNC pulses that fell due before this frame arrived happen first (the server may be late).
+        for (auto& s : slaves_)
+            if (s->esc().dc().next_pulse_host_ns() <= now_ns) s->run(now_ns);
         for (std::size_t k = 0; k < n; ++k) {
             FrameTiming t;
             t.port0_ns = now_ns + k * hop_delay_ns;

@@ -770,3 +770,28 @@ TEST(DcSyncFaults, LateFirmwareCountsCycleTimeTooSmall) {
     b.cycle(3 * kMs);
     EXPECT_EQ(b.od_get(0x1C32, 12), 8u);
 }
+
+TEST(DcSyncMode, Sync0ActivatedOnlyInSafeOpSwitchesToDcAtSafeOpToOp) {
+    // Given a master that activates SYNC0 after SAFEOP (SOEM: ecx_dcsync0 after ecx_config_map) and never
+    // writes 0x1C32:01;
+    SyncBench b;
+    b.to_preop();
+    b.request(AlState::SafeOp);
+    b.cycle();
+    ASSERT_EQ(b.status().state(), AlState::SafeOp);
+    EXPECT_EQ(b.od_get(0x1C32, 1), 1u);  // SM-synchronous so far
+    ASSERT_TRUE(b.master.start_sync(b.master.slaves()[0].station, 1'000'000, 0, 20 * kMs));
+    // When OP is requested, Then the drive switches to DC SYNC0 and reaches OP once SYNC0 runs.
+    const auto r = b.go_op();
+    ASSERT_EQ(r.state(), AlState::Op) << std::hex << r.code;
+    EXPECT_EQ(b.od_get(0x1C32, 1), 2u);
+    EXPECT_EQ(b.app().sync_mode(), coe::SyncMode::DcSync0);
+    // Back in PREOP without SYNC0 the next SAFEOP is SM-synchronous again (the master never asked for DC).
+    ASSERT_TRUE(b.master.stop_sync(b.master.slaves()[0].station));
+    b.request(AlState::PreOp);
+    b.cycle();
+    b.request(AlState::SafeOp);
+    b.cycle();
+    EXPECT_EQ(b.status().state(), AlState::SafeOp) << std::hex << b.status().code;
+    EXPECT_EQ(b.app().sync_mode(), coe::SyncMode::SmSynchronous);
+}
