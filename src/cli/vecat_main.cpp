@@ -68,6 +68,18 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
                seg->counters().dropped);
     if (pcap) fmt::print("vecat: capture written to {} ({} frames)\n", pcap_path, pcap->frames());
+    for (std::size_t i = 0; i < seg->size(); ++i) {
+        const auto& dc = seg->slave(i).esc().dc();
+        const auto sync = dc.sync_state();
+        if (dc.counters().sync_pulses[0] == 0) continue;
+        const double span =
+            sync.cycle0_ns ? static_cast<double>(sync.last_sync0 - sync.first_sync0) / sync.cycle0_ns + 1.0
+                           : 0.0;
+        fmt::print(
+            "vecat: slave {}: {} SYNC0 pulses ({} not taken by the firmware), {:.0f} cycles of {} ns "
+            "between the first and the last\n",
+            i, dc.counters().sync_pulses[0], dc.counters().pulses_not_delivered, span, sync.cycle0_ns);
+    }
     return 0;
 }
 

@@ -303,6 +303,7 @@ DistributedClock::SyncState DistributedClock::sync_state() const {
     s.cycle1_ns = ld_le32(&regs_[addr(Reg::DcSync1CycleTime)]);
     s.next_sync0 = next_sync0_;
     s.last_sync0 = counters_.sync_pulses[0] ? last_pulse_[0] : 0;
+    s.first_sync0 = first_sync0_;
     return s;
 }
 

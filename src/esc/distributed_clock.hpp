@@ -98,8 +98,9 @@ class DistributedClock {
         bool sync0_pending = false;  // first SYNC0 pulse not yet generated
         std::uint32_t cycle0_ns = 0;
         std::uint32_t cycle1_ns = 0;
-        std::uint64_t next_sync0 = 0;  // system time
-        std::uint64_t last_sync0 = 0;  // system time of the last pulse (0: none)
+        std::uint64_t next_sync0 = 0;   // system time
+        std::uint64_t last_sync0 = 0;   // system time of the last pulse (0: none)
+        std::uint64_t first_sync0 = 0;  // system time of the first pulse since activation
     };
     SyncState sync_state() const;
 
