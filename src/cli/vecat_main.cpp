@@ -35,7 +35,7 @@ void install_signals() {
 }
 
 int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
-            bool allow_busy_if) {
+            bool allow_busy_if, double drift_ppm) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -47,6 +47,9 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     }
     auto dev = vecat::device::default_drive();
     auto seg = vecat::cia402::make_drive_segment(dev, slaves);
+    // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
+    for (std::size_t i = 0; i < seg->size(); ++i)
+        seg->slave(i).esc().dc().set_drift_ppm(i % 2 ? -drift_ppm : drift_ppm, vecat::net::monotonic_ns());
     std::unique_ptr<vecat::net::RawSocket> sock;
     try {
         sock = std::make_unique<vecat::net::RawSocket>(iface);
@@ -66,6 +69,18 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
                seg->counters().dropped);
     if (pcap) fmt::print("vecat: capture written to {} ({} frames)\n", pcap_path, pcap->frames());
+    for (std::size_t i = 0; i < seg->size(); ++i) {
+        const auto& dc = seg->slave(i).esc().dc();
+        const auto sync = dc.sync_state();
+        if (dc.counters().sync_pulses[0] == 0) continue;
+        const double span =
+            sync.cycle0_ns ? static_cast<double>(sync.last_sync0 - sync.first_sync0) / sync.cycle0_ns + 1.0
+                           : 0.0;
+        fmt::print(
+            "vecat: slave {}: {} SYNC0 pulses ({} not taken by the firmware), {:.0f} cycles of {} ns "
+            "between the first and the last\n",
+            i, dc.counters().sync_pulses[0], dc.counters().pulses_not_delivered, span, sync.cycle0_ns);
+    }
     return 0;
 }
 
@@ -185,12 +200,16 @@ int main(int argc, char** argv) {
     std::string iface, pcap;
     unsigned slaves = 1;
     bool busy = false, allow_used = false;
+    double drift_ppm = 0.0;
     run->add_option("-i,--iface", iface, "Interface to serve on (one end of a veth pair, or a dedicated NIC)")
         ->required();
     run->add_option("-n,--slaves", slaves, "Number of slaves on the line")->check(CLI::Range(1u, 512u));
     run->add_option("--pcap", pcap, "Write every frame in and out to this pcapng file");
     run->add_flag("--busy-poll", busy,
                   "Spin on the socket instead of sleeping (lowest latency, one core busy)");
+    run->add_option("--dc-drift-ppm", drift_ppm,
+                    "DC clock drift of the slaves in ppm (alternating sign along the line)")
+        ->check(CLI::Range(-1000.0, 1000.0));
     run->add_flag("--allow-used-interface", allow_used,
                   "Serve even on an interface that has an IP address or the default route");
 
@@ -209,7 +228,7 @@ int main(int argc, char** argv) {
     sii_gen->add_option("-o,--output", sii_out, "Output file (standard output when omitted)");
 
     CLI11_PARSE(app, argc, argv);
-    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used);
+    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm);
     if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);
     if (*sii_gen) return cmd_sii_generate(sii_out);
     return 0;

@@ -5,6 +5,7 @@ namespace vecat::coe {
 CoeApplication::CoeApplication(const device::DeviceDescription& d) : od_(device::dictionary_objects(d)) {
     map_ = std::make_unique<ProcessDataMap>(od_, d);
     sdo_ = std::make_unique<SdoServer>(od_, [this] { return state_; });
+    sync_ = std::make_unique<SyncParameters>(od_, d);
     error_register_ = od_.find(0x1001, 0);
     error_code_ = od_.find(0x603F, 0);
     // An object mapped into the active RxPDOs is written by the master's outputs in SAFEOP and OP.
@@ -37,13 +38,42 @@ void CoeApplication::clear_faults() {
 
 esc::AlStatusCode CoeApplication::check_transition(AlState from, AlState to) {
     requested_ = to;
-    if (from == AlState::PreOp && to == AlState::SafeOp) return map_->validate();
+    if (from == AlState::PreOp && to == AlState::SafeOp) {
+        const auto code = map_->validate();
+        return code != esc::AlStatusCode::NoError ? code : sync_->check_safeop();
+    }
+    if (from == AlState::SafeOp && to == AlState::Op) return sync_->check_op();
     return esc::AlStatusCode::NoError;
 }
 
-void CoeApplication::on_state_change(AlState, AlState to) {
+void CoeApplication::on_state_change(AlState from, AlState to) {
     state_ = to;
     requested_ = to;
+    if (to != AlState::Op) outputs_received_ = false;
+    sync_->on_state_change(from, to);
+}
+
+void CoeApplication::attach(esc::Slave& slave) {
+    sync_->attach(slave);
+}
+
+esc::OpReadiness CoeApplication::op_readiness(std::uint64_t now_ns, std::uint64_t since_ns) {
+    return sync_->op_readiness(now_ns, since_ns);
+}
+
+void CoeApplication::tick(std::uint64_t now_ns) {
+    sync_->tick(now_ns, state_);
+}
+
+void CoeApplication::sync_event(unsigned signal, std::uint64_t now_ns) {
+    if (sync_->on_sync_event(signal, now_ns, state_))
+        cycle(now_ns, state_ == AlState::Op && outputs_received_);
+}
+
+bool CoeApplication::refresh_inputs(Bytes inputs) {
+    if (!sync_->dc_mode()) return false;
+    map_->copy_inputs(inputs);
+    return true;
 }
 
 void CoeApplication::on_al_error(esc::AlStatusCode code) {
@@ -68,8 +98,10 @@ void CoeApplication::on_al_error(esc::AlStatusCode code) {
 }
 
 void CoeApplication::exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) {
-    if (apply && !outputs.empty()) map_->copy_outputs(outputs);
-    cycle(now_ns, apply && !outputs.empty());
+    const bool applied = apply && !outputs.empty();
+    if (applied) map_->copy_outputs(outputs);
+    outputs_received_ |= applied && state_ == AlState::Op;
+    if (!sync_->dc_mode()) cycle(now_ns, applied);
     map_->copy_inputs(inputs);
     ++exchanges_;
 }

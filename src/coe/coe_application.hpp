@@ -9,6 +9,7 @@
 #include "coe/object_dictionary.hpp"
 #include "coe/pdo_mapping.hpp"
 #include "coe/sdo_server.hpp"
+#include "coe/sync_parameters.hpp"
 #include "esc/segment.hpp"
 #include "esc/slave.hpp"
 
@@ -61,18 +62,32 @@ class CoeApplication : public esc::Application {
     void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply_outputs, Bytes inputs) override;
     void outputs_safe_state() override;
     esc::MailboxProtocol* mailbox_protocol(esc::MailboxType t) override;
+    void tick(std::uint64_t now_ns) override;
+    void sync_event(unsigned signal, std::uint64_t now_ns) override;
+    bool refresh_inputs(Bytes inputs) override;
+    void attach(esc::Slave& slave) override;
+    esc::OpReadiness op_readiness(std::uint64_t now_ns, std::uint64_t since_ns) override;
 
     std::uint64_t exchanges() const { return exchanges_; }
+    // Synchronisation chosen at PREOP -> SAFEOP (0x1C32:01) and the application cycle: the SYNC0 (SYNC1)
+    // cycle time in DC mode, 0x1C32:02 otherwise, 0 if unknown.
+    SyncMode sync_mode() const { return sync_->mode(); }
+    std::uint64_t cycle_time_ns() const { return sync_->cycle_time_ns(); }
+    SyncParameters& sync_parameters() { return *sync_; }
 
   protected:
     // The device's own step, after new outputs were stored in the dictionary and before the inputs are
-    // read from it. outputs_applied is false below OP or without new outputs.
+    // read from it. outputs_applied is false below OP or without new outputs. In free run and SM-synchronous
+    // mode it runs on every process data exchange; in DC mode on every SYNC0 (SYNC1) event, with the outputs
+    // last received (outputs_applied: in OP with valid outputs).
     virtual void cycle(std::uint64_t /*now_ns*/, bool /*outputs_applied*/) {}
 
   private:
     ObjectDictionary od_;
     std::unique_ptr<ProcessDataMap> map_;
     std::unique_ptr<SdoServer> sdo_;
+    std::unique_ptr<SyncParameters> sync_;
+    bool outputs_received_ = false;  // in OP, outputs were applied (DC mode cycles use the last ones)
     AlState state_ = AlState::Init;
     AlState requested_ = AlState::Init;  // target of the transition being checked (emergency code)
     Entry* error_register_ = nullptr;

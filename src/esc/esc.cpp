@@ -11,6 +11,8 @@ namespace {
 
 constexpr std::uint16_t kDefaultWatchdogDivider = 2498;  // (2498 + 2) x 40 ns = 100 us
 constexpr std::uint16_t kDefaultWatchdogTime = 1000;     // 1000 x 100 us = 100 ms
+constexpr std::uint16_t kDcFirst = 0x0900;               // the DC unit's registers: 0x0900-0x09FF
+constexpr std::uint16_t kDcSize = 0x0100;
 
 bool overlaps(std::uint32_t lo, std::uint32_t hi, std::uint32_t a, std::uint32_t len) {
     return lo < a + len && hi >= a;  // hi inclusive
@@ -34,6 +36,7 @@ void saturating_inc(std::uint8_t& c) {
 Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
     : cfg_(cfg),
       mem_(kRegisterSpaceSize + std::max<std::uint32_t>(cfg.ram_bytes, 8192), 0),
+      dc_(mem_.data(), cfg.dc_drift_ppm, cfg.dc_initial_ns),
       eeprom_(std::move(eeprom)),
       wmask_(make_write_mask_table(std::min<unsigned>(cfg.fmmu_count, kMaxFmmus),
                                    std::min<unsigned>(cfg.sm_count, kMaxSms))) {
@@ -61,15 +64,15 @@ Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
     if (cfg_.sii_read_8_bytes) sii |= sii_ctrl::Read8Bytes;
     if (eeprom_.size() > 2048) sii |= sii_ctrl::TwoAddressBytes;
     st_le16(&mem_[addr(Reg::SiiControl)], sii);
-    st_le16(&mem_[addr(Reg::DcSpeedCounterStart)], 0x1000);
-    mem_[addr(Reg::DcSystemTimeDiffFilterDepth)] = 0x04;
-    mem_[addr(Reg::DcSpeedCounterFilterDepth)] = 0x0C;
     reload_eeprom();
 }
 
-std::uint64_t Esc::local_time(std::uint64_t host_ns) const {
-    const double scaled = static_cast<double>(host_ns) * (1.0 + cfg_.dc_drift_ppm * 1e-6);
-    return cfg_.dc_initial_ns + static_cast<std::uint64_t>(scaled);
+unsigned Esc::pdi_take_sync_pulses(std::uint64_t now_ns, SyncPulse* out, unsigned max) {
+    const std::uint64_t before0 = dc_.counters().sync_pulses[0], before1 = dc_.counters().sync_pulses[1];
+    const unsigned n = dc_.advance(now_ns, out, max);
+    if (dc_.counters().sync_pulses[0] != before0) set_al_event(al_event::Sync0);
+    if (dc_.counters().sync_pulses[1] != before1) set_al_event(al_event::Sync1);
+    return n;
 }
 
 void Esc::reload_eeprom() {
@@ -334,10 +337,7 @@ std::uint8_t* Esc::ecat_write_target(std::uint32_t a) {
 }
 
 void Esc::refresh_dynamic_registers(std::uint16_t first, std::uint16_t last, const FrameTiming& t) {
-    if (overlaps(first, last, addr(Reg::DcSystemTime), 8)) {
-        const std::uint64_t sys = local_time(t.port0_ns) + ld_le64(&mem_[addr(Reg::DcSystemTimeOffset)]);
-        st_le64(&mem_[addr(Reg::DcSystemTime)], sys);
-    }
+    if (overlaps(first, last, kDcFirst, kDcSize)) dc_.before_read(first, last, t.port0_ns);
 }
 
 bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_into, const FrameTiming& t) {
@@ -353,6 +353,8 @@ bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_i
             refresh_dynamic_registers(static_cast<std::uint16_t>(cur),
                                       static_cast<std::uint16_t>(cur + run - 1), t);
             copy_out(dst + pos, &mem_[cur], run, or_into);
+            if (overlaps(cur, cur + static_cast<std::uint32_t>(run) - 1, kDcFirst, kDcSize))
+                dc_.after_read(static_cast<std::uint16_t>(cur), static_cast<std::uint16_t>(cur + run - 1));
             counted = true;
         } else if (cur < mem_.size()) {
             const int s = sm_covering(cur);
@@ -381,6 +383,7 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
     bool sii_cmd_written = false;
     std::array<std::uint8_t, 8> systime{};
     std::uint8_t systime_bytes = 0;
+    const std::uint8_t activation_before = mem_[addr(Reg::DcActivation)];
     std::size_t pos = 0;
     while (pos < n) {
         const std::uint32_t cur = static_cast<std::uint32_t>(a) + static_cast<std::uint32_t>(pos);
@@ -427,21 +430,12 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
     }
     if (reg_lo <= reg_hi) {
         if (sii_cmd_written) sii_command(written_sii_cmd_);
-        if (systime_bytes) {
-            // A write of the system time feeds the time control loop: the difference to the local copy goes
-            // to 0x092C (sign in bit 31), and the local copy is steered towards the received time.
-            const std::uint64_t mine = local_time(t.port0_ns) + ld_le64(&mem_[addr(Reg::DcSystemTimeOffset)]);
-            const bool wide = (systime_bytes & 0xF0) != 0;
-            const std::uint64_t received = ld_le64(systime.data());
-            std::int64_t diff = wide ? static_cast<std::int64_t>(received - mine)
-                                     : static_cast<std::int32_t>(static_cast<std::uint32_t>(received) -
-                                                                 static_cast<std::uint32_t>(mine));
-            const std::uint64_t mag = static_cast<std::uint64_t>(diff < 0 ? -diff : diff);
-            std::uint32_t reg = static_cast<std::uint32_t>(std::min<std::uint64_t>(mag, 0x7FFFFFFF));
-            if (diff > 0) reg |= 0x80000000u;  // local copy smaller than received time
-            st_le32(&mem_[addr(Reg::DcSystemTimeDifference)], reg);
-        }
+        // A write of the system time feeds the time control loop (0x092C, the local clock's rate).
+        if (systime_bytes) dc_.system_time_written(systime, systime_bytes, t.port0_ns);
         after_register_write(static_cast<std::uint16_t>(reg_lo), static_cast<std::uint16_t>(reg_hi), t);
+        if (overlaps(reg_lo, reg_hi, kDcFirst, kDcSize))
+            dc_.after_write(static_cast<std::uint16_t>(reg_lo), static_cast<std::uint16_t>(reg_hi),
+                            t.port0_ns, t.port1_ns, port_link(1), activation_before);
     }
     return counted;
 }
@@ -508,7 +502,7 @@ bool Esc::sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, st
 // ---------------------------------------------------------------------------------------------
 // Register side effects
 
-void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTiming& t) {
+void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTiming& /*t*/) {
     if (overlaps(lo, hi, addr(Reg::AlControl), 2)) set_al_event(al_event::AlControl);
     if (overlaps(lo, hi, addr(Reg::RxErrorCounter), 12))
         std::memset(&mem_[addr(Reg::RxErrorCounter)], 0, 12);  // any write clears 0x0300-0x030B
@@ -528,14 +522,6 @@ void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTi
         const unsigned s0 = lo < 0x0800 ? 0 : (lo - 0x0800u) / kSmSize;
         for (unsigned s = s0; s < cfg_.sm_count && sm_addr(s) <= hi; ++s)
             update_sm(s);
-    }
-    if (overlaps(lo, hi, addr(Reg::DcRecvTimePort0), 4)) {
-        // Write to receive time port 0: every port latches the time this frame passed it (ETG.1000.4 9.1).
-        const std::uint64_t t0 = local_time(t.port0_ns);
-        st_le32(&mem_[addr(Reg::DcRecvTimePort0)], static_cast<std::uint32_t>(t0));
-        if (port_link(1))
-            st_le32(&mem_[addr(Reg::DcRecvTimePort1)], static_cast<std::uint32_t>(local_time(t.port1_ns)));
-        st_le64(&mem_[addr(Reg::DcRecvTimeEcatPu)], t0);
     }
 }
 

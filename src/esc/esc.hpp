@@ -9,6 +9,7 @@
 
 #include "common/bytes.hpp"
 #include "esc/datagram.hpp"
+#include "esc/distributed_clock.hpp"
 #include "esc/registers.hpp"
 
 namespace vecat::esc {
@@ -42,6 +43,8 @@ struct EscCounters {
 class Esc {
   public:
     explicit Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom);
+    Esc(const Esc&) = delete;  // the DC unit points into the register memory
+    Esc& operator=(const Esc&) = delete;
 
     // ---- EtherCAT side
     // Processes one datagram as this ESC; updates data, working counter and (auto-increment) ADP.
@@ -95,7 +98,12 @@ class Esc {
     bool pd_watchdog_expired() const { return (mem_[addr(Reg::WatchdogStatusProcessData)] & 1) == 0; }
 
     // DC local time (ns) at a given host time.
-    std::uint64_t local_time(std::uint64_t host_ns) const;
+    std::uint64_t local_time(std::uint64_t host_ns) const { return dc_.local_time(host_ns); }
+    // The distributed clocks unit (clocks, time control loop, SYNC out unit, latch units).
+    DistributedClock& dc() { return dc_; }
+    const DistributedClock& dc() const { return dc_; }
+    // SYNC pulses due up to now_ns, as the PDI sees its SYNC0/SYNC1 interrupts (sets the AL event bits).
+    unsigned pdi_take_sync_pulses(std::uint64_t now_ns, SyncPulse* out, unsigned max);
 
     // ---- Raw access for tests, tools and the application's own registers
     std::uint8_t peek(std::uint16_t a) const { return a < mem_.size() ? mem_[a] : 0; }
@@ -164,6 +172,7 @@ class Esc {
 
     EscConfig cfg_;
     std::vector<std::uint8_t> mem_;  // 0x0000 .. 0x1000 + ram_bytes
+    DistributedClock dc_;            // works on mem_'s DC registers
     std::vector<std::uint8_t> eeprom_;
     WriteMaskTable wmask_;
     std::array<SmState, kMaxSms> sm_{};

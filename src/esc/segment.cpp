@@ -1,5 +1,6 @@
 #include "esc/segment.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 #include "esc/datagram.hpp"
@@ -30,10 +31,15 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
         return false;
     } else {
         const std::size_t n = slaves_.size();
+        // SYNC pulses that fell due before this frame arrived happen first (the server may be late).
+        for (auto& s : slaves_)
+            if (s->esc().dc().next_pulse_host_ns() <= now_ns) s->run(now_ns);
         for (std::size_t k = 0; k < n; ++k) {
             FrameTiming t;
             t.port0_ns = now_ns + k * hop_delay_ns;
-            t.port1_ns = now_ns + (2 * (n - 1) - k) * hop_delay_ns + hop_delay_ns / 2;
+            // Back at port 1 after the slaves behind it (same delay per hop both ways; the last slave loops
+            // the frame back through its closed port 1 without delay), so masters compute exact delays.
+            t.port1_ns = now_ns + (2 * (n - 1) - k) * hop_delay_ns;
             Esc& esc = slaves_[k]->esc();
             for (std::size_t i = 0; i < pf.count; ++i)
                 esc.process(pf.datagram(frame, i), t);
@@ -53,6 +59,13 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
 void Segment::tick(std::uint64_t now_ns) {
     for (auto& s : slaves_)
         s->run(now_ns);
+}
+
+std::uint64_t Segment::next_event_ns() const {
+    std::uint64_t t = DistributedClock::kNever;
+    for (const auto& s : slaves_)
+        t = std::min(t, s->esc().dc().next_pulse_host_ns());
+    return t;
 }
 
 std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n, const EscConfig& cfg,

@@ -33,6 +33,9 @@ class Segment {
     bool process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns);
     // Runs the slaves' firmware and watchdogs without a frame.
     void tick(std::uint64_t now_ns);
+    // Host time of the next SYNC pulse of any slave (DistributedClock::kNever if none): the serve loop runs
+    // tick() then, so SYNC events happen on time without frames.
+    std::uint64_t next_event_ns() const;
 
     const SegmentCounters& counters() const { return counters_; }
 

@@ -124,6 +124,7 @@ Slave::Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::uniq
     outputs_.resize(2048);
     inputs_.resize(2048);
     sink_ = std::make_unique<SlaveReplySink>(*this);
+    app_->attach(*this);
     set_sm_group(true, false);
     set_sm_group(false, false);
     publish_status();
@@ -277,11 +278,10 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
             code = app_->check_transition(state_, to);
             if (code != AlStatusCode::NoError) {
                 set_error(code, AlState::SafeOp, now_ns);
-            } else if (outputs_valid()) {
-                enter(AlState::Op, now_ns);
             } else {
-                op_pending_ = true;  // stays SAFEOP until the first outputs arrive
+                op_pending_ = true;  // stays SAFEOP until the outputs are valid and the application ready
                 op_pending_since_ = now_ns;
+                try_enter_op(now_ns);
             }
             break;
         case AlAction::Refuse:
@@ -379,19 +379,39 @@ void Slave::run(std::uint64_t now_ns) {
             publish_status();
         }
     }
-    if (op_pending_) {
-        if (outputs_valid()) {
-            enter(AlState::Op, now_ns);
-            publish_status();
-        } else if (now_ns - op_pending_since_ > kOutputsValidTimeoutNs) {
-            op_pending_ = false;
-            set_error(AlStatusCode::NoValidOutputs, AlState::SafeOp, now_ns);
-            publish_status();
-        }
-    }
+    if (op_pending_) try_enter_op(now_ns);
     if (state_ != AlState::Init && state_ != AlState::Boot) service_mailbox();
     if (rank(state_) >= rank(AlState::SafeOp)) exchange_process_data(now_ns);
+    deliver_sync_pulses(now_ns);
     app_->tick(now_ns);
+}
+
+void Slave::try_enter_op(std::uint64_t now_ns) {
+    const OpReadiness r = app_->op_readiness(now_ns, op_pending_since_);
+    if (r.error != AlStatusCode::NoError) {
+        op_pending_ = false;
+        set_error(r.error, AlState::SafeOp, now_ns);
+    } else if (r.ready && outputs_valid()) {
+        enter(AlState::Op, now_ns);
+    } else if (!outputs_valid() && now_ns - op_pending_since_ > kOutputsValidTimeoutNs) {
+        op_pending_ = false;
+        set_error(AlStatusCode::NoValidOutputs, AlState::SafeOp, now_ns);
+    } else {
+        return;  // still waiting (the application bounds its own wait)
+    }
+    publish_status();
+}
+
+void Slave::deliver_sync_pulses(std::uint64_t now_ns) {
+    const unsigned n = esc_.pdi_take_sync_pulses(now_ns, pulses_.data(), kMaxPulsesPerRun);
+    if (n == 0) return;
+    esc_.pdi_clear_al_event(al_event::Sync0 | al_event::Sync1);
+    for (unsigned i = 0; i < n; ++i)
+        app_->sync_event(pulses_[i].signal, pulses_[i].host_ns);
+    if (rank(state_) < rank(AlState::SafeOp) || sm_in_ < 0) return;
+    const unsigned in_len = std::min<unsigned>(app_->input_bytes(), static_cast<unsigned>(inputs_.size()));
+    if (in_len > 0 && app_->refresh_inputs(Bytes(inputs_.data(), in_len)))
+        esc_.pdi_buffer_write(static_cast<unsigned>(sm_in_), ConstBytes(inputs_.data(), in_len));
 }
 
 }  // namespace vecat::esc

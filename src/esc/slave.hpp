@@ -16,6 +16,14 @@
 
 namespace vecat::esc {
 
+class Slave;
+
+// Whether the application lets a waiting SAFEOP -> OP transition complete (see Application::op_readiness).
+struct OpReadiness {
+    bool ready = true;                           // false: keep waiting
+    AlStatusCode error = AlStatusCode::NoError;  // not NoError: refuse with this code
+};
+
 // What the application behind the PDI provides. The slave calls it from the frame-processing thread.
 class Application {
   public:
@@ -36,6 +44,19 @@ class Application {
     virtual MailboxProtocol* mailbox_protocol(MailboxType) { return nullptr; }
     // Called regularly, also without frames (time-driven behaviour).
     virtual void tick(std::uint64_t /*now_ns*/) {}
+    // One SYNC pulse of the DC unit (signal 0 = SYNC0, 1 = SYNC1), with its time on the host clock. Called
+    // for every pulse, in time order, before tick(); pulses the firmware could not take are counted by the
+    // ESC.
+    virtual void sync_event(unsigned /*signal*/, std::uint64_t /*now_ns*/) {}
+    // After SYNC events: new inputs to publish at once (true if written into inputs), so the master's next
+    // frame reads what the application computed at the SYNC event.
+    virtual bool refresh_inputs(Bytes /*inputs*/) { return false; }
+    // The slave gives itself once, at construction: the PDI view of the ESC (DC registers, SyncManager
+    // counters) and raise_error() for errors the application detects (sync loss...).
+    virtual void attach(Slave& /*slave*/) {}
+    // SAFEOP -> OP waits until the outputs are valid and the application is ready (e.g. SYNC0 running);
+    // called at the request and on every run while the transition waits (waiting since since_ns).
+    virtual OpReadiness op_readiness(std::uint64_t /*now_ns*/, std::uint64_t /*since_ns*/) { return {}; }
 };
 
 // A process image without behaviour: keeps the last outputs and serves inputs set from outside.
@@ -113,6 +134,8 @@ class Slave {
     void service_mailbox();
     void send_pending_replies();
     void exchange_process_data(std::uint64_t now_ns);
+    void deliver_sync_pulses(std::uint64_t now_ns);
+    void try_enter_op(std::uint64_t now_ns);
     void set_sm_group(bool mailbox, bool active);
 
     device::DeviceDescription desc_;
@@ -138,6 +161,8 @@ class Slave {
     std::array<std::size_t, kReplySlots> queue_len_{};
     std::size_t q_head_ = 0, q_count_ = 0;
     std::vector<std::uint8_t> outputs_, inputs_;
+    static constexpr unsigned kMaxPulsesPerRun = 16;  // SYNC pulses taken per firmware run; more are missed
+    std::array<SyncPulse, kMaxPulsesPerRun> pulses_{};
     SlaveCounters counters_;
     friend class SlaveReplySink;
 };

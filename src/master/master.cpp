@@ -419,7 +419,125 @@ bool Master::request_state(std::uint16_t station, AlState s, std::chrono::millis
 
 std::optional<std::uint16_t> Master::exchange_process_data() {
     if (image_.empty()) return std::nullopt;
-    return transact_logical(Command::LRW, opt_.logical_base, Bytes(image_.data(), image_.size()));
+    if (dc_ref_ == 0)
+        return transact_logical(Command::LRW, opt_.logical_base, Bytes(image_.data(), image_.size()));
+    // Reference clock distribution in the cyclic frame, after the LRW (as SOEM does).
+    dc_buf_.fill(0);
+    DatagramRequest dg[2] = {
+        {Command::LRW, opt_.logical_base, Bytes(image_.data(), image_.size())},
+        {Command::FRMW,
+         static_cast<std::uint32_t>(dc_ref_) | (static_cast<std::uint32_t>(ra(Reg::DcSystemTime)) << 16),
+         Bytes(dc_buf_.data(), dc_buf_.size())}};
+    if (!transact_frame(dg)) return std::nullopt;
+    if (dg[1].wkc) dc_time_ = ld_le64(dc_buf_.data());
+    return dg[0].wkc;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Distributed clocks
+
+bool Master::configure_dc() {
+    // EtherCAT system time counts from 2000-01-01 00:00 UTC.
+    constexpr std::uint64_t kEpoch2000 = 946'684'800ull * 1'000'000'000ull;
+    const auto now = std::chrono::system_clock::now().time_since_epoch();
+    const auto ns =
+        static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(now).count());
+    return configure_dc(ns > kEpoch2000 ? ns - kEpoch2000 : ns);
+}
+
+bool Master::configure_dc(std::uint64_t master_time_ns) {
+    dc_ref_ = 0;
+    std::uint8_t zero[4] = {};
+    if (!bwr(ra(Reg::DcRecvTimePort0), zero)) return false;  // every slave latches its receive times
+    SlaveInfo* parent = nullptr;
+    for (auto& s : slaves_) {
+        s.has_dc = (s.features & esc::feature::DcAvailable) != 0;
+        if (!s.has_dc) continue;
+        std::uint8_t times[16] = {};
+        std::uint8_t pu[8] = {};
+        auto w1 = fprd(s.station, ra(Reg::DcRecvTimePort0), times);
+        auto w2 = fprd(s.station, ra(Reg::DcRecvTimeEcatPu), pu);
+        if (!w1 || *w1 != 1 || !w2 || *w2 != 1) return false;
+        for (unsigned p = 0; p < 4; ++p)
+            s.dc_port_time[p] = ld_le32(times + 4 * p);
+        s.dc_recv_time = ld_le64(pu);
+        // Delay on a line: half the difference between the parent's loop time (port 0 -> port 1 back) and
+        // this slave's own, plus the parent's delay. Port 1 open when DL status shows communication on it.
+        auto loop_time = [](const SlaveInfo& x) -> std::int64_t {
+            const bool port1 = (x.dl_status & esc::dl_status::communication(1)) != 0;
+            return port1 ? static_cast<std::int32_t>(x.dc_port_time[1] - x.dc_port_time[0]) : 0;
+        };
+        if (!parent) {
+            s.dc_delay_ns = 0;
+            dc_ref_ = s.station;
+        } else {
+            const std::int64_t d = (loop_time(*parent) - loop_time(s)) / 2;
+            s.dc_delay_ns = parent->dc_delay_ns + static_cast<std::uint32_t>(d > 0 ? d : 0);
+            if (!write32(s.station, ra(Reg::DcSystemTimeDelay), s.dc_delay_ns)) return false;
+        }
+        // Offset: the system time of every slave reads the master's time at the moment the latching frame
+        // left the reference clock (this slave latched dc_delay_ns later), so all agree at once.
+        s.dc_offset = master_time_ns + s.dc_delay_ns - s.dc_recv_time;
+        std::uint8_t off[8];
+        st_le64(off, s.dc_offset);
+        auto w3 = fpwr(s.station, ra(Reg::DcSystemTimeOffset), off);
+        if (!w3 || *w3 != 1) return false;
+        parent = &s;
+    }
+    return true;
+}
+
+std::optional<std::uint64_t> Master::distribute_reference_clock() {
+    if (dc_ref_ == 0) return std::nullopt;
+    dc_buf_.fill(0);
+    auto w = transact(Command::FRMW, dc_ref_, ra(Reg::DcSystemTime), Bytes(dc_buf_.data(), dc_buf_.size()));
+    if (!w || *w == 0) return std::nullopt;
+    dc_time_ = ld_le64(dc_buf_.data());
+    return dc_time_;
+}
+
+bool Master::compensate_static_drift(unsigned frames) {
+    for (unsigned i = 0; i < frames; ++i)
+        if (!distribute_reference_clock()) return false;
+    return true;
+}
+
+std::optional<std::uint32_t> Master::max_system_time_difference() {
+    std::uint32_t worst = 0;
+    for (const auto& s : slaves_) {
+        if (!s.has_dc || s.station == dc_ref_) continue;
+        auto v = read32(s.station, ra(Reg::DcSystemTimeDifference));
+        if (!v) return std::nullopt;
+        worst = std::max(worst, *v & 0x7FFFFFFFu);  // bit 31 is the sign
+    }
+    return worst;
+}
+
+bool Master::stop_sync(std::uint16_t station) {
+    return write8(station, ra(Reg::DcActivation), 0);
+}
+
+bool Master::start_sync(std::uint16_t station, std::uint32_t cycle0_ns, std::int32_t shift_ns,
+                        std::uint64_t start_delay_ns, std::optional<std::uint32_t> cycle1_ns) {
+    if (!stop_sync(station) || !write8(station, ra(Reg::DcCyclicUnitControl), 0)) return false;
+    std::uint8_t b[8] = {};
+    auto w = fprd(station, ra(Reg::DcSystemTime), b);
+    if (!w || *w != 1) return false;
+    const std::uint64_t now = ld_le64(b);
+    // The true cycle with SYNC1: SYNC1 follows every (cycle1 / cycle0 + 1)-th SYNC0.
+    const std::uint64_t period = cycle1_ns && cycle0_ns
+                                     ? (static_cast<std::uint64_t>(*cycle1_ns / cycle0_ns) + 1) * cycle0_ns
+                                     : cycle0_ns;
+    std::uint64_t start = now + start_delay_ns;
+    if (period) start = (start / period) * period + period;
+    start += static_cast<std::uint64_t>(static_cast<std::int64_t>(shift_ns));
+    st_le64(b, start);
+    auto w2 = fpwr(station, ra(Reg::DcStartTimeCyclic), b);
+    if (!w2 || *w2 != 1) return false;
+    if (!write32(station, ra(Reg::DcSync0CycleTime), cycle0_ns)) return false;
+    if (cycle1_ns && !write32(station, ra(Reg::DcSync1CycleTime), *cycle1_ns)) return false;
+    const std::uint8_t act = cycle1_ns ? 0x07 : 0x03;  // cyclic operation + SYNC0 (+ SYNC1)
+    return write8(station, ra(Reg::DcActivation), act);
 }
 
 Bytes Master::outputs(std::size_t i) {
@@ -447,6 +565,28 @@ bool Master::startup(AlState target, std::string* why) {
     if (!request_state(AlState::PreOp)) return fail("PREOP refused");
     if (target == AlState::PreOp) return true;
     if (!configure_process_data()) return fail("process data configuration failed");
+    if (opt_.dc.enable) {
+        // IgH/TwinCAT order: delays and offsets, static drift compensation, wait for the system time
+        // difference to be small, then SYNC0 on every DC slave before SAFEOP.
+        if (!configure_dc()) return fail("DC configuration failed");
+        if (dc_ref_ != 0) {
+            if (!compensate_static_drift(opt_.dc.static_drift_frames))
+                return fail("DC drift compensation failed");
+            const auto deadline = std::chrono::steady_clock::now() + opt_.dc.sync_wait;
+            while (true) {
+                distribute_reference_clock();
+                auto d = max_system_time_difference();
+                if (d && *d <= opt_.dc.max_sync_diff_ns) break;
+                if (std::chrono::steady_clock::now() > deadline)
+                    return fail("DC system time difference stays large");
+            }
+            if (opt_.dc.sync0_cycle_ns)
+                for (const auto& s : slaves_)
+                    if (s.has_dc && !start_sync(s.station, opt_.dc.sync0_cycle_ns, opt_.dc.shift_ns,
+                                                opt_.dc.start_delay_ns))
+                        return fail("SYNC0 activation failed");
+        }
+    }
     if (!request_state(AlState::SafeOp)) return fail("SAFEOP refused");
     if (target == AlState::SafeOp) return true;
     exchange_process_data();

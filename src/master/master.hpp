@@ -42,6 +42,23 @@ struct SlaveInfo {
     std::size_t out_offset = 0;  // in the process image
     std::size_t in_offset = 0;
     std::uint8_t mailbox_counter = 0;  // last mailbox counter used (1..7), kept per slave like real masters
+    // Distributed clocks (configure_dc)
+    bool has_dc = false;
+    std::array<std::uint32_t, 4> dc_port_time{};  // receive times latched by the BWR 0x0900
+    std::uint64_t dc_recv_time = 0;               // 0x0918
+    std::uint32_t dc_delay_ns = 0;                // propagation delay from the reference clock (0x0928)
+    std::uint64_t dc_offset = 0;                  // system time offset written (0x0920)
+};
+
+// Distributed clocks in startup(): what SOEM's ecx_configdc + ecx_dcsync0 and IgH do.
+struct DcOptions {
+    bool enable = false;
+    std::uint32_t sync0_cycle_ns = 1'000'000;  // 0: measure delays and set offsets only
+    std::int32_t shift_ns = 0;
+    unsigned static_drift_frames = 15'000;       // FRMW bursts before SYNC0 (IgH/TwinCAT style)
+    std::uint32_t max_sync_diff_ns = 10'000;     // wait until 0x092C is below (IgH: 10 us)
+    std::chrono::milliseconds sync_wait{5000};   // for at most this long
+    std::uint64_t start_delay_ns = 100'000'000;  // first SYNC0 this far after the system time read
 };
 
 struct DatagramRequest {
@@ -55,6 +72,7 @@ struct MasterOptions {
     std::int64_t reply_timeout_us = 20'000;
     int retries = 3;
     std::uint32_t logical_base = 0x00010000;
+    DcOptions dc;
 };
 
 class Master {
@@ -112,8 +130,31 @@ class Master {
     // Runs the whole sequence up to the target state.
     bool startup(esc::AlState target, std::string* why = nullptr);
 
+    // ---- Distributed clocks
+    // Latches the receive times (BWR 0x0900), reads them, writes each DC slave's system time offset so that
+    // its system time reads master_time_ns (ns since 2000-01-01) and its propagation delay from the
+    // reference clock (the first DC slave). Line topology. Returns false if a read or write failed.
+    bool configure_dc(std::uint64_t master_time_ns);
+    bool configure_dc();  // with the host's real time
+    // The reference clock's station address (0 without DC slaves).
+    std::uint16_t dc_reference() const { return dc_ref_; }
+    // One FRMW of the reference clock's system time to all other slaves; the time read (nullopt: no reply).
+    std::optional<std::uint64_t> distribute_reference_clock();
+    // Static drift compensation: n FRMW frames back to back.
+    bool compensate_static_drift(unsigned frames);
+    // Largest |system time difference| (0x092C) over the DC slaves but the reference; nullopt if unreadable.
+    std::optional<std::uint32_t> max_system_time_difference();
+    // Starts SYNC0 (and SYNC1 if cycle1_ns is set) like ecx_dcsync0/ecx_dcsync01: the first pulse on a whole
+    // multiple of the cycle at least start_delay_ns after the slave's current system time, plus shift.
+    bool start_sync(std::uint16_t station, std::uint32_t cycle0_ns, std::int32_t shift_ns,
+                    std::uint64_t start_delay_ns = 100'000'000, std::optional<std::uint32_t> cycle1_ns = {});
+    bool stop_sync(std::uint16_t station);
+    // The last system time of the reference clock read by the cyclic FRMW.
+    std::uint64_t reference_time() const { return dc_time_; }
+
     // ---- Process data
-    std::optional<std::uint16_t> exchange_process_data();  // one LRW over the image
+    // One LRW over the image; with DC configured the same frame carries the FRMW of the reference clock.
+    std::optional<std::uint16_t> exchange_process_data();
     std::uint16_t expected_wkc() const { return expected_wkc_; }
     Bytes outputs(std::size_t slave);
     ConstBytes inputs(std::size_t slave) const;
@@ -135,6 +176,9 @@ class Master {
     std::size_t out_total_ = 0;
     std::uint16_t expected_wkc_ = 0;
     std::vector<AlStatusReading> last_states_;
+    std::uint16_t dc_ref_ = 0;
+    std::uint64_t dc_time_ = 0;
+    std::array<std::uint8_t, 8> dc_buf_{};
 };
 
 }  // namespace vecat::master

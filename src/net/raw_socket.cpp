@@ -85,8 +85,10 @@ long RawSocket::try_receive(Bytes buf) {
 long RawSocket::receive(Bytes buf, std::int64_t timeout_us) {
     if (long n = try_receive(buf); n != 0) return n;
     pollfd p{fd_, POLLIN, 0};
-    const int ms = timeout_us <= 0 ? 0 : static_cast<int>((timeout_us + 999) / 1000);
-    const int r = ::poll(&p, 1, ms);
+    // ppoll: microsecond timeouts (SYNC pulses of 125 us must not wait for a millisecond poll).
+    const std::int64_t us = timeout_us <= 0 ? 0 : timeout_us;
+    const timespec ts{static_cast<time_t>(us / 1'000'000), static_cast<long>((us % 1'000'000) * 1000)};
+    const int r = ::ppoll(&p, 1, &ts, nullptr);
     if (r < 0) return errno == EINTR ? 0 : -1;
     if (r == 0) return 0;
     return try_receive(buf);

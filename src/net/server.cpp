@@ -2,6 +2,7 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <array>
 
 namespace vecat::net {
@@ -22,9 +23,18 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     ServeStats st;
     std::array<std::uint8_t, 2048> buf{};
     std::uint64_t last_tick = monotonic_ns();
+    const std::uint64_t tick_ns = static_cast<std::uint64_t>(opt.tick_us) * 1000;
     while (!stop.load(std::memory_order_relaxed)) {
+        // Wake up for the next SYNC pulse of the DC units, or after one tick, whichever comes first.
+        const std::uint64_t next_sync = seg.next_event_ns();
+        std::int64_t wait_us = opt.tick_us;
+        if (next_sync != esc::DistributedClock::kNever) {
+            const std::uint64_t t = monotonic_ns();
+            const std::uint64_t until = next_sync > t ? next_sync - t : 0;
+            wait_us = std::min<std::int64_t>(wait_us, static_cast<std::int64_t>(until / 1000));
+        }
         const long n = opt.busy_poll ? sock.try_receive(Bytes(buf.data(), buf.size()))
-                                     : sock.receive(Bytes(buf.data(), buf.size()), opt.tick_us);
+                                     : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
         const std::uint64_t now = monotonic_ns();
         if (n > 0) {
             ++st.received;
@@ -38,7 +48,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
                 if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), 2);
             }
             last_tick = now;
-        } else if (now - last_tick >= static_cast<std::uint64_t>(opt.tick_us) * 1000) {
+        } else if (now - last_tick >= tick_ns || now >= next_sync) {
             seg.tick(now);
             last_tick = now;
         }

@@ -30,9 +30,11 @@ int g_pair = 0;
 
 struct VecatProcess {
     pid_t pid = -1;
-    VecatProcess(const std::string& iface, unsigned slaves, const std::string& pcap) {
+    VecatProcess(const std::string& iface, unsigned slaves, const std::string& pcap,
+                 const std::vector<std::string>& extra = {}) {
         std::vector<std::string> args{VECAT_BINARY,           "run",    "--iface", iface, "--slaves",
                                       std::to_string(slaves), "--pcap", pcap};
+        args.insert(args.end(), extra.begin(), extra.end());
         std::vector<char*> argv;
         for (auto& a : args)
             argv.push_back(a.data());
@@ -333,6 +335,106 @@ TEST(VethDrive, TwoDrivesEnableAndFollowCyclicPositions) {
     for (int i = 0; i < 5; ++i)
         cycle(0x00, a0 + 500'000, b0 - 250'000);
     EXPECT_EQ(sw(0) & 0x4F, 0x40);  // disable voltage: switch on disabled
+    ASSERT_TRUE(m.request_state(AlState::Init));
+    EXPECT_EQ(vecat.stop(), 0);
+    std::filesystem::remove(pcap);
+}
+
+// Distributed clocks end to end: the project's master measures the delays, sets the offsets, compensates
+// the static drift with FRMW bursts, waits for 0x092C, starts SYNC0 at 1 ms and runs 3 s in OP with the
+// reference clock distributed in every cyclic frame. vecat runs with drifting clocks (--dc-drift-ppm).
+TEST(VethDc, Sync0AtOneMillisecondInOpWithDriftingClocks) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    std::string why;
+    ASSERT_TRUE(net::create_veth_pair("dcm", "dcs", &why)) << why;
+    const std::string pcap =
+        (std::filesystem::temp_directory_path() / ("vecat-dc-" + std::to_string(getpid()) + ".pcapng"))
+            .string();
+    VecatProcess vecat("dcs", 3, pcap, {"--dc-drift-ppm", "50"});
+    ASSERT_GT(vecat.pid, 0);
+    net::RawSocket sock("dcm");
+    master::MasterOptions opt;
+    opt.dc.enable = true;
+    opt.dc.sync0_cycle_ns = 1'000'000;
+    opt.dc.static_drift_frames = 1000;
+    opt.dc.max_sync_diff_ns = 10'000;
+    master::Master m(sock, opt);
+    const auto t0 = std::chrono::steady_clock::now();
+    // This machine is no real-time host (shared cores, builds running): vecat's serve loop often runs
+    // frames later than they arrived, so a SYNC0 due in between is taken first and counted as an SM event
+    // missed (see the report: frames should be processed at their kernel receive time). The sync error
+    // counter limit 0x10F1:02 is set to 0 (no limit) here; the misses are still counted and printed.
+    ASSERT_TRUE(m.startup(AlState::PreOp, &why)) << why;
+    for (const auto& s : m.slaves()) {
+        master::CoeClient c(m, s.station);
+        ASSERT_TRUE(c.download_value(0x10F1, 2, std::uint16_t{0}).ok());
+    }
+    ASSERT_TRUE(m.startup(AlState::SafeOp, &why)) << why;
+    ASSERT_NE(m.dc_reference(), 0);
+    for (std::size_t i = 1; i < m.slaves().size(); ++i)
+        EXPECT_EQ(m.slaves()[i].dc_delay_ns, m.slaves()[i - 1].dc_delay_ns + 500) << i;  // vecat's hop delay
+    // Cycles at 1 ms. Like SOEM's ec_sample, the master locks its own period to the reference clock so that
+    // its frames arrive half a cycle after SYNC0 (frames too close to SYNC0 count as missed SM events).
+    auto next = std::chrono::steady_clock::now();
+    unsigned bad_wkc = 0;
+    std::int64_t integral = 0, toff = 0;
+    auto cycle = [&] {
+        next += std::chrono::nanoseconds(1'000'000 + toff);
+        std::this_thread::sleep_until(next);
+        const bool ok = m.exchange_process_data().value_or(0) == m.expected_wkc();
+        const std::int64_t err =
+            static_cast<std::int64_t>((m.reference_time() + 500'000) % 1'000'000) - 500'000;
+        integral += err;
+        toff = -(err / 100 + integral / 50'000);  // SOEM ec_sample's gains: 0.01 and 0.00002
+        return ok;
+    };
+    for (int c = 0; c < 500; ++c)  // SAFEOP: SYNC0 starts (100 ms after the start-up), the master locks on
+        cycle();
+    std::uint8_t op[2] = {static_cast<std::uint8_t>(AlState::Op), 0};
+    ASSERT_TRUE(m.bwr(esc::addr(esc::Reg::AlControl), op));
+    bool all_op = false;
+    for (int c = 0; c < 1500 && !all_op; ++c) {
+        cycle();
+        if (c % 10 == 9) {
+            all_op = true;
+            for (const auto& s : m.slaves())
+                all_op &= m.read_al_status(s.station).state() == AlState::Op;
+        }
+    }
+    ASSERT_TRUE(all_op);
+    std::printf("[ VethDc   ] start-up with DC to OP took %.2f s\n",
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    std::uint32_t worst_diff = 0;
+    for (int c = 0; c < 3000; ++c) {
+        if (!cycle()) ++bad_wkc;
+        if (c % 100 == 99)
+            if (auto d = m.max_system_time_difference()) worst_diff = std::max(worst_diff, *d);
+    }
+    EXPECT_LT(bad_wkc, 10u);
+    std::printf("[ VethDc   ] 3 slaves, +-50 ppm: worst |0x092C| during 3 s in OP: %u ns\n", worst_diff);
+    EXPECT_LT(worst_diff, 1000u);
+    for (const auto& s : m.slaves()) {
+        const auto st = m.read_al_status(s.station);
+        EXPECT_EQ(st.state(), AlState::Op) << std::hex << st.code;
+        master::CoeClient c(m, s.station);
+        auto mode = c.upload(0x1C32, 1);
+        ASSERT_TRUE(mode.ok());
+        EXPECT_EQ(ld_le16(mode.data.data()), 2u);  // DC SYNC0
+        auto missed = c.upload(0x1C32, 11);
+        ASSERT_TRUE(missed.ok());
+        std::printf(
+            "[ VethDc   ] slave 0x%04X: 0x1C32:01 = %u, SM events missed %u, cycle time too small %u\n",
+            s.station, ld_le16(mode.data.data()), ld_le16(missed.data.data()),
+            ld_le16(c.upload(0x1C32, 12).data.data()));
+        // SYNC0 runs: the next pulse (0x0990) is ahead of the system time and moves by whole cycles.
+        std::uint8_t b[8] = {};
+        ASSERT_EQ(m.fprd(s.station, 0x0990, b).value_or(0), 1);
+        const std::uint64_t next_pulse = ld_le64(b);
+        ASSERT_EQ(m.fprd(s.station, 0x0910, b).value_or(0), 1);
+        const std::uint64_t sys = ld_le64(b);
+        EXPECT_GT(next_pulse, sys);
+        EXPECT_LE(next_pulse - sys, 1'000'000u);
+    }
     ASSERT_TRUE(m.request_state(AlState::Init));
     EXPECT_EQ(vecat.stop(), 0);
     std::filesystem::remove(pcap);
