@@ -590,6 +590,66 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
     return r;
 }
 
+std::vector<std::string> complete_for_emulation(device::DeviceDescription& d) {
+    std::vector<std::string> out;
+    for (bool rx : {true, false}) {
+        const std::uint16_t map_bit = rx ? acc::RxPdoMappable : acc::TxPdoMappable;
+        for (const auto& p : rx ? d.rx_pdos : d.tx_pdos) {
+            for (const auto& pe : p.entries) {
+                if (pe.index == 0) continue;
+                auto it = std::find_if(d.objects.begin(), d.objects.end(),
+                                       [&](const ObjectDescription& o) { return o.index == pe.index; });
+                if (it == d.objects.end()) {
+                    ObjectDescription o;
+                    o.index = pe.index;
+                    o.name = pe.name.empty() ? fmt::format("Object 0x{:04X}", pe.index) : pe.name;
+                    o.type = pe.type;
+                    o.code = pe.subindex == 0 ? ObjectCode::Var : ObjectCode::Record;
+                    if (pe.subindex != 0)
+                        o.entries.push_back(
+                            device::make_entry(0, "Number of entries", DataType::Unsigned8, acc::RO, 0));
+                    d.objects.push_back(std::move(o));
+                    it = std::prev(d.objects.end());
+                    out.push_back(fmt::format("object 0x{:04X} added: {} maps it", pe.index,
+                                              fmt::format("PDO 0x{:04X}", p.index)));
+                }
+                auto& o = *it;
+                auto* e = const_cast<EntryDescription*>(o.entry(pe.subindex));
+                if (!e) {
+                    EntryDescription ne;
+                    ne.subindex = pe.subindex;
+                    ne.name = pe.name;
+                    ne.type = pe.type;
+                    ne.bit_length = pe.bit_length;
+                    ne.access = rx ? acc::RxMap : acc::TxMap;
+                    ne.default_value = device::encode_integer(pe.type, 0);
+                    ne.default_value.resize((pe.bit_length + 7) / 8, 0);
+                    o.entries.push_back(std::move(ne));
+                    std::sort(o.entries.begin(), o.entries.end(),
+                              [](const EntryDescription& a, const EntryDescription& b) {
+                                  return a.subindex < b.subindex;
+                              });
+                    if (o.code != ObjectCode::Var && !o.entries.empty() && o.entries.front().subindex == 0)
+                        o.entries.front().default_value = {o.max_subindex()};
+                    out.push_back(fmt::format("0x{:04X}:{} added: PDO 0x{:04X} maps it", pe.index,
+                                              pe.subindex, p.index));
+                    continue;
+                }
+                if (!(e->access & map_bit)) {
+                    e->access |= map_bit;
+                    if (rx) e->access |= acc::WriteAll;
+                    out.push_back(fmt::format("0x{:04X}:{} marked {}-mappable: PDO 0x{:04X} maps it",
+                                              pe.index, pe.subindex, rx ? "Rx" : "Tx", p.index));
+                }
+                if (e->bit_length != pe.bit_length)
+                    out.push_back(fmt::format("0x{:04X}:{} has {} bits, PDO 0x{:04X} maps {}", pe.index,
+                                              pe.subindex, e->bit_length, p.index, pe.bit_length));
+            }
+        }
+    }
+    return out;
+}
+
 ImportResult import_esi_file(const std::string& path, const DeviceSelector& sel) {
     std::ifstream f(path, std::ios::binary);
     if (!f) throw EsiError("cannot open " + path);

@@ -43,6 +43,10 @@ std::optional<device::DataType> parse_esi_type(const std::string& name);
 
 std::vector<DeviceSummary> list_devices_text(const std::string& xml);
 ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel = {});
+// Makes an imported description runnable: every object a PDO maps exists and is mappable in its direction
+// (vendor files often leave them out or unflagged). Returns one line per change.
+std::vector<std::string> complete_for_emulation(device::DeviceDescription& d);
+
 ImportResult import_esi_file(const std::string& path, const DeviceSelector& sel = {});
 
 }  // namespace vecat::esi

@@ -39,12 +39,16 @@ void install_signals() {
 
 // The device to emulate: the built-in drive, or one device of a vendor ESI file.
 std::optional<vecat::device::DeviceDescription> load_device(const std::string& esi_path,
-                                                            const vecat::esi::DeviceSelector& sel) {
+                                                            const vecat::esi::DeviceSelector& sel,
+                                                            bool for_emulation = false) {
     if (esi_path.empty()) return vecat::device::default_drive();
     try {
         auto r = vecat::esi::import_esi_file(esi_path, sel);
         for (const auto& n : r.notes)
             fmt::print(stderr, "vecat: {}: {}\n", esi_path, n);
+        if (for_emulation)
+            for (const auto& n : vecat::esi::complete_for_emulation(r.desc))
+                fmt::print(stderr, "vecat: {}: {}\n", esi_path, n);
         return r.desc;
     } catch (const std::exception& e) {
         fmt::print(stderr, "vecat: {}: {}\n", esi_path, e.what());
@@ -63,7 +67,7 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
                    iface, why);
         return 2;
     }
-    auto loaded = load_device(esi_path, sel);
+    auto loaded = load_device(esi_path, sel, true);
     if (!loaded) return 1;
     const auto& dev = *loaded;
     auto seg = vecat::cia402::make_drive_segment(dev, slaves);
