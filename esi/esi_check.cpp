@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <iterator>
 
 #include "esc/sii_image.hpp"
 
@@ -43,7 +44,200 @@ void check_pdos(const char* what, const std::vector<device::Pdo>& esi, const std
     }
 }
 
+struct Region {
+    std::uint16_t type = 0;  // category type; 0xFFFE: header area
+    std::size_t start = 0;   // first data byte of the category
+    std::size_t length = 0;  // data bytes
+};
+
+// The categories of an image and where their data lie.
+std::vector<Region> regions(const std::vector<std::uint8_t>& img) {
+    std::vector<Region> out;
+    std::size_t pos = 2 * esc::sii::FirstCategory;
+    while (pos + 4 <= img.size()) {
+        const std::uint16_t type = ld_le16(img.data() + pos);
+        const std::size_t words = ld_le16(img.data() + pos + 2);
+        out.push_back({type, pos, 4});  // the category header itself
+        out.back().type = static_cast<std::uint16_t>(type);
+        if (type == 0xFFFF) break;
+        out.push_back({type, pos + 4, 2 * words});
+        pos += 4 + 2 * words;
+    }
+    return out;
+}
+
+std::string category_name(std::uint16_t t) {
+    switch (t) {
+        case 10:
+            return "Strings";
+        case 20:
+            return "DataTypes";
+        case 30:
+            return "General";
+        case 40:
+            return "FMMU";
+        case 41:
+            return "SyncM";
+        case 50:
+            return "TxPDO";
+        case 51:
+            return "RxPDO";
+        case 60:
+            return "DC";
+        case 0xFFFF:
+            return "End";
+        default:
+            return fmt::format("category {}", t);
+    }
+}
+
+std::string header_word_name(std::size_t word) {
+    switch (word) {
+        case 0x00:
+            return "PDI control";
+        case 0x01:
+            return "PDI configuration";
+        case 0x02:
+            return "SYNC impulse length";
+        case 0x03:
+            return "PDI configuration 2";
+        case 0x04:
+            return "station alias";
+        case 0x07:
+            return "checksum";
+        case 0x08:
+        case 0x09:
+            return "vendor id";
+        case 0x0A:
+        case 0x0B:
+            return "product code";
+        case 0x0C:
+        case 0x0D:
+            return "revision";
+        case 0x0E:
+        case 0x0F:
+            return "serial number";
+        case 0x14:
+        case 0x15:
+        case 0x16:
+        case 0x17:
+            return "bootstrap mailbox";
+        case 0x18:
+        case 0x19:
+        case 0x1A:
+        case 0x1B:
+            return "standard mailbox";
+        case 0x1C:
+            return "mailbox protocols";
+        case 0x3E:
+            return "EEPROM size";
+        case 0x3F:
+            return "version";
+        default:
+            return "reserved";
+    }
+}
+
+std::string general_field(std::size_t off) {
+    static const char* names[] = {"group string index",
+                                  "image string index",
+                                  "order string index",
+                                  "name string index",
+                                  "reserved",
+                                  "CoE details",
+                                  "FoE details",
+                                  "EoE details",
+                                  "SoE channels",
+                                  "DS402 channels",
+                                  "SysmanClass",
+                                  "flags",
+                                  "EBus current",
+                                  "EBus current",
+                                  "group string index (compat)",
+                                  "reserved",
+                                  "physical ports",
+                                  "physical ports",
+                                  "physical memory address",
+                                  "physical memory address"};
+    return off < std::size(names) ? names[off] : "reserved";
+}
+
+std::string why_category(std::uint16_t type, std::size_t off) {
+    switch (type) {
+        case 10:
+            return "string table: vecat adds the device name first (masters show string 1 as the name), then "
+                   "group and order code, then PDO, entry and DC names";
+        case 30:
+            if (off <= 3 || off == 14) return "string index: the string tables are ordered differently";
+            if (off == 5) return "CoE details: vecat sets the SDO bit and the ESI CoE flags";
+            if (off == 16 || off == 17) return "physical ports: vecat always declares two MII ports";
+            return "General field " + general_field(off) + " differs";
+        case 50:
+        case 51:
+            return "PDO category: vecat writes every ESI PDO with its entries";
+        case 60:
+            return "DC category: vecat writes the ESI Dc op modes";
+        default:
+            return category_name(type) + " content differs";
+    }
+}
+
 }  // namespace
+
+std::vector<SiiByteDiff> diff_sii(const std::vector<std::uint8_t>& gen,
+                                  const std::vector<std::uint8_t>& ref) {
+    std::vector<SiiByteDiff> out;
+    const auto rg = regions(gen), rr = regions(ref);
+    auto locate = [](const std::vector<Region>& rs, std::size_t i) -> const Region* {
+        for (const auto& r : rs)
+            if (i >= r.start && i < r.start + r.length) return &r;
+        return nullptr;
+    };
+    const std::size_t common = std::min(gen.size(), ref.size());
+    for (std::size_t i = 0; i < common; ++i) {
+        if (gen[i] == ref[i]) continue;
+        SiiByteDiff d{i, gen[i], ref[i], {}, {}};
+        if (i < 2 * esc::sii::FirstCategory) {
+            const std::size_t w = i / 2;
+            d.where = fmt::format("word 0x{:02X} {}", w, header_word_name(w));
+            if (w == esc::sii::Checksum)
+                d.why = "checksum over words 0..6, which differ";
+            else if (w == esc::sii::Size)
+                d.why = fmt::format("EEPROM size: generated image {} bytes, reference {} bytes", gen.size(),
+                                    ref.size());
+            else
+                d.why = "header value from the ESI differs";
+            out.push_back(d);
+            continue;
+        }
+        const Region* a = locate(rg, i);
+        const Region* b = locate(rr, i);
+        d.where = b ? fmt::format("reference {} +{}", category_name(b->type), i - b->start)
+                    : std::string("reference: past its End category (unused 0xFF)");
+        if (!a) {
+            d.why = "generated image: past its End category";
+        } else if (!b) {
+            d.why = fmt::format("generated {} +{} is where the reference has ended", category_name(a->type),
+                                i - a->start);
+        } else if (a->type != b->type || a->start != b->start) {
+            d.why = fmt::format(
+                "generated {} +{} here: categories shifted (an earlier category differs in length "
+                "or one image has a category the other lacks)",
+                category_name(a->type), i - a->start);
+        } else if (a->length == 4 && b->length == 4 && a->start + 4 <= gen.size()) {
+            d.why = "category header: data length differs";
+        } else {
+            d.why = why_category(b->type, i - b->start);
+        }
+        out.push_back(d);
+    }
+    if (gen.size() != ref.size())
+        out.push_back(
+            {common, gen.size() > common ? gen[common] : -1, ref.size() > common ? ref[common] : -1,
+             fmt::format("bytes {}..{}", common, std::max(gen.size(), ref.size()) - 1),
+             fmt::format("image sizes differ: generated {} bytes, reference {}", gen.size(), ref.size())});
+    return out;
+}
 
 bool validate_with_xmllint(const std::string& file, const std::string& xsd, std::string* output) {
     const std::string cmd = "xmllint --noout --schema " + quote(xsd) + " " + quote(file) + " 2>&1";

@@ -514,14 +514,12 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
         auto w = [&](unsigned i) -> std::uint16_t {
             return 2 * i + 1 < cfg.size() ? static_cast<std::uint16_t>(cfg[2 * i] | cfg[2 * i + 1] << 8) : 0;
         };
-        if (cfg.size() >= 10) {
-            d.pdi_control = w(0);
-            d.pdi_config = w(1);
-            d.sync_impulse_len = w(2);
-            d.station_alias = w(4);
-            if (w(3) != 0)
-                notes.push_back(fmt::format("ConfigData word 3 (PDI config 2) 0x{:04X} is not kept", w(3)));
-        }
+        if (cfg.size() >= 2) d.pdi_control = w(0);
+        if (cfg.size() >= 4) d.pdi_config = w(1);
+        if (cfg.size() >= 6) d.sync_impulse_len = w(2);
+        if (cfg.size() >= 10) d.station_alias = w(4);
+        if (w(3) != 0)
+            notes.push_back(fmt::format("ConfigData word 3 (PDI config 2) 0x{:04X} is not kept", w(3)));
         d.bootstrap_supported = static_cast<bool>(ee.child("BootStrap"));
         if (ee.child("Data"))
             notes.push_back("Eeprom Data (a complete image) is not used; the SII is generated");
