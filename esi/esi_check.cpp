@@ -172,6 +172,8 @@ std::string why_category(std::uint16_t type, std::size_t off) {
             if (off == 5) return "CoE details: vecat sets the SDO bit and the ESI CoE flags";
             if (off == 16 || off == 17) return "physical ports: vecat always declares two MII ports";
             return "General field " + general_field(off) + " differs";
+        case 40:
+            return "FMMU padding byte: vecat pads an odd count with 0xFF, 0x00 and 0xFF both mean unused";
         case 50:
         case 51:
             return "PDO category: vecat writes every ESI PDO with its entries";
