@@ -7,12 +7,16 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <thread>
 
 #include "cia402/drive.hpp"
 #include "device/device_description.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
+#include "esi/esi_check.hpp"
+#include "esi/esi_reader.hpp"
+#include "esi/esi_writer.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
@@ -34,8 +38,28 @@ void install_signals() {
     sigaction(SIGTERM, &sa, nullptr);
 }
 
+// The device to emulate: the built-in drive, or one device of a vendor ESI file.
+std::optional<vecat::device::DeviceDescription> load_device(const std::string& esi_path,
+                                                            const vecat::esi::DeviceSelector& sel,
+                                                            bool for_emulation = false) {
+    if (esi_path.empty()) return vecat::device::default_drive();
+    try {
+        auto r = vecat::esi::import_esi_file(esi_path, sel);
+        for (const auto& n : r.notes)
+            fmt::print(stderr, "vecat: {}: {}\n", esi_path, n);
+        if (for_emulation)
+            for (const auto& n : vecat::esi::complete_for_emulation(r.desc))
+                fmt::print(stderr, "vecat: {}: {}\n", esi_path, n);
+        return r.desc;
+    } catch (const std::exception& e) {
+        fmt::print(stderr, "vecat: {}: {}\n", esi_path, e.what());
+        return std::nullopt;
+    }
+}
+
 int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
-            bool allow_busy_if, double drift_ppm) {
+            bool allow_busy_if, double drift_ppm, const std::string& esi_path,
+            const vecat::esi::DeviceSelector& sel) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -45,7 +69,9 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
                    iface, why);
         return 2;
     }
-    auto dev = vecat::device::default_drive();
+    auto loaded = load_device(esi_path, sel, true);
+    if (!loaded) return 1;
+    const auto& dev = *loaded;
     auto seg = vecat::cia402::make_drive_segment(dev, slaves);
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
@@ -179,8 +205,61 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     return rc;
 }
 
-int cmd_sii_generate(const std::string& out) {
-    const auto img = vecat::esc::build_sii_image(vecat::device::default_drive());
+int write_output(const std::string& out, const std::string& data) {
+    if (out.empty() || out == "-") {
+        std::fwrite(data.data(), 1, data.size(), stdout);
+        return 0;
+    }
+    std::ofstream f(out, std::ios::binary);
+    f.write(data.data(), static_cast<std::streamsize>(data.size()));
+    return f ? 0 : 1;
+}
+
+int cmd_esi_generate(const std::string& out, const std::string& esi_path,
+                     const vecat::esi::DeviceSelector& sel) {
+    auto dev = load_device(esi_path, sel);
+    if (!dev) return 1;
+    return write_output(out, vecat::esi::write_esi(*dev));
+}
+
+int cmd_esi_check(const std::string& file, const std::string& sii_path, const std::string& xsd,
+                  const vecat::esi::DeviceSelector& sel) {
+    int problems = 0;
+    std::string msg;
+    if (!xsd.empty()) {
+        if (!vecat::esi::validate_with_xmllint(file, xsd, &msg)) {
+            fmt::print("{}: not valid against {}:\n{}", file, xsd, msg);
+            ++problems;
+        } else {
+            fmt::print("{}: valid against {}\n", file, xsd);
+        }
+    }
+    auto dev = load_device(file, sel);
+    if (!dev) return 1;
+    std::vector<std::uint8_t> img;
+    if (!sii_path.empty()) {
+        std::ifstream f(sii_path, std::ios::binary);
+        if (!f) {
+            fmt::print(stderr, "vecat: cannot open {}\n", sii_path);
+            return 1;
+        }
+        img.assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+    } else {
+        img = vecat::esc::build_sii_image(*dev);
+    }
+    for (const auto& line : vecat::esi::check_consistency(*dev, img)) {
+        fmt::print("{}: {}\n", sii_path.empty() ? file : sii_path, line);
+        ++problems;
+    }
+    if (problems == 0) fmt::print("{}: ESI, SII and dictionary agree\n", file);
+    return problems ? 1 : 0;
+}
+
+int cmd_sii_generate(const std::string& out, const std::string& esi_path,
+                     const vecat::esi::DeviceSelector& sel) {
+    auto dev = load_device(esi_path, sel);
+    if (!dev) return 1;
+    const auto img = vecat::esc::build_sii_image(*dev);
     if (out.empty() || out == "-") {
         std::fwrite(img.data(), 1, img.size(), stdout);
         return 0;
@@ -212,6 +291,14 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(-1000.0, 1000.0));
     run->add_flag("--allow-used-interface", allow_used,
                   "Serve even on an interface that has an IP address or the default route");
+    std::string esi_path, device_type;
+    std::uint32_t product = 0;
+    auto add_esi_options = [&](CLI::App* c, bool esi_option) {
+        if (esi_option) c->add_option("--esi", esi_path, "Emulate a device described by this ESI file");
+        c->add_option("--device", device_type, "Device of the ESI file by its Type name");
+        c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
+    };
+    add_esi_options(run, true);
 
     auto* demo =
         app.add_subcommand("demo", "Run virtual slaves and the bundled master on a private veth pair");
@@ -226,10 +313,33 @@ int main(int argc, char** argv) {
     auto* sii_gen = sii->add_subcommand("generate", "Write the SII EEPROM image of the default drive");
     std::string sii_out;
     sii_gen->add_option("-o,--output", sii_out, "Output file (standard output when omitted)");
+    add_esi_options(sii_gen, true);
+
+    auto* esi = app.add_subcommand("esi", "ESI (EtherCAT Slave Information) tools");
+    esi->require_subcommand(1);
+    auto* esi_gen =
+        esi->add_subcommand("generate", "Write the ESI XML file of the default drive (or of --esi)");
+    std::string esi_out;
+    esi_gen->add_option("-o,--output", esi_out, "Output file (standard output when omitted)");
+    add_esi_options(esi_gen, true);
+    auto* esi_chk = esi->add_subcommand(
+        "check",
+        "Validate an ESI file against the schema and check it against an SII image and its dictionary");
+    std::string check_file, check_sii, check_xsd = std::string(VECAT_DEFAULT_XSD);
+    esi_chk->add_option("file", check_file, "ESI file")->required();
+    esi_chk->add_option("--sii", check_sii,
+                        "SII image to compare (default: the one generated from the file)");
+    esi_chk->add_option("--schema", check_xsd, "EtherCATInfo.xsd to validate against (\"\" skips)");
+    add_esi_options(esi_chk, false);
 
     CLI11_PARSE(app, argc, argv);
-    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm);
+    vecat::esi::DeviceSelector sel;
+    if (!device_type.empty()) sel.type = device_type;
+    if (product != 0) sel.product_code = product;
+    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel);
+    if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
+    if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);
-    if (*sii_gen) return cmd_sii_generate(sii_out);
+    if (*sii_gen) return cmd_sii_generate(sii_out, esi_path, sel);
     return 0;
 }

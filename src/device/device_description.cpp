@@ -71,7 +71,8 @@ DeviceDescription default_drive() {
                          {0x6071, 0, 16, DT::Integer16, "Target torque"},
                          {0x60B8, 0, 16, DT::Unsigned16, "Touch probe function"},
                      },
-                     16},
+                     16,
+                     {0x1601}},
                  Pdo{0x1601,
                      "RxPDO 2 (PP/PV)",
                      2,
@@ -83,9 +84,10 @@ DeviceDescription default_drive() {
                          {0x607A, 0, 32, DT::Integer32, "Target position"},
                          {0x6081, 0, 32, DT::Unsigned32, "Profile velocity"},
                      },
-                     16},
-                 Pdo{0x1602, "RxPDO 3", 2, false, false, false, {}, 16},
-                 Pdo{0x1603, "RxPDO 4", 2, false, false, false, {}, 16}};
+                     16,
+                     {0x1600}},
+                 Pdo{0x1602, "RxPDO 3", 2, false, false, false, {}, 16, {}},
+                 Pdo{0x1603, "RxPDO 4", 2, false, false, false, {}, 16, {}}};
     d.tx_pdos = {Pdo{0x1A00,
                      "TxPDO 1 (CSP/CSV/CST)",
                      3,
@@ -104,7 +106,8 @@ DeviceDescription default_drive() {
                          {0x60B9, 0, 16, DT::Unsigned16, "Touch probe status"},
                          {0x60BA, 0, 32, DT::Integer32, "Touch probe 1 positive value"},
                      },
-                     16},
+                     16,
+                     {0x1A01}},
                  Pdo{0x1A01,
                      "TxPDO 2 (PP/PV)",
                      3,
@@ -115,9 +118,10 @@ DeviceDescription default_drive() {
                          {0x6041, 0, 16, DT::Unsigned16, "Statusword"},
                          {0x6064, 0, 32, DT::Integer32, "Position actual value"},
                      },
-                     16},
-                 Pdo{0x1A02, "TxPDO 3", 3, false, false, false, {}, 16},
-                 Pdo{0x1A03, "TxPDO 4", 3, false, false, false, {}, 16}};
+                     16,
+                     {0x1A00}},
+                 Pdo{0x1A02, "TxPDO 3", 3, false, false, false, {}, 16, {}},
+                 Pdo{0x1A03, "TxPDO 4", 3, false, false, false, {}, 16, {}}};
     d.sync_managers[2].length = static_cast<std::uint16_t>(d.output_bytes());
     d.sync_managers[3].length = static_cast<std::uint16_t>(d.input_bytes());
 

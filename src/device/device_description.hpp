@@ -48,7 +48,8 @@ struct Pdo {
     bool mandatory = false;
     bool assigned = true;  // part of the default assignment
     std::vector<PdoEntry> entries;
-    std::uint8_t capacity = 0;  // subindexes of the mapping object; at least entries.size()
+    std::uint8_t capacity = 0;            // subindexes of the mapping object; at least entries.size()
+    std::vector<std::uint16_t> excludes;  // PDOs that cannot be assigned together with this one (ESI Exclude)
 
     unsigned bit_length() const {
         unsigned n = 0;

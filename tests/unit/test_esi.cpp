@@ -1,0 +1,459 @@
+// ESI toolchain: the generated ESI validates against the ETG schema, a second XML parser (tinyxml2) sees
+// the description in it, generate -> import -> generate is stable, every vendor ESI imports and runs to OP.
+#include <gtest/gtest.h>
+#include <tinyxml2.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "cia402/drive.hpp"
+#include "esc/sii_image.hpp"
+#include "esi/esi_check.hpp"
+#include "esi/esi_reader.hpp"
+#include "esi/esi_writer.hpp"
+#include "test_support.hpp"
+
+namespace vecat {
+namespace {
+
+using tinyxml2::XMLElement;
+
+const std::string kShared = VECAT_SHARED_DIR;
+const std::string kXsd = kShared + "/data/schema/EtherCATInfo.xsd";
+
+std::string temp_file(const std::string& name, const std::string& content) {
+    const auto p =
+        std::filesystem::temp_directory_path() / ("vecat-esi-" + std::to_string(::getpid()) + "-" + name);
+    std::ofstream(p, std::ios::binary) << content;
+    return p.string();
+}
+
+std::int64_t hexdec(const char* s) {
+    auto v = esi::parse_hexdec(s ? s : "");
+    EXPECT_TRUE(v.has_value()) << (s ? s : "(null)");
+    return v.value_or(-1);
+}
+
+std::string child_text(const XMLElement* e, const char* name) {
+    const auto* c = e ? e->FirstChildElement(name) : nullptr;
+    return c && c->GetText() ? c->GetText() : "";
+}
+
+// ---- priority 1: writer -------------------------------------------------------------------------------
+
+TEST(EsiWriter, DefaultDriveValidatesAgainstTheEtgSchema) {
+    const auto xml = esi::write_esi(device::default_drive());
+    const auto path = temp_file("default.xml", xml);
+    std::string msg;
+    EXPECT_TRUE(esi::validate_with_xmllint(path, kXsd, &msg)) << msg;
+    std::filesystem::remove(path);
+}
+
+TEST(EsiWriter, XmllintRejectsABrokenFile) {
+    // The validation test can fail: a Device without its mandatory Type is refused.
+    auto xml = esi::write_esi(device::default_drive());
+    const auto b = xml.find("<Type ProductCode");
+    const auto e = xml.find("</Type>", b);
+    ASSERT_NE(b, std::string::npos);
+    xml.erase(b, e + 7 - b);
+    const auto path = temp_file("broken.xml", xml);
+    std::string msg;
+    EXPECT_FALSE(esi::validate_with_xmllint(path, kXsd, &msg));
+    std::filesystem::remove(path);
+}
+
+std::string access_text(std::uint16_t a) {
+    const bool w = a & device::access::WriteAll, r = a & device::access::ReadAll;
+    return !w ? "ro" : (r ? "rw" : "wo");
+}
+
+TEST(EsiWriter, TinyXml2SeesTheDescription) {
+    const auto d = device::default_drive();
+    const auto xml = esi::write_esi(d);
+    tinyxml2::XMLDocument doc;
+    ASSERT_EQ(doc.Parse(xml.c_str(), xml.size()), tinyxml2::XML_SUCCESS);
+    const auto* root = doc.FirstChildElement("EtherCATInfo");
+    ASSERT_NE(root, nullptr);
+    EXPECT_EQ(hexdec(child_text(root->FirstChildElement("Vendor"), "Id").c_str()), d.identity.vendor_id);
+    const auto* dev =
+        root->FirstChildElement("Descriptions")->FirstChildElement("Devices")->FirstChildElement("Device");
+    ASSERT_NE(dev, nullptr);
+    EXPECT_EQ(dev->NextSiblingElement("Device"), nullptr);
+    const auto* type = dev->FirstChildElement("Type");
+    EXPECT_EQ(hexdec(type->Attribute("ProductCode")), d.identity.product_code);
+    EXPECT_EQ(hexdec(type->Attribute("RevisionNo")), d.identity.revision);
+    EXPECT_EQ(std::string(type->GetText()), d.order_code);
+    EXPECT_EQ(child_text(dev, "Name"), d.name);
+    const auto* profile = dev->FirstChildElement("Profile");
+    EXPECT_EQ(child_text(profile, "ProfileNo"), "402");
+
+    // Objects: index, name, subindexes (count and names), types, access, PDO mapping.
+    const auto* dict = profile->FirstChildElement("Dictionary");
+    std::map<std::string, const XMLElement*> types;
+    for (auto* t = dict->FirstChildElement("DataTypes")->FirstChildElement("DataType"); t;
+         t = t->NextSiblingElement("DataType"))
+        types[child_text(t, "Name")] = t;
+    std::map<std::int64_t, const XMLElement*> objs;
+    for (auto* o = dict->FirstChildElement("Objects")->FirstChildElement("Object"); o;
+         o = o->NextSiblingElement("Object"))
+        objs[hexdec(child_text(o, "Index").c_str())] = o;
+    const auto expected = device::dictionary_objects(d);
+    ASSERT_EQ(objs.size(), expected.size());
+    for (const auto& eo : expected) {
+        SCOPED_TRACE(::testing::Message() << "object 0x" << std::hex << eo.index);
+        ASSERT_TRUE(objs.count(eo.index));
+        const auto* o = objs[eo.index];
+        EXPECT_EQ(child_text(o, "Name"), eo.name);
+        const std::string tname = child_text(o, "Type");
+        ASSERT_TRUE(types.count(tname)) << tname;
+        if (eo.code == device::ObjectCode::Var) {
+            const auto& e = eo.entries.at(0);
+            EXPECT_EQ(tname, esi::esi_type_name(e.type, e.bit_length));
+            const auto* flags = o->FirstChildElement("Flags");
+            EXPECT_EQ(child_text(flags, "Access"), access_text(e.access));
+            const std::string pm = child_text(flags, "PdoMapping");
+            EXPECT_EQ(pm.find('R') != std::string::npos, (e.access & device::access::RxPdoMappable) != 0);
+            EXPECT_EQ(pm.find('T') != std::string::npos, (e.access & device::access::TxPdoMappable) != 0);
+            continue;
+        }
+        // Complex: one Info/SubItem per subindex with its name; the DataType lists the subitems.
+        std::vector<std::string> names;
+        for (auto* si = o->FirstChildElement("Info")->FirstChildElement("SubItem"); si;
+             si = si->NextSiblingElement("SubItem"))
+            names.push_back(child_text(si, "Name"));
+        ASSERT_EQ(names.size(), eo.entries.size());
+        for (std::size_t i = 0; i < names.size(); ++i)
+            EXPECT_EQ(names[i], eo.entries[i].name);
+        const auto* dt = types[tname];
+        if (eo.code == device::ObjectCode::Record) {
+            std::size_t i = 0;
+            for (auto* si = dt->FirstChildElement("SubItem"); si;
+                 si = si->NextSiblingElement("SubItem"), ++i) {
+                ASSERT_LT(i, eo.entries.size());
+                const auto& e = eo.entries[i];
+                EXPECT_EQ(hexdec(child_text(si, "SubIdx").c_str()), e.subindex);
+                EXPECT_EQ(child_text(si, "Type"), esi::esi_type_name(e.type, e.bit_length));
+                EXPECT_EQ(child_text(si->FirstChildElement("Flags"), "Access"), access_text(e.access));
+                const std::string pm = child_text(si->FirstChildElement("Flags"), "PdoMapping");
+                EXPECT_EQ(pm.find('T') != std::string::npos, (e.access & device::access::TxPdoMappable) != 0);
+            }
+            EXPECT_EQ(i, eo.entries.size());
+        } else {
+            const auto* arr = types[tname + "ARR"];
+            ASSERT_NE(arr, nullptr);
+            EXPECT_EQ(child_text(arr, "BaseType"),
+                      esi::esi_type_name(eo.entries.at(1).type, eo.entries.at(1).bit_length));
+            EXPECT_EQ(std::stoul(child_text(arr->FirstChildElement("ArrayInfo"), "Elements")),
+                      eo.entries.size() - 1);
+        }
+    }
+
+    // PDOs and their entries.
+    for (bool rx : {true, false}) {
+        const auto& pdos = rx ? d.rx_pdos : d.tx_pdos;
+        std::size_t n = 0;
+        for (auto* p = dev->FirstChildElement(rx ? "RxPdo" : "TxPdo"); p;
+             p = p->NextSiblingElement(rx ? "RxPdo" : "TxPdo"), ++n) {
+            ASSERT_LT(n, pdos.size());
+            const auto& ep = pdos[n];
+            EXPECT_EQ(hexdec(child_text(p, "Index").c_str()), ep.index);
+            EXPECT_EQ(child_text(p, "Name"), ep.name);
+            EXPECT_EQ(p->Attribute("Sm") != nullptr, ep.assigned);
+            if (ep.assigned) {
+                EXPECT_EQ(p->IntAttribute("Sm"), ep.sm);
+            }
+            EXPECT_EQ(p->BoolAttribute("Fixed"), ep.fixed);
+            std::size_t k = 0;
+            for (auto* en = p->FirstChildElement("Entry"); en; en = en->NextSiblingElement("Entry"), ++k) {
+                ASSERT_LT(k, ep.entries.size());
+                EXPECT_EQ(hexdec(child_text(en, "Index").c_str()), ep.entries[k].index);
+                EXPECT_EQ(hexdec(child_text(en, "SubIndex").c_str()), ep.entries[k].subindex);
+                EXPECT_EQ(hexdec(child_text(en, "BitLen").c_str()), ep.entries[k].bit_length);
+            }
+            EXPECT_EQ(k, ep.entries.size());
+            std::size_t x = 0;
+            for (auto* ex = p->FirstChildElement("Exclude"); ex; ex = ex->NextSiblingElement("Exclude"), ++x)
+                EXPECT_EQ(hexdec(ex->GetText()), ep.excludes.at(x));
+            EXPECT_EQ(x, ep.excludes.size());
+        }
+        EXPECT_EQ(n, pdos.size());
+    }
+
+    // SyncManagers, mailbox flags, DC modes.
+    std::size_t s = 0;
+    for (auto* sm = dev->FirstChildElement("Sm"); sm; sm = sm->NextSiblingElement("Sm"), ++s) {
+        ASSERT_LT(s, d.sync_managers.size());
+        EXPECT_EQ(hexdec(sm->Attribute("StartAddress")), d.sync_managers[s].start);
+        EXPECT_EQ(hexdec(sm->Attribute("DefaultSize")), d.sync_managers[s].length);
+        EXPECT_EQ(hexdec(sm->Attribute("ControlByte")), d.sync_managers[s].control);
+    }
+    EXPECT_EQ(s, d.sync_managers.size());
+    const auto* coe = dev->FirstChildElement("Mailbox")->FirstChildElement("CoE");
+    ASSERT_NE(coe, nullptr);
+    EXPECT_TRUE(coe->BoolAttribute("SdoInfo"));
+    EXPECT_TRUE(coe->BoolAttribute("PdoAssign"));
+    EXPECT_TRUE(coe->BoolAttribute("PdoConfig"));
+    EXPECT_TRUE(coe->BoolAttribute("CompleteAccess"));
+    EXPECT_TRUE(coe->BoolAttribute("SegmentedSdo"));
+    std::size_t m = 0;
+    for (auto* om = dev->FirstChildElement("Dc")->FirstChildElement("OpMode"); om;
+         om = om->NextSiblingElement("OpMode"), ++m) {
+        ASSERT_LT(m, d.dc_modes.size());
+        EXPECT_EQ(child_text(om, "Name"), d.dc_modes[m].name);
+        EXPECT_EQ(hexdec(child_text(om, "AssignActivate").c_str()), d.dc_modes[m].assign_activate);
+        EXPECT_EQ(hexdec(child_text(om, "CycleTimeSync0").c_str()), d.dc_modes[m].cycle_time0);
+    }
+    EXPECT_EQ(m, d.dc_modes.size());
+    EXPECT_EQ(hexdec(child_text(dev->FirstChildElement("Eeprom"), "ByteSize").c_str()), d.eeprom_size_bytes);
+}
+
+// ---- priority 2: reader and round trip ----------------------------------------------------------------
+
+TEST(EsiReader, DefaultDriveRoundTripIsByteIdentical) {
+    const auto d = device::default_drive();
+    const auto first = esi::write_esi(d);
+    const auto imported = esi::import_esi_text(first);
+    EXPECT_EQ(esi::write_esi(imported.desc), first);
+    // The imported description serves the same SII image and dictionary.
+    EXPECT_EQ(esc::build_sii_image(imported.desc), esc::build_sii_image(d));
+    const auto a = device::dictionary_objects(d);
+    const auto b = device::dictionary_objects(imported.desc);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        SCOPED_TRACE(::testing::Message() << "object 0x" << std::hex << a[i].index);
+        EXPECT_EQ(a[i].index, b[i].index);
+        EXPECT_EQ(a[i].name, b[i].name);
+        EXPECT_EQ(a[i].code, b[i].code);
+        EXPECT_EQ(a[i].type, b[i].type);
+        ASSERT_EQ(a[i].entries.size(), b[i].entries.size());
+        for (std::size_t k = 0; k < a[i].entries.size(); ++k) {
+            const auto& x = a[i].entries[k];
+            const auto& y = b[i].entries[k];
+            EXPECT_EQ(x.subindex, y.subindex);
+            EXPECT_EQ(x.name, y.name);
+            EXPECT_EQ(x.type, y.type);
+            EXPECT_EQ(x.bit_length, y.bit_length);
+            EXPECT_EQ(x.access, y.access);
+            EXPECT_EQ(x.default_value, y.default_value);
+            EXPECT_EQ(x.minimum, y.minimum);
+            EXPECT_EQ(x.maximum, y.maximum);
+        }
+    }
+}
+
+TEST(EsiReader, HexDecValues) {
+    EXPECT_EQ(esi::parse_hexdec("#x1A00"), 0x1A00);
+    EXPECT_EQ(esi::parse_hexdec(" 42 "), 42);
+    EXPECT_EQ(esi::parse_hexdec("-5"), -5);
+    EXPECT_FALSE(esi::parse_hexdec("0x10").has_value());
+    EXPECT_FALSE(esi::parse_hexdec("").has_value());
+    EXPECT_EQ(esi::parse_esi_type("STRING(12)"), device::DataType::VisibleString);
+    EXPECT_EQ(esi::parse_esi_type("UDINT"), device::DataType::Unsigned32);
+    EXPECT_FALSE(esi::parse_esi_type("NO_SUCH_TYPE").has_value());
+}
+
+struct VendorCase {
+    const char* file;
+    esi::DeviceSelector sel;
+    std::uint32_t vendor, product, revision;
+    std::size_t rx, tx;  // PDOs the device offers (device level, or default modules of its slots)
+    std::vector<std::uint16_t> rx_default, tx_default;  // PDOs with an Sm attribute: the default assignment
+};
+
+std::vector<VendorCase> vendor_cases() {
+    // Values read from the files by hand (Vendor/Id, Type attributes, RxPdo/TxPdo elements).
+    return {
+        {"esi/elmo-gold.xml", {}, 0x9A, 0x00030924, 0x00000001, 1, 1, {0x1600}, {0x1A00}},
+        {"esi/elmo-gold.xml",
+         {std::nullopt, 0x00030924, 0x00010420},
+         0x9A,
+         0x00030924,
+         0x00010420,
+         0,
+         0,
+         {},
+         {}},
+        // Two slots, each with the default module 0x100 "Position Mode": PDO index +16 per slot.
+        {"esi/etg2001-modules-cia402.xml",
+         {},
+         0xE0000001,
+         0x10000,
+         0,
+         2,
+         2,
+         {0x1600, 0x1610},
+         {0x1A00, 0x1A10}},
+        {"esi/inovance-SV660N.xml", {}, 0x00100000, 0x000C010D, 0x00010000, 6, 5, {0x1701}, {0x1B01}},
+        {"esi/synapticon-somanet-cia402.xml", {}, 0x22D2, 0x201, 0x0A000002, 1, 1, {0x1600}, {0x1A00}},
+    };
+}
+
+TEST(EsiReader, VendorFilesImport) {
+    for (const auto& c : vendor_cases()) {
+        SCOPED_TRACE(c.file);
+        const auto r = esi::import_esi_file(kShared + "/data/" + c.file, c.sel);
+        const auto& d = r.desc;
+        EXPECT_EQ(d.identity.vendor_id, c.vendor);
+        EXPECT_EQ(d.identity.product_code, c.product);
+        EXPECT_EQ(d.identity.revision, c.revision);
+        EXPECT_EQ(d.profile_no, 402u);
+        if (c.rx == 0 && c.tx == 0) continue;  // only the counts of the first cases are known
+        EXPECT_EQ(d.rx_pdos.size(), c.rx);
+        EXPECT_EQ(d.tx_pdos.size(), c.tx);
+        std::vector<std::uint16_t> rx, tx;
+        for (const auto& p : d.rx_pdos)
+            if (p.assigned) rx.push_back(p.index);
+        for (const auto& p : d.tx_pdos)
+            if (p.assigned) tx.push_back(p.index);
+        EXPECT_EQ(rx, c.rx_default);
+        EXPECT_EQ(tx, c.tx_default);
+        EXPECT_EQ(d.sm_of_type(device::SmType::Outputs)->length, d.output_bytes());
+        EXPECT_GT(d.output_bytes(), 0u);
+        EXPECT_GT(d.input_bytes(), 0u);
+        EXPECT_FALSE(d.objects.empty());
+        EXPECT_TRUE(d.mailbox_protocols & device::mbx_proto::CoE);
+    }
+}
+
+TEST(EsiReader, ElmoFileHasFourDevicesAndTheSelectorPicksOne) {
+    std::ifstream f(kShared + "/data/esi/elmo-gold.xml");
+    std::stringstream ss;
+    ss << f.rdbuf();
+    const auto devs = esi::list_devices_text(ss.str());
+    ASSERT_EQ(devs.size(), 4u);
+    EXPECT_EQ(devs[0].product_code, 0x00030924u);
+    EXPECT_EQ(devs[1].product_code, 0x00030925u);
+    esi::DeviceSelector sel;
+    sel.product_code = 0x00030925;
+    EXPECT_EQ(esi::import_esi_text(ss.str(), sel).desc.identity.product_code, 0x00030925u);
+    sel.product_code = 0x12345678;
+    EXPECT_THROW(esi::import_esi_text(ss.str(), sel), esi::EsiError);
+}
+
+TEST(EsiReader, VendorFilesRegenerateValidAndStable) {
+    for (const auto& c : vendor_cases()) {
+        SCOPED_TRACE(c.file);
+        const auto r = esi::import_esi_file(kShared + "/data/" + c.file, c.sel);
+        const auto xml = esi::write_esi(r.desc);
+        const auto path = temp_file("vendor.xml", xml);
+        std::string msg;
+        EXPECT_TRUE(esi::validate_with_xmllint(path, kXsd, &msg)) << msg;
+        std::filesystem::remove(path);
+        EXPECT_EQ(esi::write_esi(esi::import_esi_text(xml).desc), xml);
+    }
+}
+
+TEST(EsiCheck, FindsWhatVendorFilesLeaveOut) {
+    // Synapticon maps 0x607A:4 (an object its dictionary does not have) and leaves 0x6040 unflagged.
+    const auto r = esi::import_esi_file(kShared + "/data/esi/synapticon-somanet-cia402.xml");
+    const auto msgs = esi::check_consistency(r.desc, esc::build_sii_image(r.desc));
+    auto has = [&](const std::string& s) {
+        return std::any_of(msgs.begin(), msgs.end(),
+                           [&](const std::string& m) { return m.find(s) != std::string::npos; });
+    };
+    EXPECT_TRUE(has("RxPDO 0x1600 maps 0x607A:4, which is not in the dictionary"));
+    EXPECT_TRUE(has("RxPDO 0x1600 maps 0x6040:0, which the dictionary does not mark Rx-mappable"));
+    // An SII that disagrees is reported with the SM and both values.
+    auto img = esc::build_sii_image(r.desc);
+    auto d2 = r.desc;
+    d2.sync_managers[0].length = 64;
+    const auto m2 = esi::check_consistency(d2, img);
+    EXPECT_TRUE(std::find(m2.begin(), m2.end(), "SM0 length: ESI 64, SII 1024") != m2.end());
+}
+
+TEST(EsiCheck, CompletedVendorDescriptionsAreConsistent) {
+    for (const auto& c : vendor_cases()) {
+        SCOPED_TRACE(c.file);
+        auto r = esi::import_esi_file(kShared + "/data/" + c.file, c.sel);
+        esi::complete_for_emulation(r.desc);
+        const auto msgs = esi::check_consistency(r.desc, esc::build_sii_image(r.desc));
+        for (const auto& m : msgs)
+            ADD_FAILURE() << m;
+    }
+}
+
+// ---- SOES pairs: the SII generated from their ESI against the image their tool made ---------------
+
+std::vector<std::uint8_t> read_bin(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+TEST(EsiSoes, SiiFromTheirEsiAgainstTheirImageListsEachDifferingByte) {
+    for (const char* name : {"soes-lan9252", "soes-dynpdo"}) {
+        SCOPED_TRACE(name);
+        const auto ref = read_bin(kShared + "/data/sii/" + name + ".bin");
+        ASSERT_EQ(ref.size(), 256u);
+        const auto r = esi::import_esi_file(kShared + "/data/sii/" + std::string(name) + ".xml");
+        const auto gen = esc::build_sii_image(r.desc);
+        const auto diffs = esi::diff_sii(gen, ref);
+        std::printf("%s: %zu differing bytes between the generated SII and the SOES image\n", name,
+                    diffs.size());
+        for (const auto& d : diffs) {
+            std::printf("  0x%04zX gen %3d ref %3d  %s: %s\n", d.offset, d.generated, d.reference,
+                        d.where.c_str(), d.why.c_str());
+            EXPECT_FALSE(d.where.empty());
+            EXPECT_FALSE(d.why.empty());
+            // The ESC configuration area, identity and mailbox words must agree (size word 0x3E excepted:
+            // the generated image needs more than ByteSize 256).
+            EXPECT_GE(d.offset, 2u * esc::sii::Size) << d.where;
+        }
+        const auto a = esc::parse_sii(ConstBytes(gen.data(), gen.size()));
+        const auto b = esc::parse_sii(ConstBytes(ref.data(), ref.size()));
+        EXPECT_TRUE(b.checksum_ok);
+        EXPECT_TRUE(a.checksum_ok);
+        // FMMU usage; the byte padding an odd count is 0xFF in vecat, 0x00 in SOES (both mean unused).
+        auto used = [](std::vector<std::uint8_t> f) {
+            while (!f.empty() && (f.back() == 0 || f.back() == 0xFF))
+                f.pop_back();
+            return f;
+        };
+        EXPECT_EQ(used(a.fmmus), used(b.fmmus));
+        ASSERT_EQ(a.sync_managers.size(), b.sync_managers.size());
+        for (std::size_t i = 0; i < a.sync_managers.size(); ++i) {
+            EXPECT_EQ(a.sync_managers[i].start, b.sync_managers[i].start) << "SM" << i;
+            EXPECT_EQ(a.sync_managers[i].control, b.sync_managers[i].control) << "SM" << i;
+            EXPECT_EQ(a.sync_managers[i].type, b.sync_managers[i].type) << "SM" << i;
+            if (b.sync_managers[i].type <= 2) {
+                EXPECT_EQ(a.sync_managers[i].length, b.sync_managers[i].length) << "mailbox SM" << i;
+            }
+        }
+        EXPECT_EQ(a.device_name(), b.device_name());
+        EXPECT_EQ(a.string_at(a.order_idx), b.string_at(b.order_idx));
+        EXPECT_EQ(a.string_at(a.group_idx), b.string_at(b.group_idx));
+        EXPECT_EQ(a.coe_details & 0x2E,
+                  b.coe_details & 0x2E);  // SdoInfo, PdoAssign, PdoConfig, CompleteAccess
+    }
+}
+
+// ---- priority 3: vendor devices emulated, the project master reaches OP -----------------------------
+
+TEST(EsiRun, EachVendorDeviceReachesOpWithItsDefaultPdos) {
+    for (const auto& c : vendor_cases()) {
+        SCOPED_TRACE(c.file);
+        auto r = esi::import_esi_file(kShared + "/data/" + c.file, c.sel);
+        esi::complete_for_emulation(r.desc);
+        EXPECT_TRUE(esi::check_consistency(r.desc, esc::build_sii_image(r.desc)).empty());
+        test::Bench b{1, {}, r.desc, &cia402::make_drive_segment};
+        std::string why;
+        ASSERT_TRUE(b.master.startup(esc::AlState::Op, &why)) << "start-up: " << why;
+        const auto& s = b.master.slaves().at(0);
+        EXPECT_EQ(s.sii.identity.vendor_id, c.vendor);
+        EXPECT_EQ(s.sii.identity.product_code, c.product);
+        EXPECT_EQ(s.out_bytes, r.desc.output_bytes());
+        EXPECT_EQ(s.in_bytes, r.desc.input_bytes());
+        for (int i = 0; i < 5; ++i) {
+            b.advance(1'000'000);
+            auto w = b.master.exchange_process_data();
+            ASSERT_TRUE(w.has_value());
+            EXPECT_EQ(*w, b.master.expected_wkc());
+        }
+    }
+}
+
+}  // namespace
+}  // namespace vecat
