@@ -54,6 +54,9 @@ RawSocket::RawSocket(const std::string& ifname, bool promiscuous) : ifname_(ifna
         mr.mr_type = PACKET_MR_PROMISC;
         ::setsockopt(fd_, SOL_PACKET, PACKET_ADD_MEMBERSHIP, &mr, sizeof(mr));
     }
+    // Kernel receive timestamps: a frame is processed as of the time it arrived, not the time the serve
+    // loop got round to it (that order matters against the SYNC pulses of the DC units).
+    ::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &one, sizeof(one));
     // Drop what was queued before the bind (frames of other protocols that raced in).
     std::uint8_t junk[1600];
     while (::recv(fd_, junk, sizeof(junk), MSG_DONTWAIT) > 0) {
@@ -72,12 +75,28 @@ bool RawSocket::send(ConstBytes frame) {
 long RawSocket::try_receive(Bytes buf) {
     while (true) {
         sockaddr_ll from{};
-        socklen_t fl = sizeof(from);
-        const ssize_t n = ::recvfrom(fd_, buf.data(), buf.size(), MSG_DONTWAIT | MSG_TRUNC,
-                                     reinterpret_cast<sockaddr*>(&from), &fl);
+        iovec iov{buf.data(), buf.size()};
+        alignas(cmsghdr) std::uint8_t control[CMSG_SPACE(sizeof(timespec))];
+        msghdr msg{};
+        msg.msg_name = &from;
+        msg.msg_namelen = sizeof(from);
+        msg.msg_iov = &iov;
+        msg.msg_iovlen = 1;
+        msg.msg_control = control;
+        msg.msg_controllen = sizeof(control);
+        const ssize_t n = ::recvmsg(fd_, &msg, MSG_DONTWAIT | MSG_TRUNC);
         if (n < 0) return (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) ? 0 : -1;
         if (from.sll_pkttype == PACKET_OUTGOING) continue;       // kernels without PACKET_IGNORE_OUTGOING
         if (static_cast<std::size_t>(n) > buf.size()) continue;  // truncated: not a valid EtherCAT frame
+        last_rx_realtime_ns_ = 0;
+        for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c)) {
+            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+                timespec ts{};
+                std::memcpy(&ts, CMSG_DATA(c), sizeof(ts));
+                last_rx_realtime_ns_ = static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000ull +
+                                       static_cast<std::uint64_t>(ts.tv_nsec);
+            }
+        }
         return n;
     }
 }

@@ -20,12 +20,15 @@ class RawSocket final : public Link {
     // Non-blocking receive: returns 0 at once when nothing is queued.
     long try_receive(Bytes buf);
     int fd() const { return fd_; }
+    // Kernel receive time (CLOCK_REALTIME, ns) of the last frame try_receive/receive returned; 0 if unknown.
+    std::uint64_t last_receive_realtime_ns() const { return last_rx_realtime_ns_; }
     const std::string& ifname() const { return ifname_; }
 
   private:
     int fd_ = -1;
     int ifindex_ = 0;
     std::string ifname_;
+    std::uint64_t last_rx_realtime_ns_ = 0;
 };
 
 }  // namespace vecat::net

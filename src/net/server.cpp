@@ -23,6 +23,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     ServeStats st;
     std::array<std::uint8_t, 2048> buf{};
     std::uint64_t last_tick = monotonic_ns();
+    std::uint64_t last_time = 0;  // latest time given to the segment
     const std::uint64_t tick_ns = static_cast<std::uint64_t>(opt.tick_us) * 1000;
     while (!stop.load(std::memory_order_relaxed)) {
         // Wake up for the next SYNC pulse of the DC units, or after one tick, whichever comes first.
@@ -39,8 +40,17 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
         if (n > 0) {
             ++st.received;
             std::size_t len = static_cast<std::size_t>(n);
-            if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), 1);
-            if (seg.process_frame(Bytes(buf.data(), buf.size()), len, now)) {
+            // The frame counts as of its kernel receive time (on the monotonic clock), never before what
+            // the segment has already seen: a SYNC pulse that fell due while the frame waited in the
+            // socket is then handled after it, as on an ESC.
+            const std::uint64_t real = realtime_ns();
+            const std::uint64_t rx_real = sock.last_receive_realtime_ns();
+            std::uint64_t at = now;
+            if (rx_real != 0 && rx_real <= real && real - rx_real < 10'000'000) at = now - (real - rx_real);
+            at = std::max(at, last_time);
+            last_time = at;
+            if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), rx_real ? rx_real : real, 1);
+            if (seg.process_frame(Bytes(buf.data(), buf.size()), len, at)) {
                 if (sock.send(ConstBytes(buf.data(), len)))
                     ++st.sent;
                 else
@@ -51,6 +61,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
         } else if (now - last_tick >= tick_ns || now >= next_sync) {
             seg.tick(now);
             last_tick = now;
+            last_time = std::max(last_time, now);
         }
     }
     if (opt.pcap) opt.pcap->flush();
