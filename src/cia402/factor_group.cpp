@@ -16,19 +16,51 @@ std::int64_t floor_div(i128 a, i128 b) {
 
 }  // namespace
 
+namespace {
+
+// The reduced fraction increments/user unit; zero when a factor is zero or the fraction needs more than
+// 62 bits (then products with 64-bit positions still fit in 128 bits).
+struct Fraction {
+    std::int64_t num = 0, den = 0;
+};
+
+i128 gcd(i128 a, i128 b) {
+    while (b != 0) {
+        const i128 t = a % b;
+        a = b;
+        b = t;
+    }
+    return a;
+}
+
+Fraction reduced(const FactorGroup& f) {
+    if (!(f.encoder_increments && f.motor_revolutions && f.gear_motor_revolutions &&
+          f.gear_shaft_revolutions && f.feed && f.feed_shaft_revolutions))
+        return {};
+    i128 n = static_cast<i128>(f.encoder_increments) * f.gear_motor_revolutions * f.feed_shaft_revolutions;
+    i128 d = static_cast<i128>(f.motor_revolutions) * f.gear_shaft_revolutions * f.feed;
+    const i128 g = gcd(n, d);
+    n /= g;
+    d /= g;
+    constexpr i128 kMax = static_cast<i128>(1) << 62;
+    if (n >= kMax || d >= kMax) return {};
+    return {static_cast<std::int64_t>(n), static_cast<std::int64_t>(d)};
+}
+
+}  // namespace
+
 bool FactorGroup::valid() const {
-    return encoder_increments && motor_revolutions && gear_motor_revolutions && gear_shaft_revolutions &&
-           feed && feed_shaft_revolutions;
+    return reduced(*this).num != 0;
 }
 
 std::int64_t FactorGroup::numerator() const {
-    if (!valid()) return 1;
-    return static_cast<std::int64_t>(encoder_increments) * gear_motor_revolutions * feed_shaft_revolutions;
+    const Fraction r = reduced(*this);
+    return r.num ? r.num : 1;
 }
 
 std::int64_t FactorGroup::denominator() const {
-    if (!valid()) return 1;
-    return static_cast<std::int64_t>(motor_revolutions) * gear_shaft_revolutions * feed;
+    const Fraction r = reduced(*this);
+    return r.num ? r.den : 1;
 }
 
 std::int64_t FactorGroup::user_to_increments(std::int64_t user) const {

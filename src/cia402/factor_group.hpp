@@ -17,9 +17,10 @@ struct FactorGroup {
     std::uint32_t feed = 1u << 20;                // 0x6092:1
     std::uint32_t feed_shaft_revolutions = 1;     // 0x6092:2
 
-    // Every factor is non-zero (otherwise the conversions use 1:1).
+    // Every factor is non-zero and the reduced fraction fits in 62 bits (otherwise the conversions use
+    // 1:1 and the drive keeps its previous factors).
     bool valid() const;
-    // increments = user * num / den
+    // increments = user * num / den, the reduced fraction
     std::int64_t numerator() const;
     std::int64_t denominator() const;
     std::int64_t user_to_increments(std::int64_t user) const;

@@ -556,6 +556,29 @@ TEST_F(DriveHoming, UnsupportedMethodReportsAHomingError) {
     EXPECT_FALSE(statusword() & sw::Bit12);
 }
 
+TEST(FactorGroup, ConvertsExactlyAndRefusesFactorsBeyond62Bits) {
+    FactorGroup f;  // 2^20 increments per revolution, feed 5000 units per revolution, gear 3:7
+    f.feed = 5000;
+    f.gear_motor_revolutions = 3;
+    f.gear_shaft_revolutions = 7;
+    ASSERT_TRUE(f.valid());
+    // increments per unit = 2^20 * 3 / (7 * 5000) = 3145728 / 35000, reduced by 8: 393216 / 4375.
+    EXPECT_EQ(f.numerator(), 393216);
+    EXPECT_EQ(f.denominator(), 4375);
+    EXPECT_EQ(f.user_to_increments(4375), 393216);
+    EXPECT_EQ(f.user_to_increments(-1), -90);  // floor(-89.88)
+    EXPECT_EQ(f.increments_to_user(393216), 4375);
+    EXPECT_EQ(f.increments_to_user(f.user_to_increments(123'456'789)), 123'456'788);  // floor both ways
+    // Products of three 32-bit factors that do not reduce: refused instead of overflowing.
+    f.encoder_increments = 4'294'967'291u;  // primes
+    f.gear_motor_revolutions = 4'294'967'279u;
+    f.feed_shaft_revolutions = 4'294'967'231u;
+    EXPECT_FALSE(f.valid());
+    EXPECT_EQ(f.numerator(), 1);
+    f.feed = 0;
+    EXPECT_FALSE(f.valid());
+}
+
 // End to end: the cyclic modes through process data in OP, as a master runs them.
 struct DriveCyclic : DriveTest {
     void SetUp() override {
