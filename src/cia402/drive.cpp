@@ -314,10 +314,18 @@ double Drive::clamp_to_software_limits(double p) const {
     return std::clamp(p, lo, hi);
 }
 
+double Drive::machine_increments() const {
+    return mech_->position() / (2.0 * std::numbers::pi) * factors_.increments_per_revolution();
+}
+
+double Drive::standstill_velocity() const {
+    // Velocity threshold 0x606F, at least one unit per second.
+    return std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0);
+}
+
 void Drive::update_inputs() {
     // Machine position in increments (homing does not move it).
-    const double inc =
-        mech_ ? mech_->position() / (2.0 * std::numbers::pi) * factors_.increments_per_revolution() : 0.0;
+    const double inc = machine_increments();
     auto m = [&](int s, std::int32_t fallback) { return rd<std::int32_t>(o_->machine[s], fallback); };
     negative_limit_ = inc <= m(1, std::numeric_limits<std::int32_t>::min());
     positive_limit_ = inc >= m(2, std::numeric_limits<std::int32_t>::max());
@@ -439,8 +447,7 @@ void Drive::servo_step() {
         active_fault_ != 0 && (rd<std::uint16_t>(o_->simulated_fault, 0) != 0 || mech_->overcurrent() ||
                                !mech_->encoder_ok() || sm_.state() != State::Fault);
     const bool at_rest =
-        std::abs(velocity_user_) <= std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0) &&
-        (loop_ != LoopMode::Position || profile_.done());
+        std::abs(velocity_user_) <= standstill_velocity() && (loop_ != LoopMode::Position || profile_.done());
     sm_.update(controlword_, fault_present, at_rest, options_);
     const State now = sm_.state();
     if (now != before) {
@@ -507,8 +514,7 @@ void Drive::servo_step() {
     }
     const double previous_inc = previous_machine_inc_;
     mech_->step(dt);
-    const double machine_inc =
-        mech_->position() / (2.0 * std::numbers::pi) * factors_.increments_per_revolution();
+    const double machine_inc = machine_increments();
     previous_machine_inc_ = machine_inc;
     increments_ = static_cast<std::int64_t>(std::floor(machine_inc));
     actual_user_ = static_cast<double>(factors_.increments_to_user(increments_)) + home_shift_;
@@ -757,7 +763,7 @@ void Drive::run_homing(double dt) {
         hp.home_offset = rd<std::int32_t>(o_->home_offset, 0);
         hp.index_period = factors_.increments_per_revolution() / ipu;
         hp.index_phase = rd<std::int32_t>(o_->machine[4], 0) / ipu + home_shift_;
-        hp.standstill_velocity = std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0);
+        hp.standstill_velocity = standstill_velocity();
         homing_active_ = homing_->start(rd<std::int8_t>(o_->homing_method, 0), hp, actual_user_);
         homing_error_ = !homing_active_;
         homing_velocity_ = 0;
@@ -870,7 +876,7 @@ void Drive::write_feedback() {
     // Target reached (bit 10) and the mode-specific bits 12/13.
     bool reached = false;
     bool bit12 = false, bit13 = false;
-    const double threshold = std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0);
+    const double threshold = standstill_velocity();
     const bool standing = std::abs(velocity_user_) <= threshold;
     speed_zero_time_ = standing ? speed_zero_time_ + dt : 0.0;
     const std::uint32_t fe_window = rd<std::uint32_t>(o_->following_error_window, 0xFFFFFFFFu);
@@ -937,7 +943,6 @@ void Drive::write_feedback() {
     if (bit13) status |= sw::Bit13;
     if (internal_limit_ || positive_limit_ || negative_limit_) status |= sw::InternalLimit;
     if (positive_limit_ || negative_limit_ || (enabled && mech_->torque_limited())) status |= sw::Warning;
-    target_reached_ = reached;
 
     wr(o_->statusword, status);
     wr(o_->modes_display, static_cast<std::int8_t>(mode_));

@@ -103,6 +103,8 @@ class Drive : public coe::CoeApplication {
     double interpolation_period() const;
     double clamp_to_software_limits(double p) const;
     bool software_limits_enabled() const;
+    double machine_increments() const;  // motor position in encoder increments (homing does not move it)
+    double standstill_velocity() const;
     double nm_per_permille() const;
     double user_to_rad(double user) const { return factors_.user_to_radians(user - home_shift_); }
     double rad_to_user(double rad) const { return factors_.radians_to_user(rad) + home_shift_; }
@@ -159,7 +161,6 @@ class Drive : public coe::CoeApplication {
     std::int32_t csp_raw_ = 0;
     double csp_since_ = 0;  // s since the latest set-point arrived
     bool csp_valid_ = false;
-    double csv_raw_ = 0;
 
     // Windows and timers (s).
     double following_error_ = 0;
@@ -167,21 +168,17 @@ class Drive : public coe::CoeApplication {
     double position_window_time_ = 0;
     double velocity_window_time_ = 0;
     double speed_zero_time_ = 0;
-    bool target_reached_ = false;
     bool internal_limit_ = false;
-    bool limit_blocks_positive_ = false;
-    bool limit_blocks_negative_ = false;
 
     // Switches, index pulse and touch probe.
     bool negative_limit_ = false, positive_limit_ = false, home_switch_ = false;
     std::uint8_t probe_inputs_ = 0, previous_probe_inputs_ = 0;
     double previous_machine_inc_ = 0;
-    std::uint16_t probe_function_ = 0, previous_probe_function_ = 0;
+    std::uint16_t previous_probe_function_ = 0;
     std::uint16_t probe_status_ = 0;
 
     // Faults.
     std::uint16_t active_fault_ = 0;
-    std::uint16_t previous_state_bits_ = 0;
 };
 
 // A segment of n drives.
