@@ -14,6 +14,7 @@
 #include "cia402/profile_generator.hpp"
 #include "cia402/state_machine.hpp"
 #include "coe/coe_application.hpp"
+#include "twinsync/status.hpp"
 
 namespace vecat::cia402 {
 
@@ -68,6 +69,8 @@ class Drive : public coe::CoeApplication {
     double velocity_actual() const { return velocity_user_; }
     std::uint64_t servo_steps() const { return steps_; }
     std::uint64_t simulated_time_ns() const { return sim_ns_; }
+    // The TWINsync option card of this drive; nullptr when the drive has none (or TWINsync is OFF).
+    const twinsync::LinkStatus* twinsync_status() const { return nullptr; }
 
     // esc::Application
     void tick(std::uint64_t now_ns) override;

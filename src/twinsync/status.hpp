@@ -1,0 +1,29 @@
+// What a TWINsync option card reports about its link: the values behind P2612, P2617, P2619 and P2623,
+// and the counters a scope or the telemetry shows. Filled by the drive's TWINsync port every control cycle.
+#pragma once
+
+#include <cstdint>
+
+namespace vecat::twinsync {
+
+struct LinkStatus {
+    std::uint16_t mode = 0;                // P2614: 0 OFF, 1 SLAVE, 2 MASTER
+    std::uint8_t setting = 0;              // P2580 operation mode
+    std::uint16_t tx_statusword = 0;       // TWINsync status word sent (table 4.5)
+    std::uint16_t rx_statusword = 0;       // P2617: TWINsync status word received
+    std::uint16_t comm_status = 0;         // P2619 bits
+    std::uint16_t slave_control_word = 0;  // P2611
+    std::uint16_t slave_status = 0;        // P2612
+    std::uint64_t frames_sent = 0;
+    std::uint64_t frames_received = 0;  // valid frames (CRC correct)
+    std::uint64_t crc_errors = 0;
+    std::uint64_t frames_missing = 0;  // control cycles without a frame from the other drive
+    std::int64_t sync_offset_ns = 0;   // slave: phase of its control cycle against the master's SYNC_OUT
+    bool synchronised = false;         // slave: locked to SYNC_OUT (the master reports true)
+    bool link_ok = false;              // valid frames within P2613
+    std::uint8_t error_number = 0;     // MSD error (40 or 39), 0 = none
+    std::uint8_t error_location = 0;
+    float tracking_error = 0;  // gantry: master position minus slave position (user units)
+};
+
+}  // namespace vecat::twinsync
