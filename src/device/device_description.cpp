@@ -131,6 +131,8 @@ DeviceDescription default_drive() {
         DcOpMode{"DC", "DC SYNC0", 0x0300, 1000000, 0, 0, 1, 0},
     };
     d.objects = cia402_drive_objects();
+    for (auto& o : twinsync_objects())
+        d.objects.push_back(std::move(o));
     return d;
 }
 

@@ -146,6 +146,8 @@ std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d);
 // The objects of the CiA 402 drive profile the vecat drive core implements (0x603F-0x60FF, 0x6502) and
 // its manufacturer objects (0x2000...).
 std::vector<ObjectDescription> cia402_drive_objects();
+// The TWINsync option's parameters (0x2000 + parameter number) and vecat's TWINsync objects 0x2102-0x2104.
+std::vector<ObjectDescription> twinsync_objects();
 
 // The built-in default device: a CiA402 servo drive with HIWIN-like SyncManager layout.
 DeviceDescription default_drive();

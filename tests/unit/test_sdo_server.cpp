@@ -926,19 +926,28 @@ std::vector<std::uint16_t> indexes_of(const Buf& list_data) {
 }  // namespace
 
 TEST_F(Sdo, OdListOfAllObjects) {
-    const InfoReply r = info_of(send(info_req(0x01, le16(1))));
-    EXPECT_EQ(r.opcode, 0x02);
-    EXPECT_EQ(r.fragments_left, 0);
-    ASSERT_GE(r.data.size(), 2u);
-    EXPECT_EQ(ld_le16(r.data.data()), 1);
+    // The whole list, in as many fragments as the default mailbox needs (all queued at once).
+    handle(info_req(0x01, le16(1)), sink);
+    ASSERT_GE(sink.queued(), 1u);
+    Buf list;
+    std::size_t left = sink.queued();
+    while (sink.queued()) {
+        const InfoReply r = info_of(sink.take().bytes);
+        --left;
+        EXPECT_EQ(r.opcode, left == 0 ? 0x02 : 0x82);
+        EXPECT_EQ(r.fragments_left, left);
+        list.insert(list.end(), r.data.begin(), r.data.end());
+    }
+    ASSERT_GE(list.size(), 2u);
+    EXPECT_EQ(ld_le16(list.data()), 1);
     std::vector<std::uint16_t> want;
     for (const auto& o : od().objects())
         want.push_back(o.index());
-    const auto got = indexes_of(r.data);
+    const auto got = indexes_of(list);
     EXPECT_EQ(got, want);
     EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
     EXPECT_EQ(got.size(), device::dictionary_objects(device::default_drive()).size());
-    EXPECT_EQ(r.data.size(), 2 + 2 * want.size());
+    EXPECT_EQ(list.size(), 2 + 2 * want.size());
 }
 
 TEST_F(Sdo, OdListLengths) {
@@ -960,8 +969,9 @@ TEST_F(Sdo, OdListLengths) {
     EXPECT_EQ(ld_le16(r.data.data() + 6), count(device::access::TxPdoMappable));
     EXPECT_EQ(ld_le16(r.data.data() + 8), count(device::access::Backup));
     EXPECT_EQ(ld_le16(r.data.data() + 10), count(device::access::Settings));
-    // The default drive: 102 objects, 28 RxPDO-mappable, 24 TxPDO-mappable, none backup/settings.
-    EXPECT_EQ(r.data, cat({le16(0), le16(102), le16(28), le16(24), le16(0), le16(0)}));
+    // The default drive: 156 objects (54 of them TWINsync), 28 RxPDO-mappable, 50 TxPDO-mappable (26 of
+    // them TWINsync values), none backup/settings.
+    EXPECT_EQ(r.data, cat({le16(0), le16(156), le16(28), le16(50), le16(0), le16(0)}));
 }
 
 TEST_F(Sdo, OdListOfPdoMappableObjects) {
