@@ -158,6 +158,43 @@ struct Drive::Objects {
     Entry* compensation_distance = at(0x2111, 1);
     Entry* compensation_length = at(0x2111, 2);
     Entry* compensation_start = at(0x2111, 3);
+    // TWINsync: the local values the drive provides and the remote values it uses.
+    Entry* tw(std::uint16_t parameter, std::uint8_t sub = 0) { return at(twinsync::object_index(parameter), sub); }
+    Entry* tw_control_selector = tw(twinsync::p::ControlSelector);
+    Entry* tw_control_mode = tw(twinsync::p::ControlMode);
+    Entry* tw_config = tw(twinsync::p::Config);
+    Entry* tw_inverted = tw(twinsync::p::SlaveInverted);
+    Entry* tw_speed_up = tw(twinsync::p::SpeedUp);
+    Entry* tw_speed_up_min = tw(twinsync::p::SpeedUpMinimum);
+    Entry* tw_act_speed_master = tw(twinsync::p::ActSpeedMaster);
+    Entry* tw_local_ref_torque = tw(twinsync::p::LocalRefTorque);
+    Entry* tw_local_act_torque = tw(twinsync::p::LocalActTorque);
+    Entry* tw_local_ref_speed = tw(twinsync::p::LocalRefSpeed);
+    Entry* tw_local_act_speed = tw(twinsync::p::LocalActSpeed);
+    Entry* tw_local_ref_pos = tw(twinsync::p::LocalRefPos);
+    Entry* tw_local_act_pos = tw(twinsync::p::LocalActPos);
+    Entry* tw_local_torque_ref = tw(twinsync::p::LocalScaling, 1);
+    Entry* tw_local_speed_ref = tw(twinsync::p::LocalScaling, 2);
+    Entry* tw_remote_ref_torque = tw(twinsync::p::RemoteRefTorque);
+    Entry* tw_remote_act_torque = tw(twinsync::p::RemoteActTorque);
+    Entry* tw_remote_ref_speed = tw(twinsync::p::RemoteRefSpeed);
+    Entry* tw_remote_act_speed = tw(twinsync::p::RemoteActSpeed);
+    Entry* tw_remote_ref_pos = tw(twinsync::p::RemoteRefPos);
+    Entry* tw_remote_act_pos = tw(twinsync::p::RemoteActPos);
+    Entry* tw_remote_torque_ref = tw(twinsync::p::RemoteScaling, 1);
+    Entry* tw_remote_speed_ref = tw(twinsync::p::RemoteScaling, 2);
+    Entry* tw_local_resolution = tw(twinsync::p::LocalResolution);
+    Entry* tw_remote_resolution = tw(twinsync::p::RemoteResolution);
+    Entry* tw_gear_numerator = tw(twinsync::p::GearNumerator);
+    Entry* tw_gear_denominator = tw(twinsync::p::GearDenominator);
+    Entry* tw_speed_actual_rpm = tw(twinsync::p::SpeedActualRpm);
+    Entry* tw_speed_setpoint_rpm = tw(twinsync::p::SpeedSetpointRpm);
+    Entry* tw_position_actual = tw(twinsync::p::PositionActual);
+    Entry* tw_torque_actual_scaled = tw(twinsync::p::TorqueActualScaled);
+    Entry* tw_local_ff_speed = tw(twinsync::p::LocalRefFFSpeed);
+    Entry* tw_local_eps = tw(twinsync::p::LocalActEps);
+    Entry* tw_error_number = tw(twinsync::p::CurrentError, 1);
+    Entry* tw_error_location = tw(twinsync::p::CurrentError, 2);
     Entry* motor[8] = {};    // 0x2000:1-7
     Entry* gains[5] = {};    // 0x2003:1-4
     Entry* machine[8] = {};  // 0x2100:1-7
@@ -191,6 +228,7 @@ Drive::Drive(const device::DeviceDescription& d)
     mech_ = std::make_unique<Mechanics>(mp, ControlGains{});
     inertia_ = mp.rotor_inertia + mp.load_inertia;
     homing_ = std::make_unique<Homing>();
+    twin_ = std::make_unique<twinsync::Port>(dictionary(), kServoPeriodNs);
     // Fault injection is refused for codes the drive does not simulate.
     if (o_->simulated_fault)
         o_->simulated_fault->on_download = [](const Entry&, ConstBytes v) {
@@ -376,6 +414,7 @@ void Drive::check_faults(double dt) {
 }
 
 void Drive::on_mode_change() {
+    continuing_ = false;
     // A new mode starts from where the axis is.
     profile_.reset({actual_user_, velocity_user_, 0.0});
     demand_ = {actual_user_, velocity_user_, 0.0};
@@ -438,14 +477,33 @@ void Drive::servo_step() {
     const double dt = kServoPeriodNs * 1e-9;
     ++steps_;
     read_configuration();
-    controlword_ = rd<std::uint16_t>(o_->controlword, 0);
+    const std::uint16_t own_controlword = rd<std::uint16_t>(o_->controlword, 0);
+    controlword_ = own_controlword;
+
+    // TWINsync: the telegram of the partner drive's last cycle. A slave controlled through TWINsync obeys
+    // the master drive's control word (P2611) instead of 0x6040.
+    twin_->receive(sim_ns_, twinsync_local());
+    previous_twin_control_ = twin_control_;
+    twin_control_ = twin_->received_control_word();
+    if (twin_->controlled_by_twinsync() && twin_->has_data())
+        controlword_ = twinsync::cia402_from_control_word(twin_control_);
+    // A master drive switches on its control once its slave is in state Control (unless P2651 bit 2).
+    if (twin_->active() && twin_->role() == twinsync::Role::Master && twin_->link_ok() &&
+        twin_->partner().mode == twinsync::Role::Slave && !twin_->partner_enabled() &&
+        !(rd<std::uint32_t>(o_->tw_config, 0) & twinsync::kConfigNoSlaveStateCheck) &&
+        sm_.state() != State::OperationEnabled)
+        controlword_ = static_cast<std::uint16_t>(controlword_ & ~0x0008u);
+
     update_inputs();
     check_faults(dt);
+    // TWINsync errors become faults in state Control (chapter 7).
+    if (const auto e = twin_->pending_error(); e && sm_.state() == State::OperationEnabled) enter_twinsync_fault(*e);
 
     const State before = sm_.state();
+    const bool twin_cause = twin_error_ && twin_->pending_error() == twin_error_;
     const bool fault_present =
         active_fault_ != 0 && (rd<std::uint16_t>(o_->simulated_fault, 0) != 0 || mech_->overcurrent() ||
-                               !mech_->encoder_ok() || sm_.state() != State::Fault);
+                               !mech_->encoder_ok() || twin_cause || sm_.state() != State::Fault);
     const bool at_rest =
         std::abs(velocity_user_) <= standstill_velocity() && (loop_ != LoopMode::Position || profile_.done());
     sm_.update(controlword_, fault_present, at_rest, options_);
@@ -453,6 +511,8 @@ void Drive::servo_step() {
     if (now != before) {
         if (before == State::Fault && now == State::SwitchOnDisabled) {
             active_fault_ = 0;
+            twin_error_.reset();
+            twin_->set_error(std::nullopt);
             clear_faults();
         }
         if (now == State::OperationEnabled) {
@@ -478,13 +538,32 @@ void Drive::servo_step() {
     }
 
     internal_limit_ = false;
+    const bool follow = twin_->follows() && twin_->has_data();
+    if (coupled_ && !follow) {
+        // Decoupled: in motion, the axis goes on as if it were still coupled until it is stopped.
+        coupled_ = false;
+        if (sm_.following_setpoints() && std::abs(demand_.v) > standstill_velocity()) {
+            continuing_ = true;
+            continue_halting_ = false;
+            continue_velocity_ = demand_.v;
+            continue_target_position_ = rd<std::int32_t>(o_->target_position);
+            continue_target_velocity_ = rd<std::int32_t>(o_->target_velocity);
+        }
+    }
     if (!sm_.drive_enabled()) {
         hold_disabled();
+        coupled_ = continuing_ = false;
     } else if (sm_.stop() != StopKind::None) {
         run_stop(sm_.stop(), dt);
+        coupled_ = continuing_ = false;
+    } else if (follow) {
+        run_twinsync(dt);
+    } else if (continuing_) {
+        run_decoupled(dt);
     } else {
         run_mode(dt);
     }
+    if (mode_ == Mode::Homing && (homing_bits_ & sw::Bit12) && !(homing_bits_ & sw::Bit13)) homed_ = true;
 
     // The loops and the mechanics.
     const double torque_limit_pos = std::min(rd<std::uint16_t>(o_->max_torque, 3000),
@@ -525,7 +604,247 @@ void Drive::servo_step() {
 
     run_touch_probe(previous_inc, machine_inc);
     write_feedback();
+    write_twinsync_values();
+    twinsync::LocalState local = twinsync_local();
+    local.controlword = own_controlword;
+    twin_->transmit(sim_ns_, local);
     previous_controlword_ = controlword_;
+}
+
+namespace {
+
+twinsync::DriveComState drivecom_state(State s) {
+    using D = twinsync::DriveComState;
+    switch (s) {
+        case State::NotReadyToSwitchOn:
+            return D::NotReadyToSwitchOn;
+        case State::SwitchOnDisabled:
+            return D::SwitchOnDisabled;
+        case State::ReadyToSwitchOn:
+            return D::ReadyToSwitchOn;
+        case State::SwitchedOn:
+            return D::SwitchedOn;
+        case State::OperationEnabled:
+            return D::OperationEnabled;
+        case State::QuickStopActive:
+            return D::QuickStopActive;
+        case State::FaultReactionActive:
+            return D::FaultReactionActive;
+        case State::Fault:
+            return D::Fault;
+    }
+    return D::Start;
+}
+
+double rpm_of_rad(double rad_per_s) {
+    return rad_per_s * 60.0 / (2.0 * std::numbers::pi);
+}
+
+// A value as a 16-bit fraction of its reference (section 4.1.6: -reference..+reference = -32768..32767).
+std::int16_t scaled16(double value, double reference) {
+    if (!(reference > 0)) return 0;
+    return static_cast<std::int16_t>(std::clamp(std::llround(value / reference * 32768.0), -32768ll, 32767ll));
+}
+
+}  // namespace
+
+twinsync::LocalState Drive::twinsync_local() const {
+    twinsync::LocalState l;
+    l.state = drivecom_state(sm_.state());
+    l.fault = sm_.state() == State::Fault || sm_.state() == State::FaultReactionActive;
+    l.homed = homed_;
+    l.transition = sm_.stop() != StopKind::None;
+    l.controlword = rd<std::uint16_t>(o_->controlword, 0);
+    l.homing_mode = mode_ == Mode::Homing;
+    l.fieldbus_synchronised = const_cast<Drive*>(this)->sync_mode() == coe::SyncMode::DcSync0 ||
+                              const_cast<Drive*>(this)->sync_mode() == coe::SyncMode::DcSync1;
+    l.position = actual_user_;
+    l.speed_rpm = rpm_of_rad(mech_->velocity());
+    l.torque_nm = mech_->torque();
+    l.rated_torque_nm = nm_per_permille() * 1000.0;
+    return l;
+}
+
+void Drive::write_twinsync_values() {
+    const double torque_ref = static_cast<double>(rd<float>(o_->tw_local_torque_ref, 1.0f));
+    const double speed_ref = static_cast<double>(rd<float>(o_->tw_local_speed_ref, 1.0f));
+    const double act_rpm = rpm_of_rad(mech_->velocity());
+    const double demand_v = loop_ == LoopMode::Velocity ? velocity_cmd_ : demand_.v;
+    const double ref_rpm = rpm_of_rad(user_velocity_to_rad(demand_v));
+    const double ref_torque = loop_ == LoopMode::Torque ? torque_cmd_ * nm_per_permille() : mech_->torque();
+    wr(o_->tw_local_ref_torque, scaled16(ref_torque, torque_ref));
+    wr(o_->tw_local_act_torque, scaled16(mech_->torque(), torque_ref));
+    wr(o_->tw_torque_actual_scaled, scaled16(mech_->torque(), torque_ref));
+    wr(o_->tw_local_ref_speed, scaled16(ref_rpm, speed_ref));
+    wr(o_->tw_local_ff_speed, scaled16(ref_rpm, speed_ref));
+    wr(o_->tw_local_act_speed, scaled16(act_rpm, speed_ref));
+    wr(o_->tw_speed_actual_rpm, static_cast<float>(act_rpm));
+    wr(o_->tw_speed_setpoint_rpm, static_cast<float>(ref_rpm));
+    wr(o_->tw_local_ref_pos, wrap32(static_cast<std::int64_t>(std::llround(demand_.p))));
+    const std::int32_t act = wrap32(static_cast<std::int64_t>(std::floor(actual_user_)));
+    wr(o_->tw_local_act_pos, act);
+    wr(o_->tw_position_actual, act);
+    // Single-turn angle of the motor, 16 bit (the virtual encoder's raw value).
+    const double per_rev = factors_.increments_per_revolution();
+    const double turn = std::fmod(machine_increments(), per_rev) / per_rev;
+    wr(o_->tw_local_eps, static_cast<std::uint16_t>(std::llround((turn < 0 ? turn + 1.0 : turn) * 65536.0) & 0xFFFF));
+    // P2650: the drive's own current error; on a TWINsync master it shows what the slave sent.
+    if (twin_->role() != twinsync::Role::Master || !twin_->active()) {
+        std::uint16_t number = 0, location = 0;
+        if (twin_error_) {
+            number = twin_error_->number;
+            location = twin_error_->location;
+        } else if (active_fault_ != 0) {
+            number = static_cast<std::uint16_t>(active_fault_ >> 8);
+            location = static_cast<std::uint16_t>(active_fault_ & 0xFF);
+        }
+        wr(o_->tw_error_number, number);
+        wr(o_->tw_error_location, location);
+    }
+}
+
+void Drive::enter_twinsync_fault(twinsync::ErrorId e) {
+    if (active_fault_ != 0) return;
+    // 0x603F: serial interface 2 for the link (40-xx) and the other axis (39-02); the speed and torque
+    // monitoring of the gantry as velocity and torque control faults. The emergency's manufacturer bytes
+    // carry the MSD error number and location.
+    std::uint16_t code = 0x7520;
+    std::uint8_t bits = coe::error_register::Communication | coe::error_register::Manufacturer;
+    if (e == twinsync::error::SpeedDifference) {
+        code = 0x8400;
+        bits = coe::error_register::Manufacturer;
+    } else if (e == twinsync::error::TorqueDifference) {
+        code = 0x8300;
+        bits = coe::error_register::Manufacturer;
+    }
+    active_fault_ = code;
+    twin_error_ = e;
+    twin_->set_error(e);
+    raise_fault(code, bits, {e.number, e.location, 0, 0, 0});
+}
+
+void Drive::hold_for_coupling() {
+    loop_ = LoopMode::Position;
+    demand_.v = demand_.a = 0;
+    torque_ff_ = 0;
+}
+
+void Drive::run_twinsync(double dt) {
+    (void)dt;
+    using twinsync::Follow;
+    using twinsync::Setting;
+    const auto* m = twin_->mode();
+    Follow f = m->follow;
+    if (f == Follow::ByControlMode) {
+        const auto cm = rd<std::uint16_t>(o_->tw_control_mode, 3);
+        f = cm == 1 ? Follow::Torque : cm == 2 ? Follow::Speed : Follow::PositionAbsolute;
+    }
+    const bool user = m->follow == Follow::ByControlMode;
+    const double inv = rd<std::int16_t>(o_->tw_inverted, 1) < 0 ? -1.0 : 1.0;
+    const double remote_speed_ref = static_cast<double>(rd<float>(o_->tw_remote_speed_ref, 1.0f));
+    const double remote_torque_ref = static_cast<double>(rd<float>(o_->tw_remote_torque_ref, 1.0f));
+    auto speed = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_speed_ref; };       // rpm
+    auto torque = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_torque_ref; };     // Nm
+    auto rpm_to_user = [&](double rpm) { return factors_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi); };
+    const double still = standstill_velocity();
+    torque_ff_ = 0;
+
+    switch (f) {
+        case Follow::PositionAbsolute: {
+            // IP: the master's actual position; REFPOS and GANTRY (and USER/EXT_MAP): its set-point.
+            const bool ip = m->setting == Setting::PconIpSlave;
+            const double master = rd<std::int32_t>(ip ? o_->tw_remote_act_pos : o_->tw_remote_ref_pos);
+            const double ff_rpm = m->setting == Setting::PconGantrySlave
+                                      ? static_cast<double>(rd<float>(o_->tw_act_speed_master))
+                                      : speed(ip ? o_->tw_remote_act_speed : o_->tw_remote_ref_speed);
+            const double v = inv * rpm_to_user(ff_rpm);
+            if (!coupled_) {
+                // Coupling only at standstill of both axes.
+                if (std::abs(v) > still || std::abs(velocity_user_) > still) return hold_for_coupling();
+                coupled_ = true;
+            }
+            demand_ = {clamp_to_software_limits(inv * master), v, 0.0};
+            loop_ = LoopMode::Position;
+            if (m->setting == Setting::PconGantrySlave) torque_ff_ = inv * torque(o_->tw_remote_act_torque) / nm_per_permille();
+            break;
+        }
+        case Follow::PositionDelta: {
+            // PCON: increments of the master's actual position, corrected by the resolution factors
+            // (P0270/P2652), geared (P2653/P2654), reversed by P2583, integrated onto the coupling position.
+            const std::int32_t master = rd<std::int32_t>(o_->tw_remote_act_pos);
+            const double k = inv * static_cast<double>(rd<std::uint32_t>(o_->tw_local_resolution, 1)) /
+                             std::max<double>(rd<std::uint32_t>(o_->tw_remote_resolution, 1), 1.0) *
+                             static_cast<double>(rd<std::int32_t>(o_->tw_gear_numerator, 1)) /
+                             std::max<double>(rd<std::int32_t>(o_->tw_gear_denominator, 1), 1.0);
+            const double v = k * rpm_to_user(speed(o_->tw_remote_act_speed));
+            if (!coupled_) {
+                if (std::abs(v) > still || std::abs(velocity_user_) > still) return hold_for_coupling();
+                coupled_ = true;
+                twin_master_last_ = master;
+            }
+            const auto delta = static_cast<std::int32_t>(static_cast<std::uint32_t>(master) -
+                                                         static_cast<std::uint32_t>(twin_master_last_));
+            twin_master_last_ = master;
+            double p = demand_.p + k * delta;
+            // Re-synchronisation (P2611 bit 12, rising): the slave takes the master position itself.
+            if ((twin_control_ & twinsync::control::ReSyncPosition) &&
+                !(previous_twin_control_ & twinsync::control::ReSyncPosition))
+                p = k * master;
+            demand_ = {clamp_to_software_limits(p), v, 0.0};
+            loop_ = LoopMode::Position;
+            break;
+        }
+        case Follow::Speed:
+        case Follow::SpeedTorquePrecontrol: {
+            double rpm = inv * speed(user ? o_->tw_remote_ref_speed : o_->tw_remote_act_speed);
+            if (m->setting == Setting::TwdSlaveV1) {
+                // Speed-up: P2584 % of the main set-point, at least P2585, signed as the master's torque.
+                const double master_torque = torque(o_->tw_remote_act_torque);
+                double add = std::abs(rpm) * static_cast<double>(rd<float>(o_->tw_speed_up)) / 100.0;
+                add = std::max(add, static_cast<double>(rd<float>(o_->tw_speed_up_min)));
+                if (master_torque != 0) rpm += master_torque > 0 ? add : -add;
+            }
+            velocity_cmd_ = std::clamp(rpm_to_user(rpm), -max_velocity(), max_velocity());
+            if (f == Follow::SpeedTorquePrecontrol) torque_ff_ = inv * torque(o_->tw_remote_act_torque) / nm_per_permille();
+            loop_ = LoopMode::Velocity;
+            demand_ = {actual_user_, velocity_cmd_, 0.0};
+            coupled_ = true;
+            break;
+        }
+        case Follow::Torque:
+            torque_cmd_ = inv * torque(o_->tw_remote_ref_torque) / nm_per_permille();
+            loop_ = LoopMode::Torque;
+            coupled_ = true;
+            break;
+        case Follow::None:
+        case Follow::ByControlMode:
+            break;
+    }
+}
+
+void Drive::run_decoupled(double dt) {
+    // A new set-point, a new target or a new mode ends the decoupled motion; halt stops it.
+    const bool new_setpoint = (controlword_ & kNewSetpoint) && !(previous_controlword_ & kNewSetpoint);
+    if (new_setpoint || rd<std::int32_t>(o_->target_position) != continue_target_position_ ||
+        rd<std::int32_t>(o_->target_velocity) != continue_target_velocity_) {
+        continuing_ = false;
+        on_mode_change();
+        run_mode(dt);
+        return;
+    }
+    loop_ = LoopMode::Position;
+    torque_ff_ = 0;
+    if (controlword_ & kHalt) {
+        if (!continue_halting_) {
+            profile_.reset(demand_);
+            profile_.stop(std::max<double>(rd<std::uint32_t>(o_->profile_deceleration, 1), 1.0), profile_limits().jerk);
+            continue_halting_ = true;
+        }
+        demand_ = profile_.step(dt);
+        if (profile_.done()) continuing_ = false;
+        return;
+    }
+    demand_ = {demand_.p + continue_velocity_ * dt, continue_velocity_, 0.0};
 }
 
 void Drive::run_mode(double dt) {
@@ -965,12 +1284,71 @@ void Drive::write_feedback() {
     wr(o_->temperature, sat16(temperature_));
 }
 
+std::shared_ptr<twinsync::Channel> connect_twinsync(Drive& a, Drive& b, double ppm_a, double ppm_b) {
+    auto ch = std::make_shared<twinsync::Channel>();
+    ch->set_oscillator_ppm(0, ppm_a);
+    ch->set_oscillator_ppm(1, ppm_b);
+    a.twinsync_port().connect(ch, 0);
+    b.twinsync_port().connect(ch, 1);
+    return ch;
+}
+
+namespace {
+
+void set_parameter(Drive& d, std::uint16_t parameter, std::uint8_t sub, std::int64_t value) {
+    if (Entry* e = d.dictionary().find(twinsync::object_index(parameter), sub)) {
+        std::array<std::uint8_t, 8> v{};
+        st_le64(v.data(), static_cast<std::uint64_t>(value));
+        e->assign(ConstBytes(v.data(), std::min<std::size_t>(e->capacity(), 8)));
+    }
+}
+
+}  // namespace
+
+void apply_twinsync_preset(Drive& master, Drive& slave, TwinsyncPreset preset) {
+    using namespace twinsync;
+    if (preset == TwinsyncPreset::None) return;
+    const Setting ms = preset == TwinsyncPreset::Gantry     ? Setting::PconGantryMaster
+                       : preset == TwinsyncPreset::Position ? Setting::PconMaster
+                                                            : Setting::SconMaster;
+    const Setting ss = preset == TwinsyncPreset::Gantry     ? Setting::PconGantrySlave
+                       : preset == TwinsyncPreset::Position ? Setting::PconSlave
+                                                            : Setting::SconSlave;
+    set_parameter(master, p::Mode, 0, static_cast<std::int64_t>(Role::Master));
+    set_parameter(master, p::Setting, 0, static_cast<std::int64_t>(ms));
+    set_parameter(slave, p::Mode, 0, static_cast<std::int64_t>(Role::Slave));
+    set_parameter(slave, p::Setting, 0, static_cast<std::int64_t>(ss));
+    set_parameter(slave, p::ControlSelector, 0, kControlByTwinsync);
+    set_parameter(slave, p::SetpointSelector, 0, kSetpointByTwinsync);
+    set_parameter(slave, p::SyncSel, 0, static_cast<std::int64_t>(SyncSelection::SlaveByTwin));
+    master.twinsync_port().reconfigure();
+    slave.twinsync_port().reconfigure();
+}
+
+std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
+                                                 const esc::EscConfig& cfg, TwinsyncPreset preset) {
+    auto seg = esc::make_segment(d, n, cfg,
+                                 [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
+                                     return std::make_unique<Drive>(dd);
+                                 });
+    if (n >= 2) {
+        auto* a = dynamic_cast<Drive*>(&seg->slave(0).app());
+        auto* b = dynamic_cast<Drive*>(&seg->slave(1).app());
+        if (a && b) {
+            connect_twinsync(*a, *b);
+            apply_twinsync_preset(*a, *b, preset);
+        }
+    }
+    return seg;
+}
+
+}  // namespace vecat::cia402
+
+namespace vecat::cia402 {
+
 std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
                                                  const esc::EscConfig& cfg) {
-    return esc::make_segment(d, n, cfg,
-                             [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
-                                 return std::make_unique<Drive>(dd);
-                             });
+    return make_drive_segment(d, n, cfg, TwinsyncPreset::None);
 }
 
 }  // namespace vecat::cia402

@@ -14,6 +14,7 @@
 #include "cia402/profile_generator.hpp"
 #include "cia402/state_machine.hpp"
 #include "coe/coe_application.hpp"
+#include "twinsync/port.hpp"
 #include "twinsync/status.hpp"
 
 namespace vecat::cia402 {
@@ -69,8 +70,13 @@ class Drive : public coe::CoeApplication {
     double velocity_actual() const { return velocity_user_; }
     std::uint64_t servo_steps() const { return steps_; }
     std::uint64_t simulated_time_ns() const { return sim_ns_; }
-    // The TWINsync option card of this drive; nullptr when the drive has none (or TWINsync is OFF).
-    const twinsync::LinkStatus* twinsync_status() const { return nullptr; }
+    // The TWINsync option card of this drive, and its status (nullptr when no cable is connected).
+    twinsync::Port& twinsync_port() { return *twin_; }
+    const twinsync::LinkStatus* twinsync_status() const {
+        return twin_->channel() ? &twin_->status() : nullptr;
+    }
+    // The TWINsync error the drive has raised as a fault (40-xx, 39-xx), if any.
+    std::optional<twinsync::ErrorId> twinsync_error() const { return twin_error_; }
 
     // esc::Application
     void tick(std::uint64_t now_ns) override;
@@ -93,6 +99,12 @@ class Drive : public coe::CoeApplication {
     void run_cyclic_position(double dt);
     void run_cyclic_velocity(double dt);
     void run_stop(StopKind k, double dt);
+    void run_twinsync(double dt);
+    void run_decoupled(double dt);
+    void hold_for_coupling();
+    twinsync::LocalState twinsync_local() const;
+    void write_twinsync_values();
+    void enter_twinsync_fault(twinsync::ErrorId e);
     void run_touch_probe(double previous_inc, double machine_inc);
     bool blocked(double direction) const;
     void start_move(double target);
@@ -182,9 +194,33 @@ class Drive : public coe::CoeApplication {
 
     // Faults.
     std::uint16_t active_fault_ = 0;
+
+    // TWINsync: the option card, the coupling of a slave drive to its master drive, and decoupling in
+    // motion (the axis goes on at its velocity until it is stopped or given a new set-point).
+    std::unique_ptr<twinsync::Port> twin_;
+    std::optional<twinsync::ErrorId> twin_error_;
+    bool coupled_ = false;
+    std::int32_t twin_master_last_ = 0;  // master position at the previous cycle (PCON increments)
+    std::uint16_t twin_control_ = 0, previous_twin_control_ = 0;
+    bool continuing_ = false, continue_halting_ = false;
+    double continue_velocity_ = 0;
+    std::int32_t continue_target_position_ = 0, continue_target_velocity_ = 0;
+    bool homed_ = false;
 };
 
-// A segment of n drives.
+// Connects the TWINsync option cards of two drives by a cable (a: end 0, b: end 1). Their oscillators
+// differ by the given ppm, which the slave's synchronisation controller has to follow.
+std::shared_ptr<twinsync::Channel> connect_twinsync(Drive& a, Drive& b, double ppm_a = 20.0, double ppm_b = -20.0);
+
+// Ready-made TWINsync set-ups of the first two drives of a line (`vecat run --twinsync ...`).
+enum class TwinsyncPreset { None, Gantry, Position, Speed };
+// Writes the parameters of both drives (drive a master, drive b slave controlled through TWINsync).
+void apply_twinsync_preset(Drive& master, Drive& slave, TwinsyncPreset p);
+
+// A segment of n drives; drives 1 and 2 (if there are two) are connected by a TWINsync cable, with the
+// preset applied.
+std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
+                                                 const esc::EscConfig& cfg, TwinsyncPreset preset);
 std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
                                                  const esc::EscConfig& cfg = {});
 

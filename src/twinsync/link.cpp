@@ -66,8 +66,12 @@ bool Channel::chance(std::uint32_t per_million) noexcept {
 
 void Channel::send(int end, ConstBytes frame, std::uint64_t t_ns) noexcept {
     const int e = end & 1;
-    if (faults_.cable_break || frame.size() > kMaxFrameBytes) return;
-    if (faults_.drop_next > 0 || chance(faults_.drop_per_million)) {
+    if (cable_broken() || frame.size() > kMaxFrameBytes) return;
+    const std::uint32_t drop = std::max({faults_.drop_per_million, injected_[0].drop_per_million,
+                                         injected_[1].drop_per_million});
+    const std::uint32_t corrupt = std::max({faults_.corrupt_per_million, injected_[0].corrupt_per_million,
+                                            injected_[1].corrupt_per_million});
+    if (faults_.drop_next > 0 || chance(drop)) {
         if (faults_.drop_next > 0) --faults_.drop_next;
         ++dropped_;
         return;
@@ -78,7 +82,7 @@ void Channel::send(int end, ConstBytes frame, std::uint64_t t_ns) noexcept {
     s.size = frame.size();
     s.t_ns = t_ns;
     s.fresh = true;
-    if (faults_.corrupt_next > 0 || chance(faults_.corrupt_per_million)) {
+    if (faults_.corrupt_next > 0 || chance(corrupt)) {
         if (faults_.corrupt_next > 0) --faults_.corrupt_next;
         // A bit error on the line: the CRC no longer matches.
         s.bytes[s.size - 1] ^= 0x10;
@@ -91,7 +95,7 @@ ConstBytes Channel::receive(int end, std::uint64_t t_ns) noexcept {
     Slot* best = nullptr;
     for (auto& s : ring_[from])
         if (s.fresh && s.t_ns < t_ns && (!best || s.t_ns > best->t_ns)) best = &s;
-    if (!best || faults_.cable_break) return {};
+    if (!best || cable_broken()) return {};
     // Older frames still waiting are superseded: the receiver only keeps the latest.
     for (auto& s : ring_[from])
         if (s.t_ns <= best->t_ns) s.fresh = false;
@@ -105,7 +109,7 @@ void Channel::sync_pulse(int end, std::uint64_t t_ns) noexcept {
 
 bool Channel::sync_seen(int end, std::uint64_t since_ns) const noexcept {
     const int from = (end & 1) ^ 1;
-    if (faults_.cable_break || faults_.sync_loss || !pulsed_[from]) return false;
+    if (sync_line_dead() || !pulsed_[from]) return false;
     return last_pulse_[from] >= since_ns;
 }
 

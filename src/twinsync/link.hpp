@@ -49,6 +49,21 @@ class Channel {
         std::uint32_t drop_per_million = 0;
     };
 
+    // Faults a drive injects through its own dictionary (0x2104), combined with faults() of the cable.
+    struct Injected {
+        bool cable_break = false;
+        bool sync_loss = false;
+        std::uint32_t corrupt_per_million = 0;
+        std::uint32_t drop_per_million = 0;
+    };
+    void inject(int end, const Injected& i) { injected_[end & 1] = i; }
+    bool cable_broken() const noexcept {
+        return faults_.cable_break || injected_[0].cable_break || injected_[1].cable_break;
+    }
+    bool sync_line_dead() const noexcept {
+        return cable_broken() || faults_.sync_loss || injected_[0].sync_loss || injected_[1].sync_loss;
+    }
+
     // The local oscillator of the drive at each end (ppm against the nominal frequency).
     void set_oscillator_ppm(int end, double ppm) { ppm_[end & 1] = ppm; }
     double oscillator_ppm(int end) const { return ppm_[end & 1]; }
@@ -80,6 +95,7 @@ class Channel {
     std::array<bool, 2> pulsed_{};
     std::array<double, 2> ppm_{};
     Faults faults_;
+    std::array<Injected, 2> injected_{};
     std::uint64_t corrupted_ = 0, dropped_ = 0;
     std::uint64_t rng_ = 0x9E3779B97F4A7C15ull;
 };

@@ -1,0 +1,143 @@
+// The TWINsync option card of one drive: it reads its configuration from the drive's dictionary (the
+// parameters of src/device/twinsync_objects.cpp), checks it when it is written (refusing what cannot work,
+// with the reason in 0x2102), builds the telegram from the send mapping once per control cycle, checks the
+// received one (length, CRC) and copies its process data into the mapped parameters, runs the
+// synchronisation controller of a slave and the monitoring of chapter 7.
+//
+// The drive calls receive() at the start of its control cycle and transmit() at its end. The port tells
+// the drive the control word received from the master drive, whether the partner is enabled, and the
+// error (40-xx, 39-xx) that is pending; the drive decides when it becomes a fault (in state Control).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "coe/object_dictionary.hpp"
+#include "twinsync/link.hpp"
+#include "twinsync/mapping.hpp"
+#include "twinsync/status.hpp"
+#include "twinsync/telegram.hpp"
+
+namespace vecat::twinsync {
+
+// MSD error numbers of the TWINsync monitoring (chapter 7): number-location.
+struct ErrorId {
+    std::uint8_t number = 0;
+    std::uint8_t location = 0;
+    bool operator==(const ErrorId&) const = default;
+};
+namespace error {
+inline constexpr ErrorId Communication{40, 0};       // faulty or missing telegrams > P2613, or sync lost
+inline constexpr ErrorId SwitchingFrequency{40, 1};  // master and slave switching frequencies differ
+inline constexpr ErrorId ModeConflict{40, 2};        // both master or both slave
+inline constexpr ErrorId DriveComState{40, 4};       // different DriveCom states
+inline constexpr ErrorId SpeedDifference{39, 0};     // gantry: speed (or position) tracking error
+inline constexpr ErrorId TorqueDifference{39, 1};    // torque difference
+inline constexpr ErrorId OtherAxis{39, 2};           // error detected on the other axis
+}  // namespace error
+
+// P2619 bits. vecat reads bit 0 "no error" as set while no error bit is.
+namespace comm_status {
+inline constexpr std::uint16_t NoError = 1u << 0;
+inline constexpr std::uint16_t CommunicationLost = 1u << 1;
+inline constexpr std::uint16_t SwitchingFrequency = 1u << 2;
+inline constexpr std::uint16_t ModeConflict = 1u << 3;
+inline constexpr std::uint16_t DriveComState = 1u << 5;
+}  // namespace comm_status
+
+// What the drive tells the port about itself every cycle.
+struct LocalState {
+    DriveComState state = DriveComState::SwitchOnDisabled;
+    bool fault = false;
+    bool homed = false;
+    bool transition = false;             // a state change is in progress (P2612 OpInProgress)
+    std::uint16_t controlword = 0;       // the drive's own CiA 402 controlword (a master sends it on)
+    bool homing_mode = false;
+    bool fieldbus_synchronised = false;  // the drive's cycle runs on EtherCAT DC (SYNC0)
+    // For the gantry monitoring (master: 29 / slave: 30), in the units of the telegram.
+    double position = 0;      // user units
+    double speed_rpm = 0;
+    double torque_nm = 0;
+    double rated_torque_nm = 1;
+};
+
+class Port {
+  public:
+    Port(coe::ObjectDictionary& od, std::uint64_t period_ns);
+    ~Port();
+
+    // The cable: this card is end `end` (0 or 1) of the channel.
+    void connect(std::shared_ptr<Channel> channel, int end);
+    const std::shared_ptr<Channel>& channel() const { return channel_; }
+    int end() const { return end_; }
+
+    Role role() const { return role_; }
+    const ModeInfo* mode() const { return mode_; }
+    bool active() const { return channel_ && role_ != Role::Off; }
+    // The slave runs on the master's set-points (P0165 = TWINSYNC) in a mode that follows.
+    bool follows() const;
+    bool controlled_by_twinsync() const;  // P0159 = TWINSYNC on a slave
+
+    void receive(std::uint64_t t_ns, const LocalState& local);
+    void transmit(std::uint64_t t_ns, const LocalState& local);
+
+    // Valid data from the partner has arrived since the link became active (values may be frozen).
+    bool has_data() const { return has_data_; }
+    bool link_ok() const { return status_.link_ok; }
+    std::uint16_t received_control_word() const { return rx_drivecom_; }  // P2611 on a slave
+    const TwinStatusWord& partner() const { return partner_; }
+    bool partner_enabled() const;  // the partner reports DriveCom state 5 (Control)
+    // The monitoring's finding this cycle (the drive raises it as a fault in state Control).
+    std::optional<ErrorId> pending_error() const { return pending_; }
+    // The error the drive has raised: sent in the status word and shown in P2650.
+    void set_error(std::optional<ErrorId> e) { raised_ = e; }
+
+    const LinkStatus& status() const { return status_; }
+    // Re-reads the configuration (called after SDO writes; cheap when nothing changed).
+    void reconfigure();
+    // Why the last write was refused ("" if it was not).
+    const std::string& message() const { return message_; }
+
+  private:
+    struct Mapped {
+        coe::Entry* entry = nullptr;
+        std::size_t bytes = 0;
+    };
+    struct Config;
+    coe::SdoAbort validate_write(coe::Entry& e, ConstBytes value);
+    coe::SdoAbort check_configuration();
+    bool resolve(const MappingWords& words, bool extended, std::vector<Mapped>& out, std::size_t& bytes,
+                 std::string& why) const;
+    void set_message(std::string m);
+    void apply_fault_injection();
+    void monitor(const LocalState& local, bool valid);
+
+    coe::ObjectDictionary& od_;
+    std::uint64_t period_ns_;
+    std::shared_ptr<Channel> channel_;
+    int end_ = 0;
+    std::unique_ptr<Config> c_;
+
+    Role role_ = Role::Off;
+    const ModeInfo* mode_ = nullptr;
+    Layout layout_ = Layout::Standard;
+    std::size_t pdo_size_ = 0;
+    std::vector<Mapped> send_, receive_;
+    bool configured_ = false;
+
+    SyncController sync_;
+    bool has_data_ = false;
+    std::uint16_t rx_drivecom_ = 0;
+    TwinStatusWord partner_;
+    double fault_time_ns_ = 0;
+    double state_mismatch_ns_ = 0;
+    std::optional<ErrorId> pending_;
+    std::optional<ErrorId> raised_;
+    LinkStatus status_;
+    std::string message_;
+};
+
+}  // namespace vecat::twinsync
