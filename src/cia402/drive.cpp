@@ -159,7 +159,9 @@ struct Drive::Objects {
     Entry* compensation_length = at(0x2111, 2);
     Entry* compensation_start = at(0x2111, 3);
     // TWINsync: the local values the drive provides and the remote values it uses.
-    Entry* tw(std::uint16_t parameter, std::uint8_t sub = 0) { return at(twinsync::object_index(parameter), sub); }
+    Entry* tw(std::uint16_t parameter, std::uint8_t sub = 0) {
+        return at(twinsync::object_index(parameter), sub);
+    }
     Entry* tw_control_selector = tw(twinsync::p::ControlSelector);
     Entry* tw_control_mode = tw(twinsync::p::ControlMode);
     Entry* tw_config = tw(twinsync::p::Config);
@@ -270,7 +272,26 @@ void Drive::advance(std::uint64_t now_ns) {
     // thousands of steps at once.
     constexpr std::uint64_t kMaxCatchUp = 200'000'000;
     if (now_ns - sim_ns_ > kMaxCatchUp) sim_ns_ = now_ns - kMaxCatchUp;
+    // Drives coupled by TWINsync step in lockstep, end 0 before end 1 at every instant, so that each
+    // receives the other's telegram of the previous control cycle whatever order the line runs them in.
+    Drive* partner = twin_partner_;
+    const bool first = twin_->end() == 0;
     while (now_ns - sim_ns_ >= kServoPeriodNs) {
+        sim_ns_ += kServoPeriodNs;
+        if (partner && !first) partner->step_to(sim_ns_);
+        servo_step();
+        if (partner && first) partner->step_to(sim_ns_);
+    }
+}
+
+void Drive::step_to(std::uint64_t t_ns) {
+    if (!started_) {
+        started_ = true;
+        sim_ns_ = t_ns;
+        return;
+    }
+    if (t_ns > sim_ns_ + 200'000'000) sim_ns_ = t_ns - 200'000'000;
+    while (sim_ns_ + kServoPeriodNs <= t_ns) {
         sim_ns_ += kServoPeriodNs;
         servo_step();
     }
@@ -497,7 +518,8 @@ void Drive::servo_step() {
     update_inputs();
     check_faults(dt);
     // TWINsync errors become faults in state Control (chapter 7).
-    if (const auto e = twin_->pending_error(); e && sm_.state() == State::OperationEnabled) enter_twinsync_fault(*e);
+    if (const auto e = twin_->pending_error(); e && sm_.state() == State::OperationEnabled)
+        enter_twinsync_fault(*e);
 
     const State before = sm_.state();
     const bool twin_cause = twin_error_ && twin_->pending_error() == twin_error_;
@@ -643,7 +665,8 @@ double rpm_of_rad(double rad_per_s) {
 // A value as a 16-bit fraction of its reference (section 4.1.6: -reference..+reference = -32768..32767).
 std::int16_t scaled16(double value, double reference) {
     if (!(reference > 0)) return 0;
-    return static_cast<std::int16_t>(std::clamp(std::llround(value / reference * 32768.0), -32768ll, 32767ll));
+    return static_cast<std::int16_t>(
+        std::clamp(std::llround(value / reference * 32768.0), -32768ll, 32767ll));
 }
 
 }  // namespace
@@ -687,9 +710,11 @@ void Drive::write_twinsync_values() {
     // Single-turn angle of the motor, 16 bit (the virtual encoder's raw value).
     const double per_rev = factors_.increments_per_revolution();
     const double turn = std::fmod(machine_increments(), per_rev) / per_rev;
-    wr(o_->tw_local_eps, static_cast<std::uint16_t>(std::llround((turn < 0 ? turn + 1.0 : turn) * 65536.0) & 0xFFFF));
-    // P2650: the drive's own current error; on a TWINsync master it shows what the slave sent.
-    if (twin_->role() != twinsync::Role::Master || !twin_->active()) {
+    wr(o_->tw_local_eps,
+       static_cast<std::uint16_t>(std::llround((turn < 0 ? turn + 1.0 : turn) * 65536.0) & 0xFFFF));
+    // P2650: the drive's own current error, unless the receive mapping brings the slave's (TWD, SCON,
+    // PCON, VE masters: "interpreted as the error of the slave drive").
+    if (!twin_->receives(twinsync::p::CurrentError)) {
         std::uint16_t number = 0, location = 0;
         if (twin_error_) {
             number = twin_error_->number;
@@ -743,9 +768,11 @@ void Drive::run_twinsync(double dt) {
     const double inv = rd<std::int16_t>(o_->tw_inverted, 1) < 0 ? -1.0 : 1.0;
     const double remote_speed_ref = static_cast<double>(rd<float>(o_->tw_remote_speed_ref, 1.0f));
     const double remote_torque_ref = static_cast<double>(rd<float>(o_->tw_remote_torque_ref, 1.0f));
-    auto speed = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_speed_ref; };       // rpm
-    auto torque = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_torque_ref; };     // Nm
-    auto rpm_to_user = [&](double rpm) { return factors_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi); };
+    auto speed = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_speed_ref; };    // rpm
+    auto torque = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_torque_ref; };  // Nm
+    auto rpm_to_user = [&](double rpm) {
+        return factors_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi);
+    };
     const double still = standstill_velocity();
     torque_ff_ = 0;
 
@@ -765,7 +792,8 @@ void Drive::run_twinsync(double dt) {
             }
             demand_ = {clamp_to_software_limits(inv * master), v, 0.0};
             loop_ = LoopMode::Position;
-            if (m->setting == Setting::PconGantrySlave) torque_ff_ = inv * torque(o_->tw_remote_act_torque) / nm_per_permille();
+            if (m->setting == Setting::PconGantrySlave)
+                torque_ff_ = inv * torque(o_->tw_remote_act_torque) / nm_per_permille();
             break;
         }
         case Follow::PositionDelta: {
@@ -805,7 +833,8 @@ void Drive::run_twinsync(double dt) {
                 if (master_torque != 0) rpm += master_torque > 0 ? add : -add;
             }
             velocity_cmd_ = std::clamp(rpm_to_user(rpm), -max_velocity(), max_velocity());
-            if (f == Follow::SpeedTorquePrecontrol) torque_ff_ = inv * torque(o_->tw_remote_act_torque) / nm_per_permille();
+            if (f == Follow::SpeedTorquePrecontrol)
+                torque_ff_ = inv * torque(o_->tw_remote_act_torque) / nm_per_permille();
             loop_ = LoopMode::Velocity;
             demand_ = {actual_user_, velocity_cmd_, 0.0};
             coupled_ = true;
@@ -837,7 +866,8 @@ void Drive::run_decoupled(double dt) {
     if (controlword_ & kHalt) {
         if (!continue_halting_) {
             profile_.reset(demand_);
-            profile_.stop(std::max<double>(rd<std::uint32_t>(o_->profile_deceleration, 1), 1.0), profile_limits().jerk);
+            profile_.stop(std::max<double>(rd<std::uint32_t>(o_->profile_deceleration, 1), 1.0),
+                          profile_limits().jerk);
             continue_halting_ = true;
         }
         demand_ = profile_.step(dt);
@@ -1290,6 +1320,8 @@ std::shared_ptr<twinsync::Channel> connect_twinsync(Drive& a, Drive& b, double p
     ch->set_oscillator_ppm(1, ppm_b);
     a.twinsync_port().connect(ch, 0);
     b.twinsync_port().connect(ch, 1);
+    a.twin_partner_ = &b;
+    b.twin_partner_ = &a;
     return ch;
 }
 
@@ -1327,10 +1359,10 @@ void apply_twinsync_preset(Drive& master, Drive& slave, TwinsyncPreset preset) {
 
 std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
                                                  const esc::EscConfig& cfg, TwinsyncPreset preset) {
-    auto seg = esc::make_segment(d, n, cfg,
-                                 [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
-                                     return std::make_unique<Drive>(dd);
-                                 });
+    auto seg = esc::make_segment(
+        d, n, cfg, [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
+            return std::make_unique<Drive>(dd);
+        });
     if (n >= 2) {
         auto* a = dynamic_cast<Drive*>(&seg->slave(0).app());
         auto* b = dynamic_cast<Drive*>(&seg->slave(1).app());

@@ -55,6 +55,8 @@ inline constexpr std::uint16_t Bit13 = 1u << 13;  // PP/CSP following error, HM 
 }  // namespace sw
 
 class Drive : public coe::CoeApplication {
+    friend std::shared_ptr<twinsync::Channel> connect_twinsync(Drive&, Drive&, double, double);
+
   public:
     static constexpr std::uint64_t kServoPeriodNs = 250'000;
 
@@ -87,6 +89,7 @@ class Drive : public coe::CoeApplication {
   private:
     struct Objects;
     void advance(std::uint64_t now_ns);
+    void step_to(std::uint64_t t_ns);
     void servo_step();
     void read_configuration();
     void apply_gains();
@@ -198,6 +201,7 @@ class Drive : public coe::CoeApplication {
     // TWINsync: the option card, the coupling of a slave drive to its master drive, and decoupling in
     // motion (the axis goes on at its velocity until it is stopped or given a new set-point).
     std::unique_ptr<twinsync::Port> twin_;
+    Drive* twin_partner_ = nullptr;  // the drive at the other end of the cable (steps in lockstep)
     std::optional<twinsync::ErrorId> twin_error_;
     bool coupled_ = false;
     std::int32_t twin_master_last_ = 0;  // master position at the previous cycle (PCON increments)
@@ -210,7 +214,8 @@ class Drive : public coe::CoeApplication {
 
 // Connects the TWINsync option cards of two drives by a cable (a: end 0, b: end 1). Their oscillators
 // differ by the given ppm, which the slave's synchronisation controller has to follow.
-std::shared_ptr<twinsync::Channel> connect_twinsync(Drive& a, Drive& b, double ppm_a = 20.0, double ppm_b = -20.0);
+std::shared_ptr<twinsync::Channel> connect_twinsync(Drive& a, Drive& b, double ppm_a = 20.0,
+                                                    double ppm_b = -20.0);
 
 // Ready-made TWINsync set-ups of the first two drives of a line (`vecat run --twinsync ...`).
 enum class TwinsyncPreset { None, Gantry, Position, Speed };

@@ -67,10 +67,10 @@ bool Channel::chance(std::uint32_t per_million) noexcept {
 void Channel::send(int end, ConstBytes frame, std::uint64_t t_ns) noexcept {
     const int e = end & 1;
     if (cable_broken() || frame.size() > kMaxFrameBytes) return;
-    const std::uint32_t drop = std::max({faults_.drop_per_million, injected_[0].drop_per_million,
-                                         injected_[1].drop_per_million});
-    const std::uint32_t corrupt = std::max({faults_.corrupt_per_million, injected_[0].corrupt_per_million,
-                                            injected_[1].corrupt_per_million});
+    const std::uint32_t drop =
+        std::max({faults_.drop_per_million, injected_[0].drop_per_million, injected_[1].drop_per_million});
+    const std::uint32_t corrupt = std::max(
+        {faults_.corrupt_per_million, injected_[0].corrupt_per_million, injected_[1].corrupt_per_million});
     if (faults_.drop_next > 0 || chance(drop)) {
         if (faults_.drop_next > 0) --faults_.drop_next;
         ++dropped_;

@@ -16,7 +16,9 @@ using coe::SdoAbort;
 // The dictionary entries the card uses, looked up once.
 struct Port::Config {
     explicit Config(coe::ObjectDictionary& od) {
-        auto at = [&](std::uint16_t parameter, std::uint8_t sub = 0) { return od.find(object_index(parameter), sub); };
+        auto at = [&](std::uint16_t parameter, std::uint8_t sub = 0) {
+            return od.find(object_index(parameter), sub);
+        };
         setting = at(p::Setting);
         mode = at(p::Mode);
         for (std::uint8_t i = 0; i < 8; ++i) {
@@ -205,8 +207,8 @@ bool Port::resolve(const MappingWords& words, bool extended, std::vector<Mapped>
         }
         const std::size_t n = extended ? e->bit_length() / 8 : m->bits / 8u;
         if (n == 0 || n > 4) {
-            why = fmt::format("sub-ID {} maps P{:04}[{}] of {} bits; 8, 16 or 32 are possible", i, m->parameter,
-                              m->element, e->bit_length());
+            why = fmt::format("sub-ID {} maps P{:04}[{}] of {} bits; 8, 16 or 32 are possible", i,
+                              m->parameter, m->element, e->bit_length());
             return false;
         }
         out.push_back({e, n});
@@ -303,6 +305,16 @@ void Port::reconfigure() {
     }
 }
 
+bool Port::receives(std::uint16_t parameter) const {
+    if (!active() || !configured_) return false;
+    const coe::Object* o = od_.find(object_index(parameter));
+    if (!o) return false;
+    for (const Mapped& m : receive_)
+        for (const Entry& e : o->entries())
+            if (&e == m.entry) return true;
+    return false;
+}
+
 bool Port::follows() const {
     return active() && configured_ && role_ == Role::Slave && mode_ && mode_->follow != Follow::None &&
            rd<std::uint16_t>(c_->setpoint_selector) == kSetpointByTwinsync;
@@ -373,7 +385,8 @@ void Port::receive(std::uint64_t t_ns, const LocalState& local) {
                                 : SyncController::Source::Twin;
         const bool pulse = channel_->sync_seen(end_, t_ns >= 2 * period_ns_ ? t_ns - 2 * period_ns_ : 0);
         const double drift = channel_->oscillator_ppm(end_) - channel_->oscillator_ppm(end_ ^ 1);
-        sync_.step(static_cast<double>(period_ns_), drift, rd<std::int16_t>(c_->sync_ticks, 0), pulse, source);
+        sync_.step(static_cast<double>(period_ns_), drift, rd<std::int16_t>(c_->sync_ticks, 0), pulse,
+                   source);
         status_.sync_offset_ns = static_cast<std::int64_t>(std::llround(sync_.phase_ns()));
         status_.synchronised = sync_.locked();
     } else {
@@ -395,20 +408,27 @@ void Port::monitor(const LocalState& local, bool valid) {
     if (layout_ == Layout::Standard) {
         // Monitoring of chapter 7 (not in the extended mapping, section 4.1.2).
         if (lost) bits |= comm_status::CommunicationLost;
-        if (has_data_ && ok) {
-            const auto own_frequency = static_cast<std::uint8_t>(rd<std::uint16_t>(c_->switching_frequency, 1));
+        if (has_data_ && !lost) {
+            const auto own_frequency =
+                static_cast<std::uint8_t>(rd<std::uint16_t>(c_->switching_frequency, 1));
             if (partner_.switching_frequency != own_frequency) bits |= comm_status::SwitchingFrequency;
             if (partner_.mode == role_) bits |= comm_status::ModeConflict;
         }
         // DriveCom states: up to state 5; not while the partner stops or is in its error reaction.
-        const bool check_states = !(role_ == Role::Master && (rd<std::uint32_t>(c_->config) & kConfigNoSlaveStateCheck));
+        const bool check_states =
+            !(role_ == Role::Master && (rd<std::uint32_t>(c_->config) & kConfigNoSlaveStateCheck));
         const bool differ = status_.link_ok && control && partner_.drivecom_state < 5;
-        state_mismatch_ns_ = (check_states && differ) ? state_mismatch_ns_ + static_cast<double>(period_ns_) : 0.0;
+        state_mismatch_ns_ =
+            (check_states && differ) ? state_mismatch_ns_ + static_cast<double>(period_ns_) : 0.0;
         if (state_mismatch_ns_ > max_fault_ns) bits |= comm_status::DriveComState;
-        if (lost) pending_ = error::Communication;
-        else if (bits & comm_status::ModeConflict) pending_ = error::ModeConflict;
-        else if (bits & comm_status::SwitchingFrequency) pending_ = error::SwitchingFrequency;
-        else if (bits & comm_status::DriveComState) pending_ = error::DriveComState;
+        if (lost)
+            pending_ = error::Communication;
+        else if (bits & comm_status::ModeConflict)
+            pending_ = error::ModeConflict;
+        else if (bits & comm_status::SwitchingFrequency)
+            pending_ = error::SwitchingFrequency;
+        else if (bits & comm_status::DriveComState)
+            pending_ = error::DriveComState;
     }
     // Gantry monitoring (section 6.2.12).
     status_.tracking_error = 0;
@@ -418,15 +438,17 @@ void Port::monitor(const LocalState& local, bool valid) {
             const double slave_pos = inv * rd<std::int32_t>(c_->remote_act_pos);
             status_.tracking_error = static_cast<float>(local.position - slave_pos);
             const double slave_speed = inv * static_cast<double>(rd<float>(c_->act_speed_master));
-            if (control && (std::abs(local.position - slave_pos) > rd<std::uint32_t>(c_->position_limit, 0xFFFFFFFFu) ||
-                            std::abs(local.speed_rpm - slave_speed) > rd<float>(c_->speed_limit, 1e30f)))
+            if (control &&
+                (std::abs(local.position - slave_pos) > rd<std::uint32_t>(c_->position_limit, 0xFFFFFFFFu) ||
+                 std::abs(local.speed_rpm - slave_speed) > rd<float>(c_->speed_limit, 1e30f)))
                 pending_ = error::SpeedDifference;
         }
         if (mode_->setting == Setting::PconGantrySlave && control) {
             const double limit = rd<std::uint16_t>(c_->torque_limit) * 1e-3 * local.rated_torque_nm;
             const double remote = rd<std::int16_t>(c_->remote_act_torque) / 32768.0 *
                                   static_cast<double>(rd<float>(c_->remote_torque_scale, 1.0f));
-            if (limit > 0 && std::abs(local.torque_nm - inv * remote) > limit) pending_ = error::TorqueDifference;
+            if (limit > 0 && std::abs(local.torque_nm - inv * remote) > limit)
+                pending_ = error::TorqueDifference;
         }
         const bool gantry =
             mode_->setting == Setting::PconGantryMaster || mode_->setting == Setting::PconGantrySlave;
@@ -469,7 +491,8 @@ void Port::transmit(std::uint64_t t_ns, const LocalState& local) {
         if (local.fault) st |= slave_status::Fault;
         if (local.homed) st |= slave_status::HomePositionSet;
         if (local.transition) st |= slave_status::OpInProgress;
-        st |= static_cast<std::uint16_t>((static_cast<unsigned>(local.state) & 0x7u) << slave_status::DriveComShift);
+        st |= static_cast<std::uint16_t>((static_cast<unsigned>(local.state) & 0x7u)
+                                         << slave_status::DriveComShift);
         t.drivecom_word = st;
         if (c_->slave_status) c_->slave_status->set(st);
         status_.slave_status = st;

@@ -53,12 +53,12 @@ struct LocalState {
     DriveComState state = DriveComState::SwitchOnDisabled;
     bool fault = false;
     bool homed = false;
-    bool transition = false;             // a state change is in progress (P2612 OpInProgress)
-    std::uint16_t controlword = 0;       // the drive's own CiA 402 controlword (a master sends it on)
+    bool transition = false;        // a state change is in progress (P2612 OpInProgress)
+    std::uint16_t controlword = 0;  // the drive's own CiA 402 controlword (a master sends it on)
     bool homing_mode = false;
     bool fieldbus_synchronised = false;  // the drive's cycle runs on EtherCAT DC (SYNC0)
     // For the gantry monitoring (master: 29 / slave: 30), in the units of the telegram.
-    double position = 0;      // user units
+    double position = 0;  // user units
     double speed_rpm = 0;
     double torque_nm = 0;
     double rated_torque_nm = 1;
@@ -96,6 +96,8 @@ class Port {
     void set_error(std::optional<ErrorId> e) { raised_ = e; }
 
     const LinkStatus& status() const { return status_; }
+    // The active receive mapping writes this parameter.
+    bool receives(std::uint16_t parameter) const;
     // Re-reads the configuration (called after SDO writes; cheap when nothing changed).
     void reconfigure();
     // Why the last write was refused ("" if it was not).
