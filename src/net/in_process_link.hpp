@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "esc/segment.hpp"
+#include "net/frame_filter.hpp"
 #include "net/link.hpp"
 
 namespace vecat::net {
@@ -18,11 +19,12 @@ class InProcessLink final : public Link {
         if (frame.size() > buf_.size()) return false;
         std::memcpy(buf_.data(), frame.data(), frame.size());
         len_ = frame.size();
-        pending_ = seg_.process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns());
+        pending_ = filter_ ? filter_->process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns())
+                           : seg_.process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns());
         return true;
     }
     long receive(Bytes out, std::int64_t) override {
-        if (!pending_) return 0;
+        if (!pending_) return filter_ ? static_cast<long>(filter_->take_due(now_ns(), out)) : 0;
         pending_ = false;
         const std::size_t n = std::min(len_, out.size());
         std::memcpy(out.data(), buf_.data(), n);
@@ -35,6 +37,8 @@ class InProcessLink final : public Link {
                                               std::chrono::steady_clock::now().time_since_epoch())
                                               .count());
     }
+    // Fault injection between the link and the segment (nullptr: none).
+    void set_filter(FrameFilter* f) { filter_ = f; }
     void set_time(std::uint64_t ns) {
         manual_time_ = true;
         manual_now_ = ns;
@@ -42,6 +46,7 @@ class InProcessLink final : public Link {
 
   private:
     esc::Segment& seg_;
+    FrameFilter* filter_ = nullptr;
     std::array<std::uint8_t, 1600> buf_{};
     std::size_t len_ = 0;
     bool pending_ = false;
