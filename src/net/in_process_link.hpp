@@ -24,7 +24,10 @@ class InProcessLink final : public Link {
         return true;
     }
     long receive(Bytes out, std::int64_t) override {
-        if (!pending_) return filter_ ? static_cast<long>(filter_->take_due(now_ns(), out)) : 0;
+        // A held-back reply that is due left earlier than the frame just sent: it arrives first.
+        if (filter_)
+            if (const std::size_t late = filter_->take_due(now_ns(), out)) return static_cast<long>(late);
+        if (!pending_) return 0;
         pending_ = false;
         const std::size_t n = std::min(len_, out.size());
         std::memcpy(out.data(), buf_.data(), n);

@@ -146,16 +146,22 @@ TEST(Scenario, ExampleFilesParse) {
 
 TEST_F(FaultTest, DroppedFrameNeverComesBackButSlavesBeforeTheCableProcessedIt) {
     up(3);
-    std::uint32_t mask = 0x12345678;
+    // ECAT event mask 0x0200: a register the master may write.
+    std::uint16_t mask = 0x1234;
+    auto write_mask = [&] {
+        return b->once(esc::Command::FPWR, b->station(0), 0x0200, Bytes(reinterpret_cast<std::uint8_t*>(&mask), 2));
+    };
     // Lost on cable 2 (between slave 1 and 2) on the way out: slave 0 has executed the write.
     ASSERT_EQ(b->inject("drop cable=2 count=1"), "ok drop#1");
-    EXPECT_FALSE(b->once(esc::Command::FPWR, b->station(0), 0x0204, Bytes(reinterpret_cast<std::uint8_t*>(&mask), 4)));
-    EXPECT_EQ(b->seg->slave(0).esc().peek32(0x0204), 0x12345678u);
+    EXPECT_FALSE(write_mask());
+    EXPECT_EQ(b->seg->slave(0).esc().peek16(0x0200), 0x1234u);
     // Lost before the first slave: nothing happened.
-    mask = 0x0000FFFF;
+    mask = 0x00FF;
     ASSERT_EQ(b->inject("drop count=1").substr(0, 2), "ok");
-    EXPECT_FALSE(b->once(esc::Command::FPWR, b->station(0), 0x0204, Bytes(reinterpret_cast<std::uint8_t*>(&mask), 4)));
-    EXPECT_EQ(b->seg->slave(0).esc().peek32(0x0204), 0x12345678u);
+    EXPECT_FALSE(write_mask());
+    EXPECT_EQ(b->seg->slave(0).esc().peek16(0x0200), 0x1234u);
+    EXPECT_EQ(write_mask(), 1);
+    EXPECT_EQ(b->seg->slave(0).esc().peek16(0x0200), 0x00FFu);
     // Count reached: the line works again, the master's retries hide nothing any more.
     EXPECT_EQ(b->master.count_slaves(), 3);
     EXPECT_EQ(b->inj.counters().frames_dropped, 2u);
@@ -286,8 +292,11 @@ TEST_F(FaultTest, ForcedAlErrorShowsTheCodeAndAnEmergency) {
     ASSERT_TRUE(r.ok());
     EXPECT_TRUE(r.data.at(0) & coe::error_register::Communication);
     ASSERT_FALSE(c.emergencies().empty());
-    EXPECT_EQ(c.emergencies().back().error_code, coe::emcy::Communication);
+    // The AL status code travels in the emergency's manufacturer bytes.
+    EXPECT_EQ(c.emergencies().back().error_register & coe::error_register::Communication,
+              coe::error_register::Communication);
     EXPECT_EQ(c.emergencies().back().data[0], 0x1A);
+    EXPECT_EQ(c.emergencies().back().data[1], 0x00);
     // The master acknowledges it like a real one.
     EXPECT_TRUE(b->master.acknowledge_error(b->station(1), AlState::SafeOp));
     EXPECT_FALSE(b->master.read_al_status(b->station(1)).error());
@@ -298,11 +307,13 @@ TEST_F(FaultTest, SdoAbortWithTheChosenCodeOnTheChosenObject) {
     master::CoeClient c(b->master, b->station(0));
     ASSERT_EQ(b->inject("sdo_abort slave=0 index=0x6060 code=0x08000022 count=1").substr(0, 2), "ok");
     EXPECT_TRUE(c.upload(0x6041, 0).ok());  // another object: unaffected
-    const auto r = c.download_value<std::int8_t>(0x6060, 0, 8);
+    ASSERT_NE(b->od0().find(0x6060, 0)->get<std::int8_t>(), 10);
+    const auto r = c.download_value<std::int8_t>(0x6060, 0, 10);
     EXPECT_TRUE(r.transport_ok);
     EXPECT_EQ(static_cast<std::uint32_t>(r.abort), 0x08000022u);
-    EXPECT_NE(b->od0().find(0x6060, 0)->get<std::int8_t>(), 8);  // not executed
-    EXPECT_TRUE(c.download_value<std::int8_t>(0x6060, 0, 8).ok());  // count reached
+    EXPECT_NE(b->od0().find(0x6060, 0)->get<std::int8_t>(), 10);  // not executed
+    EXPECT_TRUE(c.download_value<std::int8_t>(0x6060, 0, 10).ok());  // count reached
+    EXPECT_EQ(b->od0().find(0x6060, 0)->get<std::int8_t>(), 10);
     EXPECT_EQ(b->inj.counters().sdo_aborts, 1u);
 }
 
@@ -327,8 +338,8 @@ TEST_P(DriveFaultTest, StatuswordFaultBitErrorCodeAndEmergency) {
     up(1);
     auto& od = b->od0();
     od.find(0x6060, 0)->set(std::int8_t{8});  // CSP: the drive holds its position
-    for (std::uint16_t cw : {0x06, 0x07, 0x0F}) {
-        od.find(0x6040, 0)->set(cw);
+    for (int cw : {0x06, 0x07, 0x0F}) {
+        od.find(0x6040, 0)->set(static_cast<std::uint16_t>(cw));
         b->advance(kMs);
     }
     master::CoeClient c(b->master, b->station(0));
