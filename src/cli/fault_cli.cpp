@@ -22,8 +22,9 @@ std::string kinds_help() {
 }  // namespace
 
 void add_run_fault_options(CLI::App* run, RunFaultOptions& o) {
-    run->add_option("--scenario", o.scenario,
-                    "Fault scenario (YAML timeline, see src/faults/README.md); times count from the first frame")
+    run->add_option(
+           "--scenario", o.scenario,
+           "Fault scenario (YAML timeline, see src/faults/README.md); times count from the first frame")
         ->check(CLI::ExistingFile);
     run->add_option("--control", o.control,
                     "Unix socket for `vecat fault` commands while running (inject, clear, list)");
@@ -60,8 +61,8 @@ void print_fault_summary(const FaultSession& s) {
     fmt::print(
         "vecat: faults: {} started, {} ended; frames {} dropped, {} corrupted, {} delayed; {} SDO aborts, {} "
         "mailbox replies lost\n",
-        c.faults_started, c.faults_ended, c.frames_dropped, c.frames_corrupted, c.replies_delayed, c.sdo_aborts,
-        c.mailbox_replies_lost);
+        c.faults_started, c.faults_ended, c.frames_dropped, c.frames_corrupted, c.replies_delayed,
+        c.sdo_aborts, c.mailbox_replies_lost);
 }
 
 void add_fault_command(CLI::App& app, FaultCommand& f) {

@@ -56,7 +56,9 @@ struct FaultBench {
         return single.transact(cmd, adp, ado, d);
     }
     std::string inject(const std::string& line) { return inj.execute("inject " + line, now); }
-    coe::ObjectDictionary& od0() { return dynamic_cast<coe::CoeApplication&>(seg->slave(0).app()).dictionary(); }
+    coe::ObjectDictionary& od0() {
+        return dynamic_cast<coe::CoeApplication&>(seg->slave(0).app()).dictionary();
+    }
 
     device::DeviceDescription desc = device::default_drive();
     std::unique_ptr<esc::Segment> seg;
@@ -78,7 +80,8 @@ struct FaultTest : ::testing::Test {
 // ---- Fault model and scenario files
 
 TEST(FaultSpec, ParsesKeysAndRefusesUnknownOnes) {
-    const FaultSpec f = parse_fault("corrupt cable=2 direction=back probability=0.25 count=3 duration=1.5s id=x");
+    const FaultSpec f =
+        parse_fault("corrupt cable=2 direction=back probability=0.25 count=3 duration=1.5s id=x");
     EXPECT_EQ(f.kind, FaultKind::Corrupt);
     EXPECT_EQ(f.cable, 2u);
     EXPECT_TRUE(f.returning);
@@ -88,11 +91,11 @@ TEST(FaultSpec, ParsesKeysAndRefusesUnknownOnes) {
     EXPECT_EQ(f.id, "x");
     EXPECT_EQ(parse_fault("al_error slave=1 code=0x001A state=preop").code, 0x001Au);
     EXPECT_EQ(parse_fault("delay delay=250us").delay_ns, 250'000u);
-    EXPECT_THROW(parse_fault("drop port=1"), std::invalid_argument);          // drop has no port
-    EXPECT_THROW(parse_fault("drop probability=2"), std::invalid_argument);   // out of range
-    EXPECT_THROW(parse_fault("link_down slave=x"), std::invalid_argument);    // not a number
-    EXPECT_THROW(parse_fault("delay"), std::invalid_argument);                // no delay given
-    EXPECT_THROW(parse_fault("link_down port=3"), std::invalid_argument);     // two ports only
+    EXPECT_THROW(parse_fault("drop port=1"), std::invalid_argument);         // drop has no port
+    EXPECT_THROW(parse_fault("drop probability=2"), std::invalid_argument);  // out of range
+    EXPECT_THROW(parse_fault("link_down slave=x"), std::invalid_argument);   // not a number
+    EXPECT_THROW(parse_fault("delay"), std::invalid_argument);               // no delay given
+    EXPECT_THROW(parse_fault("link_down port=3"), std::invalid_argument);    // two ports only
     EXPECT_EQ(parse_fault("twinsync_crc_errors slave=1 rate=0.1").params.at("rate"), "0.1");
 }
 
@@ -122,7 +125,8 @@ events:
     EXPECT_EQ(s.events[2].target, "cut");
     EXPECT_EQ(s.events[2].at, 1'500'000'000u);
     try {
-        parse_scenario("events:\n  - at: 1s\n    start: drop\n  - at: 2s\n    start: link_down\n    cable: 1\n");
+        parse_scenario(
+            "events:\n  - at: 1s\n    start: drop\n  - at: 2s\n    start: link_down\n    cable: 1\n");
         FAIL() << "link_down takes no cable";
     } catch (const std::invalid_argument& e) {
         EXPECT_NE(std::string(e.what()).find("line 4"), std::string::npos) << e.what();
@@ -149,7 +153,8 @@ TEST_F(FaultTest, DroppedFrameNeverComesBackButSlavesBeforeTheCableProcessedIt) 
     // ECAT event mask 0x0200: a register the master may write.
     std::uint16_t mask = 0x1234;
     auto write_mask = [&] {
-        return b->once(esc::Command::FPWR, b->station(0), 0x0200, Bytes(reinterpret_cast<std::uint8_t*>(&mask), 2));
+        return b->once(esc::Command::FPWR, b->station(0), 0x0200,
+                       Bytes(reinterpret_cast<std::uint8_t*>(&mask), 2));
     };
     // Lost on cable 2 (between slave 1 and 2) on the way out: slave 0 has executed the write.
     ASSERT_EQ(b->inject("drop cable=2 count=1"), "ok drop#1");
@@ -233,7 +238,7 @@ TEST_F(FaultTest, LinkDownCutsTheLineAndShowsInDlStatusAndLostLinkCounter) {
     ASSERT_TRUE(dl);
     EXPECT_FALSE(*dl & esc::dl_status::link(1));
     EXPECT_TRUE(*dl & esc::dl_status::loop_closed(1));
-    EXPECT_EQ(b->reg8(1, 0x0311), 1);  // lost link counter port 1
+    EXPECT_EQ(b->reg8(1, 0x0311), 1);               // lost link counter port 1
     EXPECT_FALSE(b->reg16(2, esc::Reg::DlStatus));  // slave 2 is gone
     ASSERT_EQ(b->inj.execute("clear cut", b->now), "ok 1 cleared");
     EXPECT_EQ(b->master.count_slaves(), 3);
@@ -254,7 +259,9 @@ TEST_F(FaultTest, PoweredOffSlaveBreaksTheLineAndRestartsInInit) {
     EXPECT_EQ(b->master.count_slaves(), 3);
     // A fresh device: no station address, INIT; its neighbours kept theirs.
     std::uint16_t st = 0xFFFF;
-    ASSERT_EQ(b->master.aprd(1, esc::addr(esc::Reg::StationAddress), Bytes(reinterpret_cast<std::uint8_t*>(&st), 2)), 1);
+    ASSERT_EQ(b->master.aprd(1, esc::addr(esc::Reg::StationAddress),
+                             Bytes(reinterpret_cast<std::uint8_t*>(&st), 2)),
+              1);
     EXPECT_EQ(st, 0);
     std::uint8_t al = 0;
     ASSERT_EQ(b->master.aprd(1, esc::addr(esc::Reg::AlStatus), Bytes(&al, 1)), 1);
@@ -311,7 +318,7 @@ TEST_F(FaultTest, SdoAbortWithTheChosenCodeOnTheChosenObject) {
     const auto r = c.download_value<std::int8_t>(0x6060, 0, 10);
     EXPECT_TRUE(r.transport_ok);
     EXPECT_EQ(static_cast<std::uint32_t>(r.abort), 0x08000022u);
-    EXPECT_NE(b->od0().find(0x6060, 0)->get<std::int8_t>(), 10);  // not executed
+    EXPECT_NE(b->od0().find(0x6060, 0)->get<std::int8_t>(), 10);     // not executed
     EXPECT_TRUE(c.download_value<std::int8_t>(0x6060, 0, 10).ok());  // count reached
     EXPECT_EQ(b->od0().find(0x6060, 0)->get<std::int8_t>(), 10);
     EXPECT_EQ(b->inj.counters().sdo_aborts, 1u);
@@ -368,7 +375,8 @@ TEST_P(DriveFaultTest, StatuswordFaultBitErrorCodeAndEmergency) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinds, DriveFaultTest,
-                         ::testing::Values(DriveFaultCase{"encoder", 0x7305}, DriveFaultCase{"over_current", 0x2310},
+                         ::testing::Values(DriveFaultCase{"encoder", 0x7305},
+                                           DriveFaultCase{"over_current", 0x2310},
                                            DriveFaultCase{"following_error", 0x8611}),
                          [](const auto& i) { return std::string(i.param.kind); });
 
@@ -410,7 +418,9 @@ events:
     stop: cut
 )"));
     std::uint16_t v = 0;
-    auto brd = [&] { return b->once(esc::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2)); };
+    auto brd = [&] {
+        return b->once(esc::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2));
+    };
     EXPECT_EQ(brd(), 2);  // frame 0 sets the time origin
     EXPECT_EQ(brd(), 2);
     EXPECT_EQ(brd(), 2);
@@ -447,7 +457,8 @@ TEST_F(FaultTest, ExternalFaultsGoToTheirRegisteredHandler) {
 TEST_F(FaultTest, ControlSocketInjectsListsAndClears) {
     up(2);
     const std::string path =
-        (std::filesystem::temp_directory_path() / ("vecat-faults-" + std::to_string(getpid()) + ".sock")).string();
+        (std::filesystem::temp_directory_path() / ("vecat-faults-" + std::to_string(getpid()) + ".sock"))
+            .string();
     ControlServer server(path, b->inj);
     // The serving thread: ticks the injector, which takes the commands.
     std::atomic<bool> stop{false};
