@@ -70,7 +70,7 @@ void FaultInjector::load(const Scenario& s) {
     fired_.assign(s.events.size(), false);
     origin_set_ = false;
     frames_seen_ = 0;
-    rng_.seed(s.seed);
+    if (s.seed != 0) rng_.seed(s.seed);
 }
 
 void FaultInjector::note(const std::string& s) {

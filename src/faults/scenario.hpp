@@ -20,7 +20,7 @@ struct TimelineEvent {
 };
 
 struct Scenario {
-    std::uint64_t seed = 1;  // of the random draws (probability)
+    std::uint64_t seed = 0;  // of the random draws (probability); 0: keep the injector's
     std::vector<TimelineEvent> events;
 };
 
