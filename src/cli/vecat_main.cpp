@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "cia402/drive.hpp"
+#include "cli/fault_cli.hpp"
 #include "device/device_description.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
@@ -59,7 +60,7 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
 
 int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
             bool allow_busy_if, double drift_ppm, const std::string& esi_path,
-            const vecat::esi::DeviceSelector& sel) {
+            const vecat::esi::DeviceSelector& sel, const vecat::cli::RunFaultOptions& fault_opts) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -85,13 +86,18 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     }
     std::unique_ptr<vecat::net::PcapngWriter> pcap;
     if (!pcap_path.empty()) pcap = std::make_unique<vecat::net::PcapngWriter>(pcap_path, iface);
+    bool faults_ok = true;
+    auto faults = vecat::cli::start_fault_session(*seg, fault_opts, faults_ok);
+    if (!faults_ok) return 1;
     install_signals();
     fmt::print("vecat: {} x \"{}\" on {} (vendor 0x{:08X}, product 0x{:08X}); Ctrl-C stops\n", slaves,
                dev.name, iface, dev.identity.vendor_id, dev.identity.product_code);
     vecat::net::ServeOptions opt;
     opt.busy_poll = busy;
     opt.pcap = pcap.get();
+    if (faults) opt.filter = faults->injector.get();
     const auto st = vecat::net::serve(*seg, *sock, opt, g_stop);
+    if (faults) vecat::cli::print_fault_summary(*faults);
     fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
                seg->counters().dropped);
     if (pcap) fmt::print("vecat: capture written to {} ({} frames)\n", pcap_path, pcap->frames());
@@ -299,6 +305,10 @@ int main(int argc, char** argv) {
         c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
     };
     add_esi_options(run, true);
+    vecat::cli::RunFaultOptions fault_opts;
+    vecat::cli::add_run_fault_options(run, fault_opts);
+    vecat::cli::FaultCommand fault_cmd;
+    vecat::cli::add_fault_command(app, fault_cmd);
 
     auto* demo =
         app.add_subcommand("demo", "Run virtual slaves and the bundled master on a private veth pair");
@@ -336,7 +346,8 @@ int main(int argc, char** argv) {
     vecat::esi::DeviceSelector sel;
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
-    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel);
+    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, fault_opts);
+    if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);

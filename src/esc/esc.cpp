@@ -98,6 +98,7 @@ void Esc::reload_eeprom() {
 
 void Esc::set_port_link(unsigned port, bool up) {
     if (port > 3) return;
+    if (!up && port_link(port)) saturating_inc(mem_[addr(Reg::LostLinkCounter) + port]);
     if (up)
         link_mask_ = static_cast<std::uint8_t>(link_mask_ | (1u << port));
     else
@@ -123,6 +124,15 @@ void Esc::count_invalid_frame(unsigned port) {
     if (port > 3) return;
     saturating_inc(mem_[addr(Reg::RxErrorCounter) + 2 * port]);
     ++counters_.dropped_frames;
+}
+
+void Esc::count_forwarded_error(unsigned port) {
+    if (port > 3) return;
+    saturating_inc(mem_[addr(Reg::FwdRxErrorCounter) + port]);
+}
+
+void Esc::count_processing_unit_error() {
+    saturating_inc(mem_[addr(Reg::EcatProcessingUnitErrorCounter)]);
 }
 
 void Esc::set_al_event(std::uint32_t bits) {

@@ -51,7 +51,12 @@ class Esc {
     void process(DatagramView d, const FrameTiming& t);
     // A frame this ESC could not parse: counted as a real ESC counts a malformed frame on port 0.
     void count_invalid_frame(unsigned port = 0);
-    // Which ports have a link (port 0 is always up; port 1 when another ESC follows).
+    // A frame already marked invalid by a previous ESC arrived at this port (0x0308 + port).
+    void count_forwarded_error(unsigned port);
+    // An invalid frame passed the processing unit (0x030C; port 0 to port 1 direction).
+    void count_processing_unit_error();
+    // Which ports have a link (port 0 unless its cable is broken; port 1 when another ESC follows). A link
+    // that goes down counts in the lost link counter (0x0310 + port), as in the ports' auto modes.
     void set_port_link(unsigned port, bool up);
     bool port_link(unsigned port) const { return (link_mask_ >> port) & 1u; }
 

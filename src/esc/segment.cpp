@@ -9,12 +9,63 @@ namespace vecat::esc {
 
 void Segment::add(std::unique_ptr<Slave> s) {
     slaves_.push_back(std::move(s));
+    cable_up_.push_back(1);
+    halted_.push_back(0);
     // Port 1 of every slave but the last one has a link to its successor.
     for (std::size_t i = 0; i < slaves_.size(); ++i)
-        slaves_[i]->esc().set_port_link(1, i + 1 < slaves_.size());
+        update_links(i);
+}
+
+void Segment::update_links(std::size_t i) {
+    Esc& e = slaves_[i]->esc();
+    e.set_port_link(0, cable(i));
+    e.set_port_link(1, i + 1 < slaves_.size() && cable(i + 1));
+}
+
+void Segment::set_cable(std::size_t k, bool connected) {
+    if (k >= cable_up_.size()) return;
+    cable_up_[k] = connected ? 1 : 0;
+    update_links(k);
+    if (k > 0) update_links(k - 1);
+}
+
+std::size_t Segment::reachable() const {
+    if (slaves_.empty() || !cable(0)) return 0;
+    std::size_t m = 1;
+    while (m < slaves_.size() && cable(m))
+        ++m;
+    return m;
+}
+
+void Segment::set_firmware_halted(std::size_t i, bool halted) {
+    if (i < halted_.size()) halted_[i] = halted ? 1 : 0;
+}
+
+bool Segment::restart_slave(std::size_t i) {
+    if (!factory_ || i >= slaves_.size()) return false;
+    const Slave& old = *slaves_[i];
+    EscConfig cfg = old.esc().config();
+    cfg.dc_drift_ppm = old.esc().dc().drift_ppm();  // the same oscillator after the restart
+    auto fresh = std::make_unique<Slave>(old.description(), cfg, factory_(old.description()));
+    slaves_[i] = std::move(fresh);
+    update_links(i);
+    return true;
+}
+
+void Segment::run_firmware(std::uint64_t now_ns) {
+    for (std::size_t i = 0; i < slaves_.size(); ++i) {
+        if (halted_[i])
+            slaves_[i]->esc().tick(now_ns);  // the silicon's watchdogs keep running
+        else
+            slaves_[i]->run(now_ns);
+    }
 }
 
 bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns) {
+    return process_frame(frame, len, now_ns, FrameDamage{});
+}
+
+bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage) {
     if (len > frame.size()) len = frame.size();
     ConstBytes in(frame.data(), len);
     const ParsedFrame pf = parse_frame(in);
@@ -23,29 +74,41 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
         return false;
     }
     ++counters_.frames;
+    // Slaves the frame reaches, and whether it crosses the damaged cable on its way.
+    const std::size_t m = reachable();
+    const bool hit = damage.kind != FrameDamage::Kind::None && damage.cable < m;
+    if (m == 0) {
+        ++counters_.lost;  // no link at the master's cable: the frame goes nowhere
+        return false;
+    }
     if (pf.error == FrameError::NotCommands) {
         // Other EtherCAT frame types pass the ESCs unprocessed.
     } else if (pf.error != FrameError::None) {
         ++counters_.dropped;
-        if (!slaves_.empty()) slaves_.front()->esc().count_invalid_frame(0);
+        slaves_.front()->esc().count_invalid_frame(0);
         return false;
     } else {
-        const std::size_t n = slaves_.size();
+        // An outbound frame damaged on cable c is processed by the slaves before c only.
+        const std::size_t intact = hit && !damage.returning ? damage.cable : m;
         // SYNC pulses that fell due before this frame arrived happen first (the server may be late).
-        for (auto& s : slaves_)
-            if (s->esc().dc().next_pulse_host_ns() <= now_ns) s->run(now_ns);
-        for (std::size_t k = 0; k < n; ++k) {
+        for (std::size_t i = 0; i < slaves_.size(); ++i)
+            if (!halted_[i] && slaves_[i]->esc().dc().next_pulse_host_ns() <= now_ns) slaves_[i]->run(now_ns);
+        for (std::size_t k = 0; k < intact; ++k) {
             FrameTiming t;
             t.port0_ns = now_ns + k * hop_delay_ns;
             // Back at port 1 after the slaves behind it (same delay per hop both ways; the last slave loops
             // the frame back through its closed port 1 without delay), so masters compute exact delays.
-            t.port1_ns = now_ns + (2 * (n - 1) - k) * hop_delay_ns;
+            t.port1_ns = now_ns + (2 * (m - 1) - k) * hop_delay_ns;
             Esc& esc = slaves_[k]->esc();
             for (std::size_t i = 0; i < pf.count; ++i)
                 esc.process(pf.datagram(frame, i), t);
         }
-        for (auto& s : slaves_)
-            s->run(now_ns);
+        run_firmware(now_ns);
+    }
+    if (hit) {
+        if (damage.kind == FrameDamage::Kind::Corrupted) count_corruption(damage, m);
+        ++counters_.lost;
+        return false;
     }
     frame[6] |= 0x02;  // the ESC marks the frame as processed in the source address
     if (len < kMinEthFrame && frame.size() >= kMinEthFrame) {
@@ -56,9 +119,32 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
     return true;
 }
 
+void Segment::count_corruption(const FrameDamage& d, std::size_t m) {
+    // The first ESC to receive the bad FCS counts an invalid frame and marks the frame; the ESCs after it
+    // count a forwarded error (ESC datasheet section I, error counters). Only port 0 leads through the
+    // processing unit (0x030C).
+    if (!d.returning) {
+        for (std::size_t k = d.cable; k < m; ++k) {
+            Esc& e = slaves_[k]->esc();
+            if (k == d.cable)
+                e.count_invalid_frame(0);
+            else
+                e.count_forwarded_error(0);
+            e.count_processing_unit_error();
+        }
+        // On its way back the marked frame enters each ESC before the last through port 1.
+        for (std::size_t k = 0; k + 1 < m; ++k)
+            slaves_[k]->esc().count_forwarded_error(1);
+    } else if (d.cable > 0) {
+        slaves_[d.cable - 1]->esc().count_invalid_frame(1);
+        for (std::size_t k = 0; k + 1 < d.cable; ++k)
+            slaves_[k]->esc().count_forwarded_error(1);
+    }
+    // Damage on the returning cable 0 reaches the master's NIC, which drops the frame: no ESC sees it.
+}
+
 void Segment::tick(std::uint64_t now_ns) {
-    for (auto& s : slaves_)
-        s->run(now_ns);
+    run_firmware(now_ns);
 }
 
 std::uint64_t Segment::next_event_ns() const {
@@ -79,6 +165,12 @@ std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::s
             app = std::make_unique<ProcessImageApplication>(d.output_bytes(), d.input_bytes());
         seg->add(std::make_unique<Slave>(d, cfg, std::move(app)));
     }
+    if (factory)
+        seg->set_application_factory(factory);
+    else
+        seg->set_application_factory([](const device::DeviceDescription& dd) -> std::unique_ptr<Application> {
+            return std::make_unique<ProcessImageApplication>(dd.output_bytes(), dd.input_bytes());
+        });
     return seg;
 }
 

@@ -18,7 +18,21 @@ struct SegmentCounters {
     std::uint64_t replies = 0;
     std::uint64_t dropped = 0;  // malformed EtherCAT frames
     std::uint64_t ignored = 0;  // not EtherCAT
+    std::uint64_t lost = 0;     // lost or corrupted on the line, or no link at the master's cable
 };
+
+// Damage a frame suffers on one cable of the line (fault injection). Cable k joins the master (k == 0) or
+// slave k-1's port 1 to slave k's port 0; outbound frames cross it towards slave k, returning ones towards
+// the master.
+struct FrameDamage {
+    enum class Kind : std::uint8_t { None, Lost, Corrupted };
+    Kind kind = Kind::None;
+    std::size_t cable = 0;
+    bool returning = false;
+};
+
+// Makes the application of one slave (the CoE stack and drive, or a bare process image).
+using ApplicationFactory = std::function<std::unique_ptr<Application>(const device::DeviceDescription&)>;
 
 class Segment {
   public:
@@ -31,6 +45,9 @@ class Segment {
     // Processes a received frame in place. frame must have room for at least kMinEthFrame bytes; len is
     // updated (padding to 60 bytes). Returns true when a reply must be sent.
     bool process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns);
+    // The same with damage on the line: the slaves before the damage process the frame, a corrupted frame
+    // is counted in the error counters (0x0300-0x030C) of the ESCs that see it, and no reply comes back.
+    bool process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage);
     // Runs the slaves' firmware and watchdogs without a frame.
     void tick(std::uint64_t now_ns);
     // Host time of the next SYNC pulse of any slave (DistributedClock::kNever if none): the serve loop runs
@@ -39,16 +56,36 @@ class Segment {
 
     const SegmentCounters& counters() const { return counters_; }
 
+    // ---- Line faults (fault injection, see src/faults)
+    // Connects or disconnects cable k (see FrameDamage): both ports lose their link (DL status, lost link
+    // counter) and frames turn back at the last slave before the break.
+    void set_cable(std::size_t k, bool connected);
+    bool cable(std::size_t k) const { return k < cable_up_.size() && cable_up_[k] != 0; }
+    // Slaves a frame reaches from the master.
+    std::size_t reachable() const;
+    // Firmware stopped (hang, or no power): the ESC still forwards and answers, while the AL state, the
+    // mailbox and the process data of the application freeze.
+    void set_firmware_halted(std::size_t i, bool halted);
+    bool firmware_halted(std::size_t i) const { return i < halted_.size() && halted_[i] != 0; }
+    // Power-on reset of slave i: a new slave of the same device from the application factory (segments
+    // made by make_segment). Its links follow the cables. False without a factory.
+    bool restart_slave(std::size_t i);
+    void set_application_factory(ApplicationFactory f) { factory_ = std::move(f); }
+
     // Line model: delay of a frame per hop (cable + PHY + forwarding) in ns.
     std::uint64_t hop_delay_ns = 500;
 
   private:
+    void run_firmware(std::uint64_t now_ns);
+    void count_corruption(const FrameDamage& d, std::size_t reached);
+    void update_links(std::size_t i);
+
     std::vector<std::unique_ptr<Slave>> slaves_;
+    std::vector<std::uint8_t> cable_up_;  // cable k into slave k
+    std::vector<std::uint8_t> halted_;
+    ApplicationFactory factory_;
     SegmentCounters counters_;
 };
-
-// Makes the application of one slave (the CoE stack and drive, or a bare process image).
-using ApplicationFactory = std::function<std::unique_ptr<Application>(const device::DeviceDescription&)>;
 
 // Builds a segment of n slaves of the given device, each with an application from the factory (by
 // default a ProcessImageApplication without mailbox protocols).

@@ -331,10 +331,13 @@ void Slave::service_mailbox() {
         } else {
             if (h->counter != 0) last_counter_ = h->counter;
             MailboxProtocol* proto = app_->mailbox_protocol(static_cast<MailboxType>(h->type));
-            if (h->type == static_cast<std::uint8_t>(MailboxType::Error) || !proto) {
+            const ConstBytes payload(rx_.data() + kMailboxHeaderSize, h->length);
+            if (interceptor_ && interceptor_->intercept(*this, *h, payload, proto, sink)) {
+                // taken over by fault injection
+            } else if (h->type == static_cast<std::uint8_t>(MailboxType::Error) || !proto) {
                 error_reply(MailboxError::UnsupportedProtocol);
             } else {
-                proto->handle(*h, ConstBytes(rx_.data() + kMailboxHeaderSize, h->length), sink);
+                proto->handle(*h, payload, sink);
             }
         }
     }

@@ -77,6 +77,15 @@ class ProcessImageApplication : public Application {
     std::uint64_t exchanges_ = 0;
 };
 
+// Sees every mailbox request before its protocol does (fault injection: aborts, lost replies). Returns
+// true when it took the request over (answered it through the sink, or dropped it).
+class MailboxInterceptor {
+  public:
+    virtual ~MailboxInterceptor() = default;
+    virtual bool intercept(Slave& slave, const MailboxHeader& h, ConstBytes payload,
+                           MailboxProtocol* protocol, MailboxReplySink& sink) = 0;
+};
+
 // The AL state machine as a table: what a request from one state to another does.
 enum class AlAction : std::uint8_t {
     Stay,              // requested state == current state
@@ -119,6 +128,7 @@ class Slave {
     // Forces an error as the application would (fault injection, sync loss...): falls back to target.
     void raise_error(AlStatusCode code, AlState fallback);
     const SlaveCounters& counters() const { return counters_; }
+    void set_mailbox_interceptor(MailboxInterceptor* i) { interceptor_ = i; }
 
     static constexpr std::uint64_t kOutputsValidTimeoutNs = 1'000'000'000;  // SAFEOP -> OP wait
 
@@ -164,6 +174,7 @@ class Slave {
     static constexpr unsigned kMaxPulsesPerRun = 16;  // SYNC pulses taken per firmware run; more are missed
     std::array<SyncPulse, kMaxPulsesPerRun> pulses_{};
     SlaveCounters counters_;
+    MailboxInterceptor* interceptor_ = nullptr;
     friend class SlaveReplySink;
 };
 

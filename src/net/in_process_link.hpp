@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "esc/segment.hpp"
+#include "net/frame_filter.hpp"
 #include "net/link.hpp"
 
 namespace vecat::net {
@@ -18,10 +19,14 @@ class InProcessLink final : public Link {
         if (frame.size() > buf_.size()) return false;
         std::memcpy(buf_.data(), frame.data(), frame.size());
         len_ = frame.size();
-        pending_ = seg_.process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns());
+        pending_ = filter_ ? filter_->process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns())
+                           : seg_.process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns());
         return true;
     }
     long receive(Bytes out, std::int64_t) override {
+        // A held-back reply that is due left earlier than the frame just sent: it arrives first.
+        if (filter_)
+            if (const std::size_t late = filter_->take_due(now_ns(), out)) return static_cast<long>(late);
         if (!pending_) return 0;
         pending_ = false;
         const std::size_t n = std::min(len_, out.size());
@@ -35,6 +40,8 @@ class InProcessLink final : public Link {
                                               std::chrono::steady_clock::now().time_since_epoch())
                                               .count());
     }
+    // Fault injection between the link and the segment (nullptr: none).
+    void set_filter(FrameFilter* f) { filter_ = f; }
     void set_time(std::uint64_t ns) {
         manual_time_ = true;
         manual_now_ = ns;
@@ -42,6 +49,7 @@ class InProcessLink final : public Link {
 
   private:
     esc::Segment& seg_;
+    FrameFilter* filter_ = nullptr;
     std::array<std::uint8_t, 1600> buf_{};
     std::size_t len_ = 0;
     bool pending_ = false;

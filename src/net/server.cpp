@@ -19,6 +19,26 @@ std::uint64_t realtime_ns() {
     return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<std::uint64_t>(ts.tv_nsec);
 }
 
+namespace {
+
+// Sends the replies a fault held back whose time has come; shortens the wait to the next one.
+void send_due_replies(RawSocket& sock, const ServeOptions& opt, std::array<std::uint8_t, 2048>& buf,
+                      ServeStats& st, std::int64_t& wait_us) {
+    const std::uint64_t t = monotonic_ns();
+    while (const std::size_t n = opt.filter->take_due(t, Bytes(buf.data(), buf.size()))) {
+        if (sock.send(ConstBytes(buf.data(), n)))
+            ++st.sent;
+        else
+            ++st.send_errors;
+        if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), n), realtime_ns(), 2);
+    }
+    const std::uint64_t due = opt.filter->next_due_ns();
+    if (due != ~std::uint64_t{0})
+        wait_us = std::min<std::int64_t>(wait_us, due > t ? static_cast<std::int64_t>((due - t) / 1000) : 0);
+}
+
+}  // namespace
+
 ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, const std::atomic<bool>& stop) {
     ServeStats st;
     std::array<std::uint8_t, 2048> buf{};
@@ -34,6 +54,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             const std::uint64_t until = next_sync > t ? next_sync - t : 0;
             wait_us = std::min<std::int64_t>(wait_us, static_cast<std::int64_t>(until / 1000));
         }
+        if (opt.filter) send_due_replies(sock, opt, buf, st, wait_us);
         const long n = opt.busy_poll ? sock.try_receive(Bytes(buf.data(), buf.size()))
                                      : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
         const std::uint64_t now = monotonic_ns();
@@ -50,7 +71,9 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             at = std::max(at, last_time);
             last_time = at;
             if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), rx_real ? rx_real : real, 1);
-            if (seg.process_frame(Bytes(buf.data(), buf.size()), len, at)) {
+            const bool reply = opt.filter ? opt.filter->process_frame(Bytes(buf.data(), buf.size()), len, at)
+                                          : seg.process_frame(Bytes(buf.data(), buf.size()), len, at);
+            if (reply) {
                 if (sock.send(ConstBytes(buf.data(), len)))
                     ++st.sent;
                 else
@@ -60,6 +83,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             last_tick = now;
         } else if (now - last_tick >= tick_ns || now >= next_sync) {
             seg.tick(now);
+            if (opt.filter) opt.filter->tick(now);
             last_tick = now;
             last_time = std::max(last_time, now);
         }

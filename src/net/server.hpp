@@ -6,15 +6,17 @@
 #include <cstdint>
 
 #include "esc/segment.hpp"
+#include "net/frame_filter.hpp"
 #include "net/pcapng_writer.hpp"
 #include "net/raw_socket.hpp"
 
 namespace vecat::net {
 
 struct ServeOptions {
-    bool busy_poll = false;        // spin on the socket instead of sleeping in poll()
-    std::int64_t tick_us = 100;    // firmware/watchdog tick period when idle
-    PcapngWriter* pcap = nullptr;  // capture of every frame in and out
+    bool busy_poll = false;         // spin on the socket instead of sleeping in poll()
+    std::int64_t tick_us = 100;     // firmware/watchdog tick period when idle
+    PcapngWriter* pcap = nullptr;   // capture of every frame in and out
+    FrameFilter* filter = nullptr;  // fault injection (src/faults): frames go through it to the segment
 };
 
 struct ServeStats {

@@ -1,0 +1,25 @@
+// What stands between a transport and the segment when faults are injected (src/faults): it runs each
+// frame through the segment with the faults of the line, and may hold replies back to send them later.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "common/bytes.hpp"
+
+namespace vecat::net {
+
+class FrameFilter {
+  public:
+    virtual ~FrameFilter() = default;
+    // Replaces Segment::process_frame: true when the (processed) frame goes back now.
+    virtual bool process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns) = 0;
+    // Called when the transport is idle (timelines advance without frames).
+    virtual void tick(std::uint64_t now_ns) = 0;
+    // A held-back reply due at now_ns, copied into out; its length, 0 when none is due.
+    virtual std::size_t take_due(std::uint64_t now_ns, Bytes out) = 0;
+    // Host time of the next held-back reply (max when none).
+    virtual std::uint64_t next_due_ns() const = 0;
+};
+
+}  // namespace vecat::net
