@@ -10,7 +10,10 @@ namespace {
 
 // Faults served outside the injector register their handlers here (the TWINsync port: its
 // twinsync_cable_break, twinsync_crc_errors and twinsync_sync_loss handlers).
-void register_fault_handlers(faults::FaultInjector& /*injector*/, esc::Segment& /*seg*/) {}
+void register_fault_handlers(FaultSession& s, esc::Segment& seg) {
+    s.twinsync = std::make_unique<faults::TwinsyncFaults>(seg);
+    faults::register_twinsync_faults(*s.injector, *s.twinsync);
+}
 
 std::string kinds_help() {
     std::string s = "Faults (common keys: slave, probability, count, duration, id):\n";
@@ -37,7 +40,7 @@ std::unique_ptr<FaultSession> start_fault_session(esc::Segment& seg, const RunFa
     auto s = std::make_unique<FaultSession>();
     s->injector = std::make_unique<faults::FaultInjector>(seg, o.seed);
     s->injector->on_event = [](const std::string& line) { fmt::print("vecat: {}\n", line); };
-    register_fault_handlers(*s->injector, seg);
+    register_fault_handlers(*s, seg);
     try {
         if (!o.scenario.empty()) {
             const auto sc = faults::load_scenario(o.scenario);

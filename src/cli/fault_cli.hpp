@@ -9,6 +9,7 @@
 #include "esc/segment.hpp"
 #include "faults/control.hpp"
 #include "faults/injector.hpp"
+#include "faults/twinsync_faults.hpp"
 
 namespace vecat::cli {
 
@@ -22,6 +23,7 @@ void add_run_fault_options(CLI::App* run, RunFaultOptions& o);
 // The injector of a `vecat run` with its control socket; nullptr from start_fault_session when neither a
 // scenario nor a control socket was asked for (frames then go straight to the segment).
 struct FaultSession {
+    std::unique_ptr<faults::TwinsyncFaults> twinsync;  // outlives the injector that calls it
     std::unique_ptr<faults::FaultInjector> injector;
     std::unique_ptr<faults::ControlServer> control;
 };

@@ -10,8 +10,10 @@
 #include "cia402/drive.hpp"
 #include "faults/control.hpp"
 #include "faults/injector.hpp"
+#include "faults/twinsync_faults.hpp"
 #include "master/coe_client.hpp"
 #include "test_support.hpp"
+#include "twinsync/parameters.hpp"
 
 namespace vecat::faults {
 namespace {
@@ -452,6 +454,38 @@ TEST_F(FaultTest, ExternalFaultsGoToTheirRegisteredHandler) {
     EXPECT_TRUE(h.stopped.empty());
     b->advance(5 * kMs);
     EXPECT_EQ(h.stopped, std::vector<std::string>{"twinsync_crc_errors"});
+}
+
+TEST_F(FaultTest, TwinsyncFaultsReachTheDrivesThroughTheirPort) {
+    up(2);
+    TwinsyncFaults h(*b->seg);
+    register_twinsync_faults(b->inj, h);
+    auto& d0 = dynamic_cast<cia402::Drive&>(b->seg->slave(0).app());
+    auto& d1 = dynamic_cast<cia402::Drive&>(b->seg->slave(1).app());
+    // TWINsync on between the two drives (master drive 1, slave drive 2).
+    cia402::apply_twinsync_preset(d0, d1, cia402::TwinsyncPreset::Position);
+    b->advance(20 * kMs);
+    ASSERT_TRUE(d1.twinsync_status()->link_ok);
+    ASSERT_EQ(b->inject("twinsync_crc_errors slave=0 count=3 id=crc"), "ok crc");
+    b->advance(5 * kMs);
+    EXPECT_EQ(d0.twinsync_status()->crc_errors + d1.twinsync_status()->crc_errors, 3u);
+    EXPECT_TRUE(d1.twinsync_status()->link_ok);  // three bad frames are far below P2613
+    ASSERT_EQ(b->inject("twinsync_sync_loss slave=1 id=sync"), "ok sync");
+    b->advance(2 * kMs);
+    EXPECT_FALSE(d1.twinsync_status()->synchronised);
+    EXPECT_EQ(b->inj.execute("clear sync", b->now).substr(0, 2), "ok");
+    b->advance(20 * kMs);
+    EXPECT_TRUE(d1.twinsync_status()->synchronised);
+    ASSERT_EQ(b->inject("twinsync_cable_break slave=1 duration=20ms"), "ok twinsync_cable_break#1");
+    b->advance(15 * kMs);
+    EXPECT_FALSE(d0.twinsync_status()->link_ok);
+    EXPECT_FALSE(d1.twinsync_status()->link_ok);
+    EXPECT_TRUE(b->od0().find(twinsync::object_index(twinsync::p::CommStatus), 0)->get<std::uint16_t>() &
+                0x0002);
+    b->advance(10 * kMs);  // the break ends after its 20 ms
+    b->advance(kMs);
+    EXPECT_TRUE(d0.twinsync_status()->link_ok);
+    EXPECT_EQ(b->inject("twinsync_cable_break slave=5").substr(0, 5), "error");
 }
 
 TEST_F(FaultTest, ControlSocketInjectsListsAndClears) {
