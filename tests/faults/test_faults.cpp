@@ -460,6 +460,11 @@ TEST_F(FaultTest, TwinsyncFaultsReachTheDrivesThroughTheirPort) {
     up(2);
     TwinsyncFaults h(*b->seg);
     register_twinsync_faults(b->inj, h);
+    // The injector (in b) stops its faults through h when it goes: it must go first.
+    struct ResetFirst {
+        std::unique_ptr<FaultBench>& bench;
+        ~ResetFirst() { bench.reset(); }
+    } reset_first{b};
     auto& d0 = dynamic_cast<cia402::Drive&>(b->seg->slave(0).app());
     auto& d1 = dynamic_cast<cia402::Drive&>(b->seg->slave(1).app());
     // TWINsync on between the two drives (master drive 1, slave drive 2).
