@@ -15,6 +15,10 @@ struct ServeOptions {
     bool busy_poll = false;        // spin on the socket instead of sleeping in poll()
     std::int64_t tick_us = 100;    // firmware/watchdog tick period when idle
     PcapngWriter* pcap = nullptr;  // capture of every frame in and out
+    // Called on the serving thread after each processed frame, once its reply is sent (telemetry); it must
+    // neither block nor allocate. now_ns: the time the frame was processed at.
+    void (*after_frame)(void* context, std::uint64_t now_ns) = nullptr;
+    void* after_frame_context = nullptr;
 };
 
 struct ServeStats {
