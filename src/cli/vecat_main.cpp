@@ -204,7 +204,7 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     server.join();
     pcap.flush();
     scope.write(outdir, "vecat demo: two drives in CSP",
-                "position_demand+position_actual,following_error,velocity_actual");
+                "position_actual+position_demand,following_error,velocity_actual");
     const auto img = vecat::esc::build_sii_image(dev);
     std::ofstream(sii_path, std::ios::binary)
         .write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));

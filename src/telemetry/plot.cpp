@@ -85,6 +85,16 @@ std::vector<std::pair<double, double>> reduce(const Series& s, double t0, double
     return out;
 }
 
+// 10^-3 -> "⁻³" for the axis label.
+std::string superscript(int e) {
+    static const char* kDigits[] = {"\u2070", "\u00b9", "\u00b2", "\u00b3", "\u2074",
+                                    "\u2075", "\u2076", "\u2077", "\u2078", "\u2079"};
+    std::string s = e < 0 ? "\u207b" : "";
+    for (char c : std::to_string(e < 0 ? -e : e))
+        s += kDigits[c - '0'];
+    return s;
+}
+
 }  // namespace
 
 std::vector<double> nice_ticks(double lo, double hi, int target) {
@@ -98,8 +108,9 @@ std::vector<double> nice_ticks(double lo, double hi, int target) {
             step = m * mag;
             break;
         }
-    for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step)
-        ticks.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
+    // Multiples of the step, each computed anew so that errors do not add up.
+    for (double k = std::ceil(lo / step - 1e-9); k * step <= hi + step * 1e-9; k += 1)
+        ticks.push_back(k == 0 ? 0.0 : k * step);
     return ticks;
 }
 
@@ -116,6 +127,7 @@ std::string render_svg(const Plot& p) {
             for (double t : s.t)
                 tr.add(t);
     if (tr.empty()) tr = {0, 1};
+    if (tr.lo > 0 && tr.lo < 0.05 * (tr.hi - tr.lo)) tr.lo = 0;  // start at time zero
     if (tr.hi - tr.lo < 1e-9) tr.hi = tr.lo + 1;
     const auto tticks = nice_ticks(tr.lo, tr.hi, 10);
     const double tstep = tticks.size() > 1 ? tticks[1] - tticks[0] : 1;
@@ -178,7 +190,7 @@ std::string render_svg(const Plot& p) {
                              kLeft, Y(0), kLeft + pw);
         // Quantity and unit on the y axis, rotated.
         std::string unit = pan.unit;
-        if (exp3 != 0) unit = fmt::format("\u00d710^{}{}{}", exp3, unit.empty() ? "" : " ", unit);
+        if (exp3 != 0) unit = fmt::format("\u00d710{}{}{}", superscript(exp3), unit.empty() ? "" : " ", unit);
         const std::string ylabel = unit.empty() ? pan.quantity : pan.quantity + " [" + unit + "]";
         o += fmt::format(
             "<text transform=\"translate({},{}) rotate(-90)\" text-anchor=\"middle\" "
@@ -208,13 +220,13 @@ std::string render_svg(const Plot& p) {
             }
             o += fmt::format(
                 "<polyline clip-path=\"url(#c{})\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\" "
-                "stroke-linejoin=\"round\" points=\"{}\"/>\n",
-                k, colour, d);
+                "stroke-linejoin=\"round\"{} points=\"{}\"/>\n",
+                k, colour, s.dashed ? " stroke-dasharray=\"6,4\"" : "", d);
             // Legend entry to the right of the panel.
             const int ly = y0 + 14 + static_cast<int>(si) * 20;
             o += fmt::format(
-                "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"{3}\" stroke-width=\"3\"/>\n",
-                kLeft + pw + 12, ly, kLeft + pw + 36, colour);
+                "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"{3}\" stroke-width=\"3\"{4}/>\n",
+                kLeft + pw + 12, ly, kLeft + pw + 36, colour, s.dashed ? " stroke-dasharray=\"5,3\"" : "");
             o += fmt::format("<text x=\"{}\" y=\"{}\">{}</text>\n", kLeft + pw + 42, ly + 4.5,
                              escape(s.label));
         }

@@ -12,7 +12,8 @@ struct Series {
     std::string label;
     std::vector<double> t;  // s
     std::vector<double> y;
-    bool step = false;  // draw as a staircase (states, words)
+    bool step = false;    // draw as a staircase (states, words)
+    bool dashed = false;  // demand values, drawn over the actual ones
 };
 
 struct Panel {

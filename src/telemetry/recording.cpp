@@ -58,7 +58,7 @@ const std::vector<Column<AxisSample>>& axis_columns() {
         VECAT_COLUMN(A, controlword, "controlword", ""),
         VECAT_COLUMN(A, statusword, "statusword", ""),
         VECAT_COLUMN(A, error_code, "error code", ""),
-        VECAT_COLUMN(A, position_demand, "position demand", "inc"),
+        VECAT_COLUMN(A, position_demand, "position", "inc"),
         VECAT_COLUMN(A, position_actual, "position", "inc"),
         VECAT_COLUMN(A, velocity_actual, "velocity", "inc/s"),
         VECAT_COLUMN(A, torque_actual, "torque", "\u2030 rated"),
@@ -368,6 +368,7 @@ Plot make_plot(const Recording& r, const std::vector<std::vector<std::string>>& 
                 if (several_slaves > 1 || axis != 0)
                     s.label = fmt::format("slave {}{} {}", slave, axis ? fmt::format(".{}", axis) : "", name);
                 s.step = step_like(name);
+                s.dashed = name.find("demand") != std::string::npos;
                 pan.series.push_back(std::move(s));
             }
         }

@@ -41,7 +41,7 @@ bool known_signal(const std::string& name);
 std::vector<std::vector<std::string>> parse_signal_groups(const std::string& spec,
                                                           std::string* why = nullptr);
 inline constexpr const char* kDefaultSignals =
-    "position_demand+position_actual,following_error,velocity_actual,torque_actual";
+    "position_actual+position_demand,following_error,velocity_actual,torque_actual";
 
 // One panel per group, one series per signal and axis (slave) in the recording; time from the first sample.
 // slaves: only these positions (empty: all).
