@@ -12,6 +12,7 @@
 
 #include "cia402/drive.hpp"
 #include "cli/fault_cli.hpp"
+#include "cli/telemetry_commands.hpp"
 #include "device/device_description.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
@@ -60,7 +61,8 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
 
 int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
             bool allow_busy_if, double drift_ppm, const std::string& esi_path,
-            const vecat::esi::DeviceSelector& sel, const vecat::cli::RunFaultOptions& fault_opts) {
+            const vecat::esi::DeviceSelector& sel, const vecat::cli::RunFaultOptions& fault_opts,
+            const vecat::cli::TelemetryOptions& telemetry) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -96,7 +98,10 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     opt.busy_poll = busy;
     opt.pcap = pcap.get();
     if (faults) opt.filter = faults->injector.get();
+    auto tel = vecat::cli::RunTelemetry::start(*seg, telemetry, opt);
+    if (!tel) return 2;
     const auto st = vecat::net::serve(*seg, *sock, opt, g_stop);
+    tel.reset();
     if (faults) vecat::cli::print_fault_summary(*faults);
     fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
                seg->counters().dropped);
@@ -136,6 +141,7 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     std::atomic<bool> stop{false};
     vecat::net::ServeOptions opt;
     opt.pcap = &pcap;
+    vecat::cli::DemoScope scope(*seg, opt);
     std::thread server([&] { vecat::net::serve(*seg, slave_sock, opt, stop); });
 
     int rc = 0;
@@ -204,6 +210,8 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     stop = true;
     server.join();
     pcap.flush();
+    scope.write(outdir, "vecat demo: two drives in CSP",
+                "position_actual+position_demand,following_error,velocity_actual");
     const auto img = vecat::esc::build_sii_image(dev);
     std::ofstream(sii_path, std::ios::binary)
         .write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));
@@ -309,6 +317,8 @@ int main(int argc, char** argv) {
     vecat::cli::add_run_fault_options(run, fault_opts);
     vecat::cli::FaultCommand fault_cmd;
     vecat::cli::add_fault_command(app, fault_cmd);
+    vecat::cli::TelemetryOptions telemetry;
+    vecat::cli::add_telemetry_options(run, telemetry);
 
     auto* demo =
         app.add_subcommand("demo", "Run virtual slaves and the bundled master on a private veth pair");
@@ -342,12 +352,16 @@ int main(int argc, char** argv) {
     esi_chk->add_option("--schema", check_xsd, "EtherCATInfo.xsd to validate against (\"\" skips)");
     add_esi_options(esi_chk, false);
 
+    auto* scope = vecat::cli::add_scope_command(app);
+
     CLI11_PARSE(app, argc, argv);
     vecat::esi::DeviceSelector sel;
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
-    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, fault_opts);
+    if (*run)
+        return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, fault_opts, telemetry);
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
+    if (*scope) return vecat::cli::run_scope();
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);

@@ -80,6 +80,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
                     ++st.send_errors;
                 if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), 2);
             }
+            if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);
             last_tick = now;
         } else if (now - last_tick >= tick_ns || now >= next_sync) {
             seg.tick(now);

@@ -17,6 +17,10 @@ struct ServeOptions {
     std::int64_t tick_us = 100;     // firmware/watchdog tick period when idle
     PcapngWriter* pcap = nullptr;   // capture of every frame in and out
     FrameFilter* filter = nullptr;  // fault injection (src/faults): frames go through it to the segment
+    // Called on the serving thread after each processed frame, once its reply is sent (telemetry); it must
+    // neither block nor allocate. now_ns: the time the frame was processed at.
+    void (*after_frame)(void* context, std::uint64_t now_ns) = nullptr;
+    void* after_frame_context = nullptr;
 };
 
 struct ServeStats {

@@ -1,0 +1,240 @@
+#include "telemetry/sampler.hpp"
+
+#include "cia402/drive.hpp"
+#include "coe/coe_application.hpp"
+#include "esc/registers.hpp"
+
+namespace vecat::telemetry {
+
+const char* to_string(EventKind k) noexcept {
+    switch (k) {
+        case EventKind::AlState:
+            return "al_state";
+        case EventKind::Cia402State:
+            return "cia402_state";
+        case EventKind::Mode:
+            return "mode";
+        case EventKind::Fault:
+            return "fault";
+        case EventKind::FaultCleared:
+            return "fault_cleared";
+        case EventKind::Emergency:
+            return "emergency";
+        case EventKind::Overflow:
+            return "overflow";
+    }
+    return "unknown";
+}
+
+// One slave and the objects read from it, looked up once.
+struct Sampler::Slot {
+    std::uint16_t position = 0;
+    esc::Slave* slave = nullptr;
+    coe::CoeApplication* coe = nullptr;  // nullptr: no CoE (status only)
+    cia402::Drive* drive = nullptr;      // nullptr: no drive (no axis samples)
+    const coe::Entry* controlword = nullptr;
+    const coe::Entry* statusword = nullptr;
+    const coe::Entry* error_code = nullptr;
+    const coe::Entry* mode = nullptr;
+    const coe::Entry* position_demand = nullptr;
+    const coe::Entry* position_actual = nullptr;
+    const coe::Entry* velocity_actual = nullptr;
+    const coe::Entry* torque_actual = nullptr;
+    const coe::Entry* following_error = nullptr;
+    std::uint64_t last_exchange = 0;
+    std::uint64_t exchanges_seen = 0;  // exchanges since sampling started (decimation)
+    std::uint64_t samples = 0;
+    // Previous values for the event detection.
+    std::uint8_t al_status = 0;
+    std::uint8_t cia402_state = 0;
+    std::int8_t mode_value = 0;
+    std::uint16_t fault = 0;
+    std::uint64_t emergencies = 0;
+};
+
+namespace {
+
+template <class T>
+T read(const coe::Entry* e) {
+    return e ? e->get<T>() : T{};
+}
+
+}  // namespace
+
+Sampler::Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt) : seg_(seg), q_(q), opt_(opt) {
+    if (opt_.decimation == 0) opt_.decimation = 1;
+    if (opt_.status_every == 0) opt_.status_every = 1;
+    slots_.resize(seg.size());
+    for (std::size_t i = 0; i < seg.size(); ++i) {
+        Slot& s = slots_[i];
+        s.position = static_cast<std::uint16_t>(i);
+        s.slave = &seg.slave(i);
+        s.coe = dynamic_cast<coe::CoeApplication*>(&s.slave->app());
+        s.drive = dynamic_cast<cia402::Drive*>(&s.slave->app());
+        if (s.coe) {
+            auto& od = s.coe->dictionary();
+            s.controlword = od.find(0x6040, 0);
+            s.statusword = od.find(0x6041, 0);
+            s.error_code = od.find(0x603F, 0);
+            s.mode = od.find(0x6061, 0);
+            s.position_demand = od.find(0x6062, 0);
+            s.position_actual = od.find(0x6064, 0);
+            s.velocity_actual = od.find(0x606C, 0);
+            s.torque_actual = od.find(0x6077, 0);
+            s.following_error = od.find(0x60F4, 0);
+            s.last_exchange = s.coe->exchanges();
+            s.emergencies = s.coe->sdo_server().counters().emergencies_sent;
+        }
+        s.al_status = s.slave->esc().al_status();
+        if (s.drive) s.cia402_state = static_cast<std::uint8_t>(s.drive->cia402_state());
+        s.mode_value = read<std::int8_t>(s.mode);
+        s.fault = read<std::uint16_t>(s.error_code);
+    }
+}
+
+Sampler::~Sampler() = default;
+
+void Sampler::on_frame(std::uint64_t now_ns) {
+    ++stats_.frames;
+    for (auto& s : slots_) {
+        detect_events(s, now_ns);
+        if (!s.coe) continue;
+        const std::uint64_t ex = s.coe->exchanges();
+        if (ex == s.last_exchange) continue;
+        s.last_exchange = ex;
+        if (s.exchanges_seen++ % opt_.decimation == 0) sample(s, now_ns);
+    }
+    const std::uint64_t lost = q_.overflows();
+    if (lost != overflows_reported_ && !slots_.empty()) {
+        // Reported once the queue has room again.
+        Event e;
+        e.time_ns = now_ns;
+        e.kind = EventKind::Overflow;
+        e.old_value = static_cast<std::int64_t>(overflows_reported_);
+        e.new_value = static_cast<std::int64_t>(lost);
+        if (q_.push(Record{e})) overflows_reported_ = lost;
+    }
+}
+
+void Sampler::sample_all(std::uint64_t now_ns) {
+    for (auto& s : slots_) {
+        detect_events(s, now_ns);
+        sample(s, now_ns);
+    }
+}
+
+void Sampler::sample(Slot& s, std::uint64_t now_ns) {
+    if (s.drive) {
+        AxisSample a;
+        a.time_ns = now_ns;
+        a.cycle = s.coe->exchanges();
+        a.slave = s.position;
+        a.cia402_state = static_cast<std::uint8_t>(s.drive->cia402_state());
+        a.mode = read<std::int8_t>(s.mode);
+        a.controlword = read<std::uint16_t>(s.controlword);
+        a.statusword = read<std::uint16_t>(s.statusword);
+        a.error_code = read<std::uint16_t>(s.error_code);
+        a.position_demand = read<std::int32_t>(s.position_demand);
+        a.position_actual = read<std::int32_t>(s.position_actual);
+        a.velocity_actual = read<std::int32_t>(s.velocity_actual);
+        a.torque_actual = read<std::int16_t>(s.torque_actual);
+        a.following_error = read<std::int32_t>(s.following_error);
+        if (q_.push(Record{a})) ++stats_.samples;
+        if (const twinsync::LinkStatus* ts = s.drive->twinsync_status()) {
+            TwinsyncSample t;
+            t.time_ns = now_ns;
+            t.slave = s.position;
+            t.mode = static_cast<std::uint8_t>(ts->mode);
+            t.tx_statusword = ts->tx_statusword;
+            t.rx_statusword = ts->rx_statusword;
+            t.comm_status = ts->comm_status;
+            t.synchronised = ts->synchronised;
+            t.link_ok = ts->link_ok;
+            t.error_number = ts->error_number;
+            t.frames_sent = ts->frames_sent;
+            t.frames_received = ts->frames_received;
+            t.crc_errors = ts->crc_errors;
+            t.frames_missing = ts->frames_missing;
+            t.sync_offset_ns = ts->sync_offset_ns;
+            t.tracking_error = ts->tracking_error;
+            q_.push(Record{t});
+        }
+    }
+    if (s.samples++ % opt_.status_every == 0) status(s, now_ns);
+}
+
+void Sampler::status(Slot& s, std::uint64_t now_ns) {
+    const esc::Esc& e = s.slave->esc();
+    SlaveStatus st;
+    st.time_ns = now_ns;
+    st.slave = s.position;
+    st.al_status = e.al_status();
+    st.al_status_code = e.al_status_code();
+    // 0x092C: bit 31 is the sign (1: local copy of the system time smaller than the received one).
+    const std::uint32_t diff = e.peek32(esc::addr(esc::Reg::DcSystemTimeDifference));
+    const std::int32_t mag = static_cast<std::int32_t>(diff & 0x7FFF'FFFFu);
+    st.dc_time_difference_ns = (diff & 0x8000'0000u) ? -mag : mag;
+    st.watchdog_pd_expiries = e.peek(esc::addr(esc::Reg::WatchdogCounterProcessData));
+    st.watchdog_pdi_expiries = e.peek(esc::addr(esc::Reg::WatchdogCounterPdi));
+    for (std::uint16_t i = 0; i < 8; ++i)
+        st.rx_errors += e.peek(static_cast<std::uint16_t>(esc::addr(esc::Reg::RxErrorCounter) + i));
+    for (std::uint16_t i = 0; i < 4; ++i)
+        st.lost_links += e.peek(static_cast<std::uint16_t>(esc::addr(esc::Reg::LostLinkCounter) + i));
+    st.mailbox_errors = s.slave->counters().mailbox_errors;
+    if (s.coe) {
+        st.frames = s.coe->exchanges();
+        st.emergencies = s.coe->sdo_server().counters().emergencies_sent;
+    }
+    q_.push(Record{st});
+}
+
+void Sampler::event(const Slot& s, std::uint64_t now_ns, EventKind k, std::uint32_t code,
+                    std::int64_t old_value, std::int64_t new_value) {
+    Event e;
+    e.time_ns = now_ns;
+    e.slave = s.position;
+    e.kind = k;
+    e.code = code;
+    e.old_value = old_value;
+    e.new_value = new_value;
+    if (q_.push(Record{e})) ++stats_.events;
+}
+
+void Sampler::detect_events(Slot& s, std::uint64_t now_ns) {
+    const esc::Esc& e = s.slave->esc();
+    const std::uint8_t al = e.al_status();
+    if (al != s.al_status) {
+        event(s, now_ns, EventKind::AlState, e.al_status_code(), s.al_status, al);
+        s.al_status = al;
+        status(s, now_ns);
+    }
+    if (s.drive) {
+        const auto st = static_cast<std::uint8_t>(s.drive->cia402_state());
+        if (st != s.cia402_state) {
+            event(s, now_ns, EventKind::Cia402State, 0, s.cia402_state, st);
+            s.cia402_state = st;
+        }
+    }
+    if (!s.coe) return;
+    const auto m = read<std::int8_t>(s.mode);
+    if (m != s.mode_value) {
+        event(s, now_ns, EventKind::Mode, 0, s.mode_value, m);
+        s.mode_value = m;
+    }
+    const auto f = read<std::uint16_t>(s.error_code);
+    if (f != s.fault) {
+        if (f != 0)
+            event(s, now_ns, EventKind::Fault, f, s.fault, f);
+        else
+            event(s, now_ns, EventKind::FaultCleared, s.fault, s.fault, 0);
+        s.fault = f;
+    }
+    const std::uint64_t em = s.coe->sdo_server().counters().emergencies_sent;
+    if (em != s.emergencies) {
+        event(s, now_ns, EventKind::Emergency, f, static_cast<std::int64_t>(s.emergencies),
+              static_cast<std::int64_t>(em));
+        s.emergencies = em;
+    }
+}
+
+}  // namespace vecat::telemetry

@@ -1,0 +1,77 @@
+// The cyclic-thread side of the telemetry: after each frame the serve loop processed, the sampler reads
+// the segment's slaves (the drive's dictionary objects, the ESC registers, the TWINsync link status) and
+// pushes records into the bounded queue. It samples an axis when its slave exchanged process data, every
+// `decimation`-th exchange; it detects events (AL state, CiA 402 state, mode, 0x603F faults, emergencies)
+// on every frame. It neither allocates nor blocks: a full queue drops the record and counts it.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "esc/segment.hpp"
+#include "telemetry/samples.hpp"
+#include "telemetry/spsc_queue.hpp"
+
+namespace vecat::coe {
+class CoeApplication;
+class Entry;
+}  // namespace vecat::coe
+namespace vecat::cia402 {
+class Drive;
+}
+
+namespace vecat::telemetry {
+
+// 8192 records: about two seconds of two axes at 1 kHz if the publisher stalls.
+using TelemetryQueue = SpscQueue<Record, 8192>;
+
+struct SamplerOptions {
+    unsigned decimation = 1;      // one axis sample every n process data exchanges (1: every one)
+    unsigned status_every = 100;  // slave status every n axis samples (and at each AL state change)
+};
+
+struct SamplerStats {
+    std::uint64_t frames = 0;   // on_frame calls
+    std::uint64_t samples = 0;  // axis samples pushed
+    std::uint64_t events = 0;   // events pushed
+};
+
+class Sampler {
+  public:
+    // The segment's slaves are looked up once here (call before the serve loop starts).
+    Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt = {});
+    ~Sampler();
+    Sampler(const Sampler&) = delete;
+    Sampler& operator=(const Sampler&) = delete;
+
+    // After each processed frame, on the cyclic thread (now_ns: the time the frame was processed at).
+    void on_frame(std::uint64_t now_ns);
+    // Samples every slave now, whether it exchanged process data or not (what on_frame does for a slave
+    // whose sample is due). Used by the benchmark.
+    void sample_all(std::uint64_t now_ns);
+
+    // For net::ServeOptions::after_frame (context: the sampler).
+    static void after_frame(void* sampler, std::uint64_t now_ns) {
+        static_cast<Sampler*>(sampler)->on_frame(now_ns);
+    }
+
+    const SamplerStats& stats() const { return stats_; }
+    TelemetryQueue& queue() { return q_; }
+
+  private:
+    struct Slot;
+    void sample(Slot& s, std::uint64_t now_ns);
+    void status(Slot& s, std::uint64_t now_ns);
+    void detect_events(Slot& s, std::uint64_t now_ns);
+    void event(const Slot& s, std::uint64_t now_ns, EventKind k, std::uint32_t code, std::int64_t old_value,
+               std::int64_t new_value);
+
+    esc::Segment& seg_;
+    TelemetryQueue& q_;
+    SamplerOptions opt_;
+    std::vector<Slot> slots_;
+    SamplerStats stats_;
+    std::uint64_t overflows_reported_ = 0;
+};
+
+}  // namespace vecat::telemetry
