@@ -775,6 +775,7 @@ void Drive::run_twinsync(double dt) {
     };
     const double still = standstill_velocity();
     torque_ff_ = 0;
+    cyclic_following_ = true;  // statusword bit 12 of the cyclic modes: the drive follows (TWINsync's) command
 
     switch (f) {
         case Follow::PositionAbsolute: {

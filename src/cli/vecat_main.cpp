@@ -7,10 +7,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <thread>
 
 #include "cia402/drive.hpp"
+#include "cia402/profile_generator.hpp"
 #include "cli/fault_cli.hpp"
 #include "cli/telemetry_commands.hpp"
 #include "device/device_description.hpp"
@@ -62,7 +64,7 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
 int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
             bool allow_busy_if, double drift_ppm, const std::string& esi_path,
             const vecat::esi::DeviceSelector& sel, const vecat::cli::RunFaultOptions& fault_opts,
-            const vecat::cli::TelemetryOptions& telemetry) {
+            const vecat::cli::TelemetryOptions& telemetry, vecat::cia402::TwinsyncPreset twinsync) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -75,7 +77,7 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     auto loaded = load_device(esi_path, sel, true);
     if (!loaded) return 1;
     const auto& dev = *loaded;
-    auto seg = vecat::cia402::make_drive_segment(dev, slaves);
+    auto seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
         seg->slave(i).esc().dc().set_drift_ppm(i % 2 ? -drift_ppm : drift_ppm, vecat::net::monotonic_ns());
@@ -134,7 +136,11 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     install_signals();
 
     auto dev = vecat::device::default_drive();
-    auto seg = vecat::cia402::make_drive_segment(dev, slaves);
+    // Drives 1 and 2 form a gantry coupled by TWINsync: the master commands drive 1, drive 2 follows.
+    const bool gantry = slaves >= 2;
+    auto seg = vecat::cia402::make_drive_segment(
+        dev, slaves, {},
+        gantry ? vecat::cia402::TwinsyncPreset::Gantry : vecat::cia402::TwinsyncPreset::None);
     vecat::net::RawSocket slave_sock("vecat-s");
     vecat::net::RawSocket master_sock("vecat-m");
     vecat::net::PcapngWriter pcap(pcap_path, "vecat-s");
@@ -147,8 +153,8 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     int rc = 0;
     vecat::master::Master m(master_sock);
     fmt::print(
-        "vecat demo: {} virtual drive(s) on veth pair vecat-m <-> vecat-s in a private network namespace\n",
-        slaves);
+        "vecat demo: {} virtual drive(s) on veth pair vecat-m <-> vecat-s in a private network namespace{}\n",
+        slaves, gantry ? "; drives 1 and 2 are a TWINsync gantry (drive 2 follows drive 1)" : "");
     std::string fail;
     if (!m.startup(AlState::Op, &fail)) {
         fmt::print(stderr, "vecat demo: start-up failed: {}\n", fail);
@@ -160,38 +166,55 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
                 "bytes\n",
                 s.position, s.station, s.sii.device_name(), s.sii.identity.vendor_id,
                 s.sii.identity.product_code, s.sii.identity.revision, s.out_bytes, s.in_bytes);
-        fmt::print("  all slaves in OP; enabling the drives (6, 7, 15) in CSP and moving them, 1 ms cycle\n");
+        fmt::print(
+            "  all slaves in OP; enabling the drives (6, 7, 15) in CSP and moving them with a jerk-limited "
+            "profile, 1 ms cycle\n");
         // Default mapping: controlword, mode of operation, pad, target position / statusword, mode
         // display, pad, position actual value, velocity actual value.
         unsigned misses = 0;
+        double worst_tracking = 0;
         std::vector<std::int32_t> start(m.slaves().size(), 0);
+        // One revolution out and back (2^20 increments) at up to 1 rev/s, 10 rev/s^2, 100 rev/s^3.
+        constexpr double kRev = 1 << 20;
+        const vecat::cia402::ProfileLimits limits{kRev, 10 * kRev, 10 * kRev, 100 * kRev};
+        std::vector<vecat::cia402::ProfileGenerator> gen(m.slaves().size());
         auto next = std::chrono::steady_clock::now();
         for (unsigned c = 0; c < cycles && !g_stop; ++c) {
             next += std::chrono::milliseconds(1);
             const std::uint16_t cw = c < 10 ? 0x06 : c < 20 ? 0x07 : (c + 20 < cycles ? 0x0F : 0x00);
-            // From cycle 30 on each drive travels half a revolution and back (2^19 increments), 0.5 Hz.
-            const double t = c < 30 ? 0.0 : (c - 30) * 1e-3;
-            const double travel = (1 << 19) * 0.5 * (1 - std::cos(3.14159265358979 * t));
             for (std::size_t i = 0; i < m.slaves().size(); ++i) {
                 auto out = m.outputs(i);
                 auto in = m.inputs(i);
                 if (out.size() < 8 || in.size() < 12) continue;
-                if (c == 1) start[i] = static_cast<std::int32_t>(vecat::ld_le32(in.data() + 4));
+                if (c == 1) {
+                    start[i] = static_cast<std::int32_t>(vecat::ld_le32(in.data() + 4));
+                    gen[i].reset({static_cast<double>(start[i]), 0, 0});
+                }
+                // Drive 2 of the gantry takes its set-points through TWINsync; the others each get their own.
+                const double dir = (i % 2) ? -1.0 : 1.0;
+                if (c == 30) gen[i].move_to(start[i] + dir * kRev, limits);
+                if (c == cycles / 2) gen[i].move_to(start[i], limits);
+                const double p = c >= 1 ? gen[i].step(1e-3).p : 0.0;
                 vecat::st_le16(out.data(), cw);
                 out[2] = 8;
-                const double dir = (i % 2) ? -1.0 : 1.0;
-                vecat::st_le32(out.data() + 4, static_cast<std::uint32_t>(
-                                                   start[i] + static_cast<std::int32_t>(dir * travel)));
+                vecat::st_le32(out.data() + 4,
+                               static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(p))));
             }
             auto w = m.exchange_process_data();
             if (!w || *w != m.expected_wkc()) ++misses;
+            if (gantry && m.slaves().size() >= 2 && m.inputs(1).size() >= 8)
+                worst_tracking =
+                    std::max(worst_tracking,
+                             std::abs(static_cast<double>(
+                                          static_cast<std::int32_t>(vecat::ld_le32(m.inputs(0).data() + 4))) -
+                                      static_cast<std::int32_t>(vecat::ld_le32(m.inputs(1).data() + 4))));
             if (c % 250 == 0 || c + 1 == cycles) {
                 fmt::print("\r  cycle {:5}/{}  WKC {}/{}  misses {}", c + 1, cycles, w ? *w : 0,
                            m.expected_wkc(), misses);
                 for (std::size_t i = 0; i < m.slaves().size() && i < 4; ++i) {
                     auto in = m.inputs(i);
                     if (in.size() >= 12)
-                        fmt::print("  drive {}: status 0x{:04X} pos {:8}", i, vecat::ld_le16(in.data()),
+                        fmt::print("  drive {}: status 0x{:04X} pos {:8}", i + 1, vecat::ld_le16(in.data()),
                                    static_cast<std::int32_t>(vecat::ld_le32(in.data() + 4)));
                 }
             }
@@ -199,6 +222,12 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
             std::this_thread::sleep_until(next);
         }
         fmt::print("\n");
+        if (gantry)
+            fmt::print(
+                "  gantry: largest position difference drive 1 - drive 2 read over EtherCAT: {:.0f} "
+                "increments "
+                "({:.3f} % of a revolution)\n",
+                worst_tracking, worst_tracking / kRev * 100.0);
         if (!m.request_state(AlState::Init)) {
             fmt::print(stderr, "vecat demo: back to INIT failed\n");
             rc = 1;
@@ -210,8 +239,12 @@ int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
     stop = true;
     server.join();
     pcap.flush();
-    scope.write(outdir, "vecat demo: two drives in CSP",
-                "position_actual+position_demand,following_error,velocity_actual");
+    if (gantry)
+        scope.write(outdir, "vecat demo: TWINsync gantry, drive 1 commanded in CSP, drive 2 following",
+                    "position_actual+position_demand,twinsync.tracking_error,velocity_actual");
+    else
+        scope.write(outdir, "vecat demo: drives in CSP",
+                    "position_actual+position_demand,following_error,velocity_actual");
     const auto img = vecat::esc::build_sii_image(dev);
     std::ofstream(sii_path, std::ios::binary)
         .write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));
@@ -291,12 +324,25 @@ int main(int argc, char** argv) {
 
     auto* run = app.add_subcommand("run", "Serve virtual slaves on a network interface");
     std::string iface, pcap;
-    unsigned slaves = 1;
+    unsigned slaves = 2;
+    vecat::cia402::TwinsyncPreset twinsync = vecat::cia402::TwinsyncPreset::None;
     bool busy = false, allow_used = false;
     double drift_ppm = 0.0;
     run->add_option("-i,--iface", iface, "Interface to serve on (one end of a veth pair, or a dedicated NIC)")
         ->required();
-    run->add_option("-n,--slaves", slaves, "Number of slaves on the line")->check(CLI::Range(1u, 512u));
+    run->add_option("-n,--slaves", slaves,
+                    "Number of slaves on the line (drives 1 and 2 are connected by a TWINsync cable)")
+        ->check(CLI::Range(1u, 512u));
+    const std::map<std::string, vecat::cia402::TwinsyncPreset> presets = {
+        {"off", vecat::cia402::TwinsyncPreset::None},
+        {"gantry", vecat::cia402::TwinsyncPreset::Gantry},
+        {"position", vecat::cia402::TwinsyncPreset::Position},
+        {"speed", vecat::cia402::TwinsyncPreset::Speed}};
+    run->add_option(
+           "--twinsync", twinsync,
+           "TWINsync between drives 1 and 2 preset: off (configure it by CoE), gantry (P2580 29/30), "
+           "position (PCON 7/8) or speed (SCON 5/6); drive 2 is then controlled through TWINsync")
+        ->transform(CLI::CheckedTransformer(presets, CLI::ignore_case));
     run->add_option("--pcap", pcap, "Write every frame in and out to this pcapng file");
     run->add_flag("--busy-poll", busy,
                   "Spin on the socket instead of sleeping (lowest latency, one core busy)");
@@ -359,7 +405,8 @@ int main(int argc, char** argv) {
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
     if (*run)
-        return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, fault_opts, telemetry);
+        return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, fault_opts, telemetry,
+                       twinsync);
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
