@@ -774,8 +774,11 @@ void Drive::run_twinsync(double dt) {
         return factors_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi);
     };
     const double still = standstill_velocity();
+    // The master's speed arrives as a 16-bit fraction of P2609: standstill within two of its steps.
+    const double still_remote = std::max(still, 2.0 * std::abs(rpm_to_user(remote_speed_ref / 32768.0)));
     torque_ff_ = 0;
-    cyclic_following_ = true;  // statusword bit 12 of the cyclic modes: the drive follows (TWINsync's) command
+    cyclic_following_ =
+        true;  // statusword bit 12 of the cyclic modes: the drive follows (TWINsync's) command
 
     switch (f) {
         case Follow::PositionAbsolute: {
@@ -788,7 +791,8 @@ void Drive::run_twinsync(double dt) {
             const double v = inv * rpm_to_user(ff_rpm);
             if (!coupled_) {
                 // Coupling only at standstill of both axes.
-                if (std::abs(v) > still || std::abs(velocity_user_) > still) return hold_for_coupling();
+                if (std::abs(v) > still_remote || std::abs(velocity_user_) > still)
+                    return hold_for_coupling();
                 coupled_ = true;
             }
             demand_ = {clamp_to_software_limits(inv * master), v, 0.0};
@@ -807,7 +811,8 @@ void Drive::run_twinsync(double dt) {
                              std::max<double>(rd<std::int32_t>(o_->tw_gear_denominator, 1), 1.0);
             const double v = k * rpm_to_user(speed(o_->tw_remote_act_speed));
             if (!coupled_) {
-                if (std::abs(v) > still || std::abs(velocity_user_) > still) return hold_for_coupling();
+                if (std::abs(v) > still_remote || std::abs(velocity_user_) > still)
+                    return hold_for_coupling();
                 coupled_ = true;
                 twin_master_last_ = master;
             }

@@ -305,6 +305,10 @@ void Port::reconfigure() {
     }
 }
 
+std::uint16_t Port::received_control_word() const {
+    return c_->slave_ctrl ? c_->slave_ctrl->get<std::uint16_t>() : rx_drivecom_;
+}
+
 bool Port::receives(std::uint16_t parameter) const {
     if (!active() || !configured_) return false;
     const coe::Object* o = od_.find(object_index(parameter));
@@ -496,7 +500,7 @@ void Port::transmit(std::uint64_t t_ns, const LocalState& local) {
         t.drivecom_word = st;
         if (c_->slave_status) c_->slave_status->set(st);
         status_.slave_status = st;
-        status_.slave_control_word = rx_drivecom_;
+        status_.slave_control_word = received_control_word();
     }
     std::size_t off = 0;
     for (const Mapped& m : send_) {

@@ -87,7 +87,9 @@ class Port {
     // Valid data from the partner has arrived since the link became active (values may be frozen).
     bool has_data() const { return has_data_; }
     bool link_ok() const { return status_.link_ok; }
-    std::uint16_t received_control_word() const { return rx_drivecom_; }  // P2611 on a slave
+    // P2611 on a slave: from the telegram's control word (standard layout) or, in the extended layout, from
+    // wherever the user mapped P2611.
+    std::uint16_t received_control_word() const;
     const TwinStatusWord& partner() const { return partner_; }
     bool partner_enabled() const;  // the partner reports DriveCom state 5 (Control)
     // The monitoring's finding this cycle (the drive raises it as a fault in state Control).

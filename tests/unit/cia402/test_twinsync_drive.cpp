@@ -262,6 +262,68 @@ TEST_F(TwinBench, RefusedConfigurationsSayWhy) {
               coe::SdoAbort::ValueTooHigh);
 }
 
+std::unique_ptr<esc::Segment> speed_line(const device::DeviceDescription& d, std::size_t n,
+                                         const esc::EscConfig& cfg) {
+    return make_drive_segment(d, n, cfg, TwinsyncPreset::Speed);
+}
+
+struct TwinSpeed : TwinBench {
+    TwinSpeed() : TwinBench(&speed_line) {}
+};
+
+TEST_F(TwinSpeed, SconSlaveRunsAtTheMasterSpeed) {
+    enable_gantry();
+    // The master drive ramps to 1 rev/s in CSP; the slave's speed set-point is the master's actual speed
+    // (16-bit, scaled by P2602/P2609 = 5000 rpm).
+    std::int32_t p = pos(0);
+    for (int i = 0; i < 500; ++i)
+        cycle(0x0F, p += std::min(i, 100) * (1 << 20) / 100000);
+    const double v0 = drive(0).velocity_actual(), v1 = drive(1).velocity_actual();
+    std::printf("SCON: master %.0f, slave %.0f units/s\n", v0, v1);
+    EXPECT_NEAR(v0, 1 << 20, 0.02 * (1 << 20));
+    EXPECT_NEAR(v1, v0, 0.01 * v0);  // the 16-bit speed resolution is 5000/32768 rpm
+    EXPECT_EQ(par(1, p::RemoteActSpeed).get<std::int16_t>(), par(0, p::LocalActSpeed).get<std::int16_t>());
+}
+
+TEST_F(TwinBench, ExtendedMappingCarriesWhatTheUserMapped) {
+    // EXT_MAP: the master sends its position set-point P2600, its speed P2599 and its control word P2611
+    // (pppp.SS.tt, type 0); the slave takes them into P2607, P2605 and P2611 and follows by P0300 = 3
+    // (position). Without a control word in the telegram, P2611 must be mapped for control via TWINsync.
+    for (int d = 0; d < 2; ++d) {
+        par(d, p::Setting).set<std::uint8_t>(d == 0 ? 31 : 32);
+        for (std::uint8_t s = 1; s <= 8; ++s) {
+            par(d, p::ProcessSendData, s).set<std::uint32_t>(0);
+            par(d, p::ProcessReceiveData, s).set<std::uint32_t>(0);
+        }
+    }
+    par(0, p::ProcessSendData, 1).set<std::uint32_t>(0x0A280000);
+    par(0, p::ProcessSendData, 2).set<std::uint32_t>(0x0A270000);
+    par(1, p::ProcessReceiveData, 1).set<std::uint32_t>(0x0A2F0000);
+    par(1, p::ProcessReceiveData, 2).set<std::uint32_t>(0x0A2D0000);
+    par(0, p::ProcessSendData, 3).set<std::uint32_t>(0x0A330000);
+    par(1, p::ProcessReceiveData, 3).set<std::uint32_t>(0x0A330000);
+    drive(0).twinsync_port().reconfigure();
+    drive(1).twinsync_port().reconfigure();
+    ASSERT_TRUE(drive(0).twinsync_port().mode()->extended);
+    enable_gantry();
+    std::int32_t p = pos(0);
+    for (int i = 0; i < 300; ++i)
+        cycle(0x0F, p += 200);
+    for (int i = 0; i < 100; ++i)
+        cycle(0x0F, p);
+    EXPECT_EQ(par(1, p::RemoteRefPos).get<std::int32_t>(), par(0, p::LocalRefPos).get<std::int32_t>());
+    // Both follow the same set-point; stiction leaves each up to ~0.01 % of a revolution off for a while.
+    EXPECT_EQ(e(1, 0x6062).get<std::int32_t>(), p);
+    EXPECT_NEAR(pos(1), p, 150);
+    EXPECT_NEAR(pos(0), p, 150);
+    // No status word in the extended layout, so no 40-xx monitoring: P2619 stays 0.
+    EXPECT_EQ(par(1, p::CommStatus).get<std::uint16_t>(), 0x0001);
+    // A scope signal (type 1) is refused.
+    master::CoeClient c(b.master, 0x1002);
+    EXPECT_EQ(c.download_value<std::uint32_t>(object_index(p::ProcessReceiveData), 4, 0x03F30001u).abort,
+              coe::SdoAbort::NotMappable);
+}
+
 struct TwinPosition : TwinBench {
     TwinPosition() : TwinBench(&position_line) {}
 };
