@@ -626,7 +626,8 @@ void Drive::servo_step() {
 
     run_touch_probe(previous_inc, machine_inc);
     write_feedback();
-    write_twinsync_values();
+    // The TWINsync values every cycle while the link is on; otherwise only for SDO reads, every 4 ms.
+    if (twin_->active() || steps_ % 16 == 0) write_twinsync_values();
     twinsync::LocalState local = twinsync_local();
     local.controlword = own_controlword;
     twin_->transmit(sim_ns_, local);
