@@ -206,6 +206,46 @@ TEST_F(TwinBench, TwoMastersGive40_02) {
     }
 }
 
+TEST_F(TwinBench, DifferentSwitchingFrequenciesGive40_01) {
+    master::CoeClient c(b.master, 0x1002);
+    ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::SwitchingFrequency), 0, 3).abort,
+              coe::SdoAbort::None);
+    for (int i = 0; i < 5; ++i)
+        cycle(0, pos(0));
+    EXPECT_EQ(par(0, p::Statusword).get<std::uint16_t>() & 0x0E, 3 << 1);  // the slave's 8 kHz
+    EXPECT_TRUE(par(0, p::CommStatus).get<std::uint16_t>() & comm_status::SwitchingFrequency);
+    // The error comes as soon as the drives enter Control (the slave first, then the master's check).
+    for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
+        for (int i = 0; i < 5; ++i)
+            cycle(cw, pos(0));
+    EXPECT_EQ(drive(1).twinsync_error(), error::SwitchingFrequency);
+    EXPECT_EQ(drive(1).cia402_state(), State::Fault);
+    EXPECT_EQ(sw(1) & 0x08, 0x08);
+}
+
+TEST_F(TwinBench, SlaveLeavingControlGives40_04AfterTheMaxFaultTime) {
+    // The slave drive is switched by its own EtherCAT controlword; both are enabled, then the slave is
+    // switched off: the master, still in Control, reports 40-04 once P2613 has passed.
+    par(1, p::ControlSelector).set<std::uint16_t>(0);
+    drive(1).twinsync_port().reconfigure();
+    const std::int32_t p0 = pos(0), p1 = pos(1);
+    for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
+        for (int i = 0; i < 5; ++i)
+            cycle(cw, p0, cw, 8, p1);
+    ASSERT_EQ(drive(0).cia402_state(), State::OperationEnabled);
+    ASSERT_EQ(drive(1).cia402_state(), State::OperationEnabled);
+    double t = -1;
+    for (int k = 1; k <= 80 && t < 0; ++k) {
+        cycle(0x0F, p0, 0x07, 8, p1, kCycle);
+        if (drive(0).twinsync_error()) t = k * kCycle / 1e6;
+    }
+    EXPECT_EQ(drive(0).twinsync_error(), error::DriveComState);
+    EXPECT_GT(t, 10.0);
+    EXPECT_LE(t, 10.75);
+    EXPECT_TRUE(par(0, p::CommStatus).get<std::uint16_t>() & comm_status::DriveComState);
+    EXPECT_FALSE(drive(1).twinsync_error()) << "the slave is not in Control: it reports nothing";
+}
+
 TEST_F(TwinBench, SyncLossFaultsTheSlaveAndTheGantryMasterSeesTheOtherAxis) {
     enable_gantry();
     e(1, 0x2104, 2).set<std::uint8_t>(1);  // sync loss: data still passes, SYNC_OUT does not
