@@ -115,9 +115,16 @@ std::vector<double> nice_ticks(double lo, double hi, int target) {
 }
 
 std::string render_svg(const Plot& p) {
-    constexpr int kLeft = 96, kRight = 210, kTop = 48, kGap = 26, kBottom = 58;
+    constexpr int kLeft = 96, kTop = 48, kGap = 26, kBottom = 58;
+    // The legend column is as wide as the longest label (about 7 px per character at this font size);
+    // the picture grows by what the default 210 px do not hold, so the plotting area keeps its width.
+    std::size_t longest = 0;
+    for (const auto& pan : p.panels)
+        for (const auto& s : pan.series)
+            longest = std::max(longest, s.label.size());
+    const int kRight = std::max(210, 54 + 7 * static_cast<int>(longest));
     const int n = static_cast<int>(p.panels.size());
-    const int w = p.width, ph = p.panel_height;
+    const int w = p.width + (kRight - 210), ph = p.panel_height;
     const int pw = w - kLeft - kRight;
     const int h = kTop + n * ph + std::max(0, n - 1) * kGap + kBottom;
 
