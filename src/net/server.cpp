@@ -34,8 +34,9 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             const std::uint64_t until = next_sync > t ? next_sync - t : 0;
             wait_us = std::min<std::int64_t>(wait_us, static_cast<std::int64_t>(until / 1000));
         }
-        const long n = opt.busy_poll ? sock.try_receive(Bytes(buf.data(), buf.size()))
-                                     : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
+        const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
+        const long n = spin ? sock.try_receive(Bytes(buf.data(), buf.size()))
+                            : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
         const std::uint64_t now = monotonic_ns();
         if (n > 0) {
             ++st.received;

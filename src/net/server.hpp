@@ -15,6 +15,9 @@ struct ServeOptions {
     bool busy_poll = false;        // spin on the socket instead of sleeping in poll()
     std::int64_t tick_us = 100;    // firmware/watchdog tick period when idle
     PcapngWriter* pcap = nullptr;  // capture of every frame in and out
+    // While this flag is true a busy-polling loop sleeps in poll() like the blocking mode (the round-trip
+    // benchmark parks one server while it measures another on the same two cores).
+    const std::atomic<bool>* park = nullptr;
 };
 
 struct ServeStats {
