@@ -20,6 +20,7 @@
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
+#include "net/realtime.hpp"
 #include "net/server.hpp"
 
 namespace {
@@ -59,7 +60,7 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
 
 int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
             bool allow_busy_if, double drift_ppm, const std::string& esi_path,
-            const vecat::esi::DeviceSelector& sel) {
+            const vecat::esi::DeviceSelector& sel, const vecat::net::RealtimeOptions& rt = {}) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -91,6 +92,11 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     vecat::net::ServeOptions opt;
     opt.busy_poll = busy;
     opt.pcap = pcap.get();
+    // The serve loop runs on this thread: pinning, SCHED_FIFO and locked memory apply to it.
+    if (!vecat::net::apply_realtime(rt, &why)) {
+        fmt::print(stderr, "vecat: {}\n", why);
+        return 1;
+    }
     const auto st = vecat::net::serve(*seg, *sock, opt, g_stop);
     fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
                seg->counters().dropped);
@@ -284,8 +290,16 @@ int main(int argc, char** argv) {
         ->required();
     run->add_option("-n,--slaves", slaves, "Number of slaves on the line")->check(CLI::Range(1u, 512u));
     run->add_option("--pcap", pcap, "Write every frame in and out to this pcapng file");
-    run->add_flag("--busy-poll", busy,
-                  "Spin on the socket instead of sleeping (lowest latency, one core busy)");
+    run->add_flag("--busy-poll,!--blocking", busy,
+                  "Spin on the socket instead of sleeping in poll() (lowest latency, one core busy); "
+                  "--blocking (the default) suits laptops");
+    vecat::net::RealtimeOptions rt;
+    run->add_option("--cpu", rt.cpu, "Pin the serve loop to this CPU");
+    run->add_option("--fifo", rt.fifo_priority,
+                    "Run the serve loop under SCHED_FIFO with this priority (1..99; with --busy-poll the "
+                    "kernel's RT throttling stalls it for 50 ms a second unless that is turned off)")
+        ->check(CLI::Range(1, 99));
+    run->add_flag("--mlock", rt.lock_memory, "Lock all memory (mlockall): no page faults while serving");
     run->add_option("--dc-drift-ppm", drift_ppm,
                     "DC clock drift of the slaves in ppm (alternating sign along the line)")
         ->check(CLI::Range(-1000.0, 1000.0));
@@ -336,7 +350,7 @@ int main(int argc, char** argv) {
     vecat::esi::DeviceSelector sel;
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
-    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel);
+    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, rt);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);

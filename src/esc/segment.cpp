@@ -9,6 +9,7 @@ namespace vecat::esc {
 
 void Segment::add(std::unique_ptr<Slave> s) {
     slaves_.push_back(std::move(s));
+    last_run_ns_.push_back(0);
     // Port 1 of every slave but the last one has a link to its successor.
     for (std::size_t i = 0; i < slaves_.size(); ++i)
         slaves_[i]->esc().set_port_link(1, i + 1 < slaves_.size());
@@ -32,8 +33,8 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
     } else {
         const std::size_t n = slaves_.size();
         // SYNC pulses that fell due before this frame arrived happen first (the server may be late).
-        for (auto& s : slaves_)
-            if (s->esc().dc().next_pulse_host_ns() <= now_ns) s->run(now_ns);
+        for (std::size_t k = 0; k < n; ++k)
+            if (slaves_[k]->esc().dc().next_pulse_host_ns() <= now_ns) run(k, now_ns);
         for (std::size_t k = 0; k < n; ++k) {
             FrameTiming t;
             t.port0_ns = now_ns + k * hop_delay_ns;
@@ -41,11 +42,15 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
             // the frame back through its closed port 1 without delay), so masters compute exact delays.
             t.port1_ns = now_ns + (2 * (n - 1) - k) * hop_delay_ns;
             Esc& esc = slaves_[k]->esc();
+            bool addressed = false;
             for (std::size_t i = 0; i < pf.count; ++i)
-                esc.process(pf.datagram(frame, i), t);
+                addressed |= esc.process(pf.datagram(frame, i), t);
+            // Marks the slave for its firmware run below (0: run now).
+            if (addressed) last_run_ns_[k] = 0;
         }
-        for (auto& s : slaves_)
-            s->run(now_ns);
+        for (std::size_t k = 0; k < n; ++k)
+            if (last_run_ns_[k] == 0 || now_ns - last_run_ns_[k] >= kMaxRunGapNs || now_ns < last_run_ns_[k])
+                run(k, now_ns);
     }
     frame[6] |= 0x02;  // the ESC marks the frame as processed in the source address
     if (len < kMinEthFrame && frame.size() >= kMinEthFrame) {
@@ -56,9 +61,14 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
     return true;
 }
 
+void Segment::run(std::size_t k, std::uint64_t now_ns) {
+    slaves_[k]->run(now_ns);
+    last_run_ns_[k] = now_ns == 0 ? 1 : now_ns;
+}
+
 void Segment::tick(std::uint64_t now_ns) {
-    for (auto& s : slaves_)
-        s->run(now_ns);
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        run(k, now_ns);
 }
 
 std::uint64_t Segment::next_event_ns() const {

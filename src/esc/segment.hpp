@@ -43,7 +43,13 @@ class Segment {
     std::uint64_t hop_delay_ns = 500;
 
   private:
+    void run(std::size_t k, std::uint64_t now_ns);
     std::vector<std::unique_ptr<Slave>> slaves_;
+    // Per slave: host time of its last firmware run. A frame runs the firmware of the slaves it addressed,
+    // and of the others only when kMaxRunGapNs has passed (a cycle of several frames does not run every
+    // slave once per frame).
+    std::vector<std::uint64_t> last_run_ns_;
+    static constexpr std::uint64_t kMaxRunGapNs = 100'000;
     SegmentCounters counters_;
 };
 
