@@ -14,6 +14,7 @@
 //                 the timeout, or a wrong working counter) and late replies, and the serve thread's CPU.
 #include <fmt/core.h>
 #include <pthread.h>
+#include <signal.h>
 #include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
@@ -40,6 +41,12 @@ using namespace vecat;
 namespace {
 
 constexpr int kSkip = 77;  // ctest: skipped (no root for the namespace)
+
+// Ctrl-C (or SIGTERM) ends the run early; the figures of the cycles done are printed.
+std::atomic<bool> g_interrupted{false};
+void on_signal(int) {
+    g_interrupted = true;
+}
 
 std::uint64_t now_ns() {
     return net::monotonic_ns();
@@ -261,13 +268,13 @@ int run(const Options& o) {
         std::uint64_t done = 0;
         bool refl_turn = latency;
         const std::uint64_t report_every = std::max<std::uint64_t>(cycles / 10, 1);
-        while (done < cycles) {
+        while (done < cycles && !g_interrupted) {
             const std::uint64_t n = std::min(block, cycles - done);
             if (latency) {
                 park_refl = !refl_turn;
                 park_vecat = refl_turn;
             }
-            for (std::uint64_t i = 0; i < n; ++i) {
+            for (std::uint64_t i = 0; i < n && !g_interrupted; ++i) {
                 if (period_ns) {
                     wait_until(next);
                     const std::uint64_t woke = now_ns();
@@ -334,6 +341,7 @@ int run(const Options& o) {
             fmt::print("  master wake-up lateness: median {:.2f} us, p99.9 {:.2f} us, max {:.2f} us\n",
                        sw.p50 / 1e3, sw.p999 / 1e3, sw.max / 1e3);
         }
+        if (g_interrupted) fmt::print("interrupted after {} cycles\n", done);
         fmt::print("vecat: {} cycles, {} working-counter misses (timeout {} us), {} late replies (> {} us)\n",
                    c_vecat, misses, timeout_us, late, static_cast<double>(late_ns) / 1000.0);
         if (misses) fmt::print("  lowest working counter seen: {} of {}\n", worst_wkc, m.expected_wkc());
@@ -376,5 +384,10 @@ int main(int argc, char** argv) {
     app.add_option("--late-us", o.late_us, "A reply later than this is late (default: half the period)");
     app.add_flag("!--no-dc", o.dc, "No DC: LRW only, no FRMW");
     CLI11_PARSE(app, argc, argv);
+    struct sigaction sa {};
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
     return run(o);
 }
