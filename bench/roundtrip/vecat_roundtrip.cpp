@@ -250,7 +250,7 @@ int run(const Options& o) {
         rt_vecat.reserve(cycles);
         rt_refl.reserve(latency ? cycles : 0);
         wake.reserve(cycles);
-        std::uint64_t misses = 0, late = 0, refl_lost = 0, c_vecat = 0;
+        std::uint64_t misses = 0, no_reply = 0, late = 0, refl_lost = 0, c_vecat = 0;
         std::uint16_t worst_wkc = 0xFFFF;
         // Warm-up: drives enabled, caches and branch predictors warm.
         for (std::uint64_t c = 0; c < 200; ++c) {
@@ -301,7 +301,8 @@ int run(const Options& o) {
                     ++c_vecat;
                     if (!w || *w != m.expected_wkc()) {
                         ++misses;
-                        worst_wkc = std::min<std::uint16_t>(worst_wkc, w.value_or(0));
+                        no_reply += !w;
+                        if (w) worst_wkc = std::min(worst_wkc, *w);
                     } else {
                         if (t1 - t0 > late_ns) ++late;
                         if (measured || !latency) rt_vecat.push_back(static_cast<std::uint32_t>(t1 - t0));
@@ -344,7 +345,11 @@ int run(const Options& o) {
         if (g_interrupted) fmt::print("interrupted after {} cycles\n", done);
         fmt::print("vecat: {} cycles, {} working-counter misses (timeout {} us), {} late replies (> {} us)\n",
                    c_vecat, misses, timeout_us, late, static_cast<double>(late_ns) / 1000.0);
-        if (misses) fmt::print("  lowest working counter seen: {} of {}\n", worst_wkc, m.expected_wkc());
+        if (misses)
+            fmt::print(
+                "  of the misses {} without reply in time, {} with a wrong working counter (lowest {} of "
+                "{})\n",
+                no_reply, misses - no_reply, worst_wkc, m.expected_wkc());
         auto secs = [](const timeval& a, const timeval& b) {
             return static_cast<double>(b.tv_sec - a.tv_sec) +
                    static_cast<double>(b.tv_usec - a.tv_usec) * 1e-6;
