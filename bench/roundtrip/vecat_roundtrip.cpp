@@ -347,9 +347,9 @@ int run(const Options& o) {
                    c_vecat, misses, timeout_us, late, static_cast<double>(late_ns) / 1000.0);
         if (misses)
             fmt::print(
-                "  of the misses {} without reply in time, {} with a wrong working counter (lowest {} of "
-                "{})\n",
-                no_reply, misses - no_reply, worst_wkc, m.expected_wkc());
+                "  of the misses {} without reply in time, {} with a wrong working counter{}\n", no_reply,
+                misses - no_reply,
+                misses > no_reply ? fmt::format(" (lowest {} of {})", worst_wkc, m.expected_wkc()) : "");
         auto secs = [](const timeval& a, const timeval& b) {
             return static_cast<double>(b.tv_sec - a.tv_sec) +
                    static_cast<double>(b.tv_usec - a.tv_usec) * 1e-6;
