@@ -113,6 +113,7 @@ struct Options {
     unsigned timeout_us = 0;  // 0: the period (at least 1000 us)
     unsigned late_us = 0;     // 0: half the period
     bool dc = true;
+    std::int64_t tick_us = net::ServeOptions{}.tick_us;
 };
 
 // The drives are enabled (6, 7, 15) in CSP and hold the position they had, so that every cycle runs the
@@ -217,6 +218,7 @@ int run(const Options& o) {
     net::ServeOptions sopt;
     sopt.busy_poll = o.busy;
     sopt.park = &park_vecat;
+    sopt.tick_us = o.tick_us;
     std::thread server([&] {
         realtime_or_warn("server", cpu.server, o.fifo);
         net::serve(*seg, vecat_sock, sopt, stop);
@@ -388,6 +390,9 @@ int main(int argc, char** argv) {
                    "Reply deadline; later counts as a miss (default: the period)");
     app.add_option("--late-us", o.late_us, "A reply later than this is late (default: half the period)");
     app.add_flag("!--no-dc", o.dc, "No DC: LRW only, no FRMW");
+    app.add_option("--tick-us", o.tick_us,
+                   "Firmware tick of the serve loop between frames (as vecat run --tick-us)")
+        ->check(CLI::Range(10, 100000));
     CLI11_PARSE(app, argc, argv);
     struct sigaction sa {};
     sa.sa_handler = on_signal;

@@ -60,7 +60,8 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
 
 int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
             bool allow_busy_if, double drift_ppm, const std::string& esi_path,
-            const vecat::esi::DeviceSelector& sel, const vecat::net::RealtimeOptions& rt = {}) {
+            const vecat::esi::DeviceSelector& sel, const vecat::net::RealtimeOptions& rt = {},
+            std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -92,6 +93,7 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     vecat::net::ServeOptions opt;
     opt.busy_poll = busy;
     opt.pcap = pcap.get();
+    opt.tick_us = tick_us;
     // The serve loop runs on this thread: pinning, SCHED_FIFO and locked memory apply to it.
     if (!vecat::net::apply_realtime(rt, &why)) {
         fmt::print(stderr, "vecat: {}\n", why);
@@ -300,6 +302,11 @@ int main(int argc, char** argv) {
                     "kernel's RT throttling stalls it for 50 ms a second unless that is turned off)")
         ->check(CLI::Range(1, 99));
     run->add_flag("--mlock", rt.lock_memory, "Lock all memory (mlockall): no page faults while serving");
+    std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
+    run->add_option("--tick-us", tick_us,
+                    "Run the slaves' firmware this often between frames (watchdogs, drive model); longer "
+                    "saves CPU with many slaves")
+        ->check(CLI::Range(10, 100000));
     run->add_option("--dc-drift-ppm", drift_ppm,
                     "DC clock drift of the slaves in ppm (alternating sign along the line)")
         ->check(CLI::Range(-1000.0, 1000.0));
@@ -350,7 +357,7 @@ int main(int argc, char** argv) {
     vecat::esi::DeviceSelector sel;
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
-    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, rt);
+    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, rt, tick_us);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);
