@@ -1,5 +1,6 @@
 #include "cia402/factor_group.hpp"
 
+#include <array>
 #include <numbers>
 
 namespace vecat::cia402 {
@@ -33,7 +34,7 @@ i128 gcd(i128 a, i128 b) {
     return a;
 }
 
-Fraction reduced(const FactorGroup& f) {
+Fraction reduce(const FactorGroup& f) {
     if (!(f.encoder_increments && f.motor_revolutions && f.gear_motor_revolutions &&
           f.gear_shaft_revolutions && f.feed && f.feed_shaft_revolutions))
         return {};
@@ -45,6 +46,26 @@ Fraction reduced(const FactorGroup& f) {
     constexpr i128 kMax = static_cast<i128>(1) << 62;
     if (n >= kMax || d >= kMax) return {};
     return {static_cast<std::int64_t>(n), static_cast<std::int64_t>(d)};
+}
+
+// Every servo step converts several values with the same factors, and the gcd of 128-bit products is
+// costly (hundreds of ns): the last result is kept, per thread, keyed by the six factors.
+Fraction reduced(const FactorGroup& f) {
+    using Key = std::array<std::uint32_t, 6>;
+    struct Memo {
+        Key key{};
+        Fraction r;
+        bool set = false;
+    };
+    thread_local Memo memo;
+    const Key key{f.encoder_increments,
+                  f.motor_revolutions,
+                  f.gear_motor_revolutions,
+                  f.gear_shaft_revolutions,
+                  f.feed,
+                  f.feed_shaft_revolutions};
+    if (!memo.set || memo.key != key) memo = {key, reduce(f), true};
+    return memo.r;
 }
 
 }  // namespace

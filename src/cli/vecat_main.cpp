@@ -24,6 +24,7 @@
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
+#include "net/realtime.hpp"
 #include "net/server.hpp"
 
 namespace {
@@ -64,7 +65,8 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
 int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
             bool allow_busy_if, double drift_ppm, const std::string& esi_path,
             const vecat::esi::DeviceSelector& sel, const vecat::cli::RunFaultOptions& fault_opts,
-            const vecat::cli::TelemetryOptions& telemetry, vecat::cia402::TwinsyncPreset twinsync) {
+            const vecat::cli::TelemetryOptions& telemetry, vecat::cia402::TwinsyncPreset twinsync,
+            const vecat::net::RealtimeOptions& rt, std::int64_t tick_us) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -100,8 +102,14 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     opt.busy_poll = busy;
     opt.pcap = pcap.get();
     if (faults) opt.filter = faults->injector.get();
+    opt.tick_us = tick_us;
     auto tel = vecat::cli::RunTelemetry::start(*seg, telemetry, opt);
     if (!tel) return 2;
+    // The serve loop runs on this thread: pinning, SCHED_FIFO and locked memory apply to it.
+    if (!vecat::net::apply_realtime(rt, &why)) {
+        fmt::print(stderr, "vecat: {}\n", why);
+        return 1;
+    }
     const auto st = vecat::net::serve(*seg, *sock, opt, g_stop);
     tel.reset();
     if (faults) vecat::cli::print_fault_summary(*faults);
@@ -344,8 +352,21 @@ int main(int argc, char** argv) {
            "position (PCON 7/8) or speed (SCON 5/6); drive 2 is then controlled through TWINsync")
         ->transform(CLI::CheckedTransformer(presets, CLI::ignore_case));
     run->add_option("--pcap", pcap, "Write every frame in and out to this pcapng file");
-    run->add_flag("--busy-poll", busy,
-                  "Spin on the socket instead of sleeping (lowest latency, one core busy)");
+    run->add_flag("--busy-poll,!--blocking", busy,
+                  "Spin on the socket instead of sleeping in poll() (lowest latency, one core busy); "
+                  "--blocking (the default) suits laptops");
+    vecat::net::RealtimeOptions rt;
+    run->add_option("--cpu", rt.cpu, "Pin the serve loop to this CPU");
+    run->add_option("--fifo", rt.fifo_priority,
+                    "Run the serve loop under SCHED_FIFO with this priority (1..99; with --busy-poll the "
+                    "kernel's RT throttling stalls it for 50 ms a second unless that is turned off)")
+        ->check(CLI::Range(1, 99));
+    run->add_flag("--mlock", rt.lock_memory, "Lock all memory (mlockall): no page faults while serving");
+    std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
+    run->add_option("--tick-us", tick_us,
+                    "Run the slaves' firmware this often between frames (watchdogs, drive model); longer "
+                    "saves CPU with many slaves")
+        ->check(CLI::Range(10, 100000));
     run->add_option("--dc-drift-ppm", drift_ppm,
                     "DC clock drift of the slaves in ppm (alternating sign along the line)")
         ->check(CLI::Range(-1000.0, 1000.0));
@@ -406,7 +427,7 @@ int main(int argc, char** argv) {
     if (product != 0) sel.product_code = product;
     if (*run)
         return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, fault_opts, telemetry,
-                       twinsync);
+                       twinsync, rt, tick_us);
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);

@@ -151,7 +151,7 @@ bool Esc::addressed_fixed(std::uint16_t adp) const {
 // ---------------------------------------------------------------------------------------------
 // Datagram dispatch (ETG.1000.4 5.4, working counter rules of Table 13)
 
-void Esc::process(DatagramView d, const FrameTiming& t) {
+bool Esc::process(DatagramView d, const FrameTiming& t) {
     ++counters_.datagrams;
     last_host_ns_ = t.port0_ns;
     unsigned wkc = 0;
@@ -219,6 +219,7 @@ void Esc::process(DatagramView d, const FrameTiming& t) {
             break;
     }
     if (wkc) d.add_wkc(wkc);
+    return wkc != 0;
 }
 
 void Esc::physical(DatagramView d, std::uint16_t ado, bool do_read, bool do_write, bool or_read,

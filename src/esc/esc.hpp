@@ -47,8 +47,9 @@ class Esc {
     Esc& operator=(const Esc&) = delete;
 
     // ---- EtherCAT side
-    // Processes one datagram as this ESC; updates data, working counter and (auto-increment) ADP.
-    void process(DatagramView d, const FrameTiming& t);
+    // Processes one datagram as this ESC; updates data, working counter and (auto-increment) ADP. Returns
+    // true when the datagram addressed this ESC (it added to the working counter).
+    bool process(DatagramView d, const FrameTiming& t);
     // A frame this ESC could not parse: counted as a real ESC counts a malformed frame on port 0.
     void count_invalid_frame(unsigned port = 0);
     // A frame already marked invalid by a previous ESC arrived at this port (0x0308 + port).

@@ -11,6 +11,7 @@ void Segment::add(std::unique_ptr<Slave> s) {
     slaves_.push_back(std::move(s));
     cable_up_.push_back(1);
     halted_.push_back(0);
+    last_run_ns_.push_back(0);
     // Port 1 of every slave but the last one has a link to its successor.
     for (std::size_t i = 0; i < slaves_.size(); ++i)
         update_links(i);
@@ -53,12 +54,8 @@ bool Segment::restart_slave(std::size_t i) {
 }
 
 void Segment::run_firmware(std::uint64_t now_ns) {
-    for (std::size_t i = 0; i < slaves_.size(); ++i) {
-        if (halted_[i])
-            slaves_[i]->esc().tick(now_ns);  // the silicon's watchdogs keep running
-        else
-            slaves_[i]->run(now_ns);
-    }
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        run(k, now_ns);
 }
 
 bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns) {
@@ -91,8 +88,8 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
         // An outbound frame damaged on cable c is processed by the slaves before c only.
         const std::size_t intact = hit && !damage.returning ? damage.cable : m;
         // SYNC pulses that fell due before this frame arrived happen first (the server may be late).
-        for (std::size_t i = 0; i < slaves_.size(); ++i)
-            if (!halted_[i] && slaves_[i]->esc().dc().next_pulse_host_ns() <= now_ns) slaves_[i]->run(now_ns);
+        for (std::size_t k = 0; k < slaves_.size(); ++k)
+            if (slaves_[k]->esc().dc().next_pulse_host_ns() <= now_ns) run(k, now_ns);
         for (std::size_t k = 0; k < intact; ++k) {
             FrameTiming t;
             t.port0_ns = now_ns + k * hop_delay_ns;
@@ -100,10 +97,15 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
             // the frame back through its closed port 1 without delay), so masters compute exact delays.
             t.port1_ns = now_ns + (2 * (m - 1) - k) * hop_delay_ns;
             Esc& esc = slaves_[k]->esc();
+            bool addressed = false;
             for (std::size_t i = 0; i < pf.count; ++i)
-                esc.process(pf.datagram(frame, i), t);
+                addressed |= esc.process(pf.datagram(frame, i), t);
+            // Marks the slave for its firmware run below (0: run now).
+            if (addressed) last_run_ns_[k] = 0;
         }
-        run_firmware(now_ns);
+        for (std::size_t k = 0; k < slaves_.size(); ++k)
+            if (last_run_ns_[k] == 0 || now_ns - last_run_ns_[k] >= kMaxRunGapNs || now_ns < last_run_ns_[k])
+                run(k, now_ns);
     }
     if (hit) {
         if (damage.kind == FrameDamage::Kind::Corrupted) count_corruption(damage, m);
@@ -141,6 +143,14 @@ void Segment::count_corruption(const FrameDamage& d, std::size_t m) {
             slaves_[k]->esc().count_forwarded_error(1);
     }
     // Damage on the returning cable 0 reaches the master's NIC, which drops the frame: no ESC sees it.
+}
+
+void Segment::run(std::size_t k, std::uint64_t now_ns) {
+    if (halted_[k])
+        slaves_[k]->esc().tick(now_ns);  // the silicon's watchdogs keep running
+    else
+        slaves_[k]->run(now_ns);
+    last_run_ns_[k] = now_ns == 0 ? 1 : now_ns;
 }
 
 void Segment::tick(std::uint64_t now_ns) {

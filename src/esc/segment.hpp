@@ -77,6 +77,7 @@ class Segment {
 
   private:
     void run_firmware(std::uint64_t now_ns);
+    void run(std::size_t k, std::uint64_t now_ns);
     void count_corruption(const FrameDamage& d, std::size_t reached);
     void update_links(std::size_t i);
 
@@ -84,6 +85,11 @@ class Segment {
     std::vector<std::uint8_t> cable_up_;  // cable k into slave k
     std::vector<std::uint8_t> halted_;
     ApplicationFactory factory_;
+    // Per slave: host time of its last firmware run. A frame runs the firmware of the slaves it addressed,
+    // and of the others only when kMaxRunGapNs has passed (a cycle of several frames does not run every
+    // slave once per frame).
+    std::vector<std::uint64_t> last_run_ns_;
+    static constexpr std::uint64_t kMaxRunGapNs = 100'000;
     SegmentCounters counters_;
 };
 

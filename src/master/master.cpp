@@ -30,6 +30,10 @@ std::size_t Master::build_frame(std::span<DatagramRequest> dgs) {
     tx_[12] = 0x88;
     tx_[13] = 0xA4;
     std::size_t off = esc::kEthHeaderSize + esc::kEcatHeaderSize;
+    std::size_t total = off;
+    for (const auto& d : dgs)
+        total += esc::kDatagramHeaderSize + d.data.size() + esc::kWkcSize;
+    if (total > esc::kMaxEthFrame || dgs.size() > esc::kMaxDatagramsPerFrame) return 0;
     for (std::size_t i = 0; i < dgs.size(); ++i) {
         auto& d = dgs[i];
         std::uint8_t* p = tx_.data() + off;
@@ -79,6 +83,7 @@ bool Master::wait_reply(std::span<DatagramRequest> dgs) {
 
 bool Master::transact_frame(std::span<DatagramRequest> dgs) {
     const std::size_t len = build_frame(dgs);
+    if (len == 0) return false;  // does not fit in one frame
     for (int attempt = 0; attempt <= opt_.retries; ++attempt) {
         if (!link_.send(ConstBytes(tx_.data(), len))) continue;
         if (wait_reply(dgs)) {
@@ -335,6 +340,19 @@ bool Master::configure_process_data() {
         off += s.in_bytes;
     }
     image_.assign(off, 0);
+    // Frames of at most kMaxLrwBytes, cut only between two slaves' areas: every FMMU lies in one frame.
+    chunks_.clear();
+    auto add_area = [&](std::size_t o, std::size_t n) {
+        if (n == 0) return;
+        if (chunks_.empty() || chunks_.back().size + n > kMaxLrwBytes)
+            chunks_.push_back({o, n});
+        else
+            chunks_.back().size += n;
+    };
+    for (const auto& s : slaves_)
+        add_area(s.out_offset, s.out_bytes);
+    for (const auto& s : slaves_)
+        add_area(s.in_offset, s.in_bytes);
     for (auto& s : slaves_) {
         unsigned fmmu = 0;
         for (std::size_t i = 0; i < s.sii.sync_managers.size(); ++i) {
@@ -419,18 +437,28 @@ bool Master::request_state(std::uint16_t station, AlState s, std::chrono::millis
 
 std::optional<std::uint16_t> Master::exchange_process_data() {
     if (image_.empty()) return std::nullopt;
-    if (dc_ref_ == 0)
-        return transact_logical(Command::LRW, opt_.logical_base, Bytes(image_.data(), image_.size()));
-    // Reference clock distribution in the cyclic frame, after the LRW (as SOEM does).
-    dc_buf_.fill(0);
-    DatagramRequest dg[2] = {
-        {Command::LRW, opt_.logical_base, Bytes(image_.data(), image_.size())},
-        {Command::FRMW,
-         static_cast<std::uint32_t>(dc_ref_) | (static_cast<std::uint32_t>(ra(Reg::DcSystemTime)) << 16),
-         Bytes(dc_buf_.data(), dc_buf_.size())}};
-    if (!transact_frame(dg)) return std::nullopt;
-    if (dg[1].wkc) dc_time_ = ld_le64(dc_buf_.data());
-    return dg[0].wkc;
+    std::uint16_t wkc = 0;
+    for (std::size_t c = 0; c < chunks_.size(); ++c) {
+        const Bytes part(image_.data() + chunks_[c].offset, chunks_[c].size);
+        const std::uint32_t laddr = opt_.logical_base + static_cast<std::uint32_t>(chunks_[c].offset);
+        if (dc_ref_ == 0 || c > 0) {
+            auto w = transact_logical(Command::LRW, laddr, part);
+            if (!w) return std::nullopt;
+            wkc = static_cast<std::uint16_t>(wkc + *w);
+            continue;
+        }
+        // Reference clock distribution in the cyclic frame, after the LRW (as SOEM does).
+        dc_buf_.fill(0);
+        DatagramRequest dg[2] = {
+            {Command::LRW, laddr, part},
+            {Command::FRMW,
+             static_cast<std::uint32_t>(dc_ref_) | (static_cast<std::uint32_t>(ra(Reg::DcSystemTime)) << 16),
+             Bytes(dc_buf_.data(), dc_buf_.size())}};
+        if (!transact_frame(dg)) return std::nullopt;
+        if (dg[1].wkc) dc_time_ = ld_le64(dc_buf_.data());
+        wkc = static_cast<std::uint16_t>(wkc + dg[0].wkc);
+    }
+    return wkc;
 }
 
 // ---------------------------------------------------------------------------------------------

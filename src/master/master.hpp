@@ -153,14 +153,22 @@ class Master {
     std::uint64_t reference_time() const { return dc_time_; }
 
     // ---- Process data
-    // One LRW over the image; with DC configured the same frame carries the FRMW of the reference clock.
+    // LRW over the image; with DC configured the first frame carries the FRMW of the reference clock. An
+    // image larger than one frame holds goes in several frames, split between slaves (so the working
+    // counters add up to expected_wkc()); returns their sum, nullopt when a frame got no reply.
     std::optional<std::uint16_t> exchange_process_data();
+    // Largest LRW payload per frame (a full frame less the LRW and FRMW headers).
+    static constexpr std::size_t kMaxLrwBytes = 1466;
+    std::size_t process_image_size() const { return image_.size(); }
+    std::size_t process_data_frames() const { return chunks_.size(); }
     std::uint16_t expected_wkc() const { return expected_wkc_; }
     Bytes outputs(std::size_t slave);
     ConstBytes inputs(std::size_t slave) const;
 
     std::vector<SlaveInfo>& slaves() { return slaves_; }
     const std::vector<AlStatusReading>& last_states() const { return last_states_; }
+    // Timeouts and retries may change after start-up (cyclic code wants one try and a deadline).
+    MasterOptions& options() { return opt_; }
 
   private:
     std::size_t build_frame(std::span<DatagramRequest> dgs);
@@ -173,6 +181,10 @@ class Master {
     std::array<std::uint8_t, 1600> rx_{};
     std::vector<SlaveInfo> slaves_;
     std::vector<std::uint8_t> image_;
+    struct Chunk {
+        std::size_t offset, size;
+    };
+    std::vector<Chunk> chunks_;  // the image's parts, one LRW frame each
     std::size_t out_total_ = 0;
     std::uint16_t expected_wkc_ = 0;
     std::vector<AlStatusReading> last_states_;

@@ -6,6 +6,7 @@
 #include <net/if.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -103,6 +104,17 @@ long RawSocket::try_receive(Bytes buf) {
 
 long RawSocket::receive(Bytes buf, std::int64_t timeout_us) {
     if (long n = try_receive(buf); n != 0) return n;
+    if (busy_poll_) {
+        timespec t0{}, t{};
+        clock_gettime(CLOCK_MONOTONIC, &t0);
+        const std::int64_t limit_ns = timeout_us * 1000;
+        while (true) {
+            if (long n = try_receive(buf); n != 0) return n;
+            clock_gettime(CLOCK_MONOTONIC, &t);
+            const std::int64_t spent = (t.tv_sec - t0.tv_sec) * 1'000'000'000ll + (t.tv_nsec - t0.tv_nsec);
+            if (spent >= limit_ns) return 0;
+        }
+    }
     pollfd p{fd_, POLLIN, 0};
     // ppoll: microsecond timeouts (SYNC pulses of 125 us must not wait for a millisecond poll).
     const std::int64_t us = timeout_us <= 0 ? 0 : timeout_us;

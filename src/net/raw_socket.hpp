@@ -16,7 +16,11 @@ class RawSocket final : public Link {
     RawSocket& operator=(const RawSocket&) = delete;
 
     bool send(ConstBytes frame) override;
+    // Waits up to timeout_us: asleep in ppoll(), or spinning on the socket in busy-poll mode.
     long receive(Bytes buf, std::int64_t timeout_us) override;
+    // Busy-poll mode: receive() never sleeps (lowest latency, one core busy while waiting).
+    void set_busy_poll(bool on) { busy_poll_ = on; }
+    bool busy_poll() const { return busy_poll_; }
     // Non-blocking receive: returns 0 at once when nothing is queued.
     long try_receive(Bytes buf);
     int fd() const { return fd_; }
@@ -29,6 +33,7 @@ class RawSocket final : public Link {
     int ifindex_ = 0;
     std::string ifname_;
     std::uint64_t last_rx_realtime_ns_ = 0;
+    bool busy_poll_ = false;
 };
 
 }  // namespace vecat::net

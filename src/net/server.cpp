@@ -55,8 +55,9 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             wait_us = std::min<std::int64_t>(wait_us, static_cast<std::int64_t>(until / 1000));
         }
         if (opt.filter) send_due_replies(sock, opt, buf, st, wait_us);
-        const long n = opt.busy_poll ? sock.try_receive(Bytes(buf.data(), buf.size()))
-                                     : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
+        const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
+        const long n = spin ? sock.try_receive(Bytes(buf.data(), buf.size()))
+                            : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
         const std::uint64_t now = monotonic_ns();
         if (n > 0) {
             ++st.received;

@@ -21,6 +21,9 @@ struct ServeOptions {
     // neither block nor allocate. now_ns: the time the frame was processed at.
     void (*after_frame)(void* context, std::uint64_t now_ns) = nullptr;
     void* after_frame_context = nullptr;
+    // While this flag is true a busy-polling loop sleeps in poll() like the blocking mode (the round-trip
+    // benchmark parks one server while it measures another on the same two cores).
+    const std::atomic<bool>* park = nullptr;
 };
 
 struct ServeStats {

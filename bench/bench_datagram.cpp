@@ -1,0 +1,150 @@
+// The datagram engine: cost of one frame through a segment of N drives in OP (Segment::process_frame, no
+// network). The counter per_slave is the time per frame divided by the number of slaves.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#include "cia402/drive.hpp"
+#include "esc/registers.hpp"
+#include "master/master.hpp"
+#include "net/in_process_link.hpp"
+
+namespace {
+
+using namespace vecat;
+
+// N default drives brought to OP by the project's master over an in-process link, enabled in CSP.
+struct Line {
+    std::unique_ptr<esc::Segment> seg;
+    std::unique_ptr<net::InProcessLink> link;
+    std::unique_ptr<master::Master> m;
+    std::uint64_t now = 1'000'000'000;
+    explicit Line(std::size_t n) {
+        seg = cia402::make_drive_segment(device::default_drive(), n);
+        link = std::make_unique<net::InProcessLink>(*seg);
+        link->set_time(now);
+        m = std::make_unique<master::Master>(*link);
+        if (!m->startup(esc::AlState::Op)) throw std::runtime_error("start-up failed");
+        for (const std::uint16_t cw :
+             {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}, std::uint16_t{0x0F}}) {
+            for (std::size_t i = 0; i < n; ++i) {
+                auto o = m->outputs(i);
+                st_le16(o.data(), cw);
+                o[2] = 8;
+            }
+            m->exchange_process_data();
+            now += 1'000'000;
+            link->set_time(now);
+        }
+    }
+};
+
+// A frame of datagrams (command, address, length), data zero unless copied in afterwards.
+struct Frame {
+    std::vector<std::uint8_t> bytes;  // the template
+    std::vector<std::uint8_t> work;   // processed in place
+    std::size_t len = 0;
+    struct Dg {
+        esc::Command cmd;
+        std::uint32_t address;
+        std::size_t size;
+    };
+    explicit Frame(std::initializer_list<Dg> dgs) {
+        std::size_t off = esc::kEthHeaderSize + esc::kEcatHeaderSize;
+        bytes.assign(1600, 0);
+        std::fill_n(bytes.begin(), 6, 0xFF);
+        std::fill_n(bytes.begin() + 6, 6, 0x10);
+        bytes[12] = 0x88;
+        bytes[13] = 0xA4;
+        std::size_t i = 0;
+        for (const auto& d : dgs) {
+            std::uint8_t* p = bytes.data() + off;
+            p[0] = static_cast<std::uint8_t>(d.cmd);
+            p[1] = static_cast<std::uint8_t>(i);
+            st_le32(p + 2, d.address);
+            st_le16(p + 6, static_cast<std::uint16_t>(d.size | (++i < dgs.size() ? 0x8000 : 0)));
+            off += esc::kDatagramHeaderSize + d.size + esc::kWkcSize;
+        }
+        st_le16(bytes.data() + esc::kEthHeaderSize,
+                static_cast<std::uint16_t>((off - esc::kEthHeaderSize - esc::kEcatHeaderSize) | 0x1000));
+        len = std::max(off, esc::kMinEthFrame);
+        work = bytes;
+    }
+    std::uint8_t* data(std::size_t dg_offset) {
+        return bytes.data() + esc::kEthHeaderSize + esc::kEcatHeaderSize + esc::kDatagramHeaderSize +
+               dg_offset;
+    }
+    bool run(esc::Segment& seg, std::uint64_t now) {
+        std::memcpy(work.data(), bytes.data(), len);
+        std::size_t l = len;
+        return seg.process_frame(Bytes(work.data(), work.size()), l, now);
+    }
+};
+
+const std::uint32_t kFrmwAddress =
+    0x1001u | (static_cast<std::uint32_t>(esc::addr(esc::Reg::DcSystemTime)) << 16);
+
+void per_slave(benchmark::State& state, std::size_t n) {
+    state.counters["per_slave"] =
+        benchmark::Counter(static_cast<double>(state.iterations() * n),
+                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+// FPRD of the AL status of the first slave: every slave compares the address.
+void BM_Fprd(benchmark::State& state) {
+    const auto n = static_cast<std::size_t>(state.range(0));
+    Line line(n);
+    Frame f({{esc::Command::FPRD, 0x1001u | (0x0130u << 16), 2}});
+    for (auto _ : state)
+        benchmark::DoNotOptimize(f.run(*line.seg, line.now));
+    per_slave(state, n);
+}
+BENCHMARK(BM_Fprd)->Arg(1)->Arg(10)->Arg(100);
+
+// LRW of 32 bytes at the start of the process image (the first slave's outputs and part of the next).
+void BM_Lrw32(benchmark::State& state) {
+    const auto n = static_cast<std::size_t>(state.range(0));
+    Line line(n);
+    Frame f({{esc::Command::LRW, 0x00010000, 32}});
+    std::memcpy(f.data(0), line.m->outputs(0).data(),
+                std::min<std::size_t>(32, line.m->process_image_size()));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(f.run(*line.seg, line.now));
+    per_slave(state, n);
+}
+BENCHMARK(BM_Lrw32)->Arg(1)->Arg(10)->Arg(100);
+
+// The cyclic exchange: LRW over the whole image plus the FRMW of the reference clock, in as many frames as
+// the image needs (100 drives: 4 frames). range(1) = 0: time stands still (the ESC engine and the firmware's
+// process data exchange only); 1: 1 ms passes per cycle (also 4 servo periods of every drive).
+void BM_CyclicLrwFrmw(benchmark::State& state) {
+    const auto n = static_cast<std::size_t>(state.range(0));
+    const bool advance = state.range(1) != 0;
+    Line line(n);
+    std::vector<Frame> frames;
+    const std::size_t image = line.m->process_image_size();
+    for (std::size_t off = 0; off < image; off += master::Master::kMaxLrwBytes) {
+        const std::size_t k = std::min(image - off, master::Master::kMaxLrwBytes);
+        const std::uint32_t laddr = 0x00010000u + static_cast<std::uint32_t>(off);
+        if (off == 0)
+            frames.emplace_back(
+                Frame({{esc::Command::LRW, laddr, k}, {esc::Command::FRMW, kFrmwAddress, 8}}));
+        else
+            frames.emplace_back(Frame({{esc::Command::LRW, laddr, k}}));
+        std::memcpy(frames.back().data(0), line.m->outputs(0).data() + off, k);
+    }
+    for (auto _ : state) {
+        if (advance) line.now += 1'000'000;
+        for (auto& f : frames)
+            benchmark::DoNotOptimize(f.run(*line.seg, line.now));
+    }
+    per_slave(state, n);
+    state.SetLabel(std::to_string(frames.size()) + " frame(s)" +
+                   (advance ? ", 1 ms per cycle" : ", time frozen"));
+}
+BENCHMARK(BM_CyclicLrwFrmw)->ArgsProduct({{1, 10, 100}, {0, 1}});
+
+}  // namespace
