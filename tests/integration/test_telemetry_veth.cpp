@@ -4,22 +4,19 @@
 // network namespace; DDS uses its loopback with unicast discovery (no multicast on the host network).
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <time.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <thread>
 
+#include "child_process.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "telemetry/dds.hpp"
 #include "telemetry/recording.hpp"
 #include "test_support.hpp"
-
-extern char** environ;
 
 using namespace vecat;
 
@@ -40,27 +37,7 @@ std::uint64_t monotonic_ns() {
     return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<std::uint64_t>(ts.tv_nsec);
 }
 
-struct Process {
-    pid_t pid = -1;
-    explicit Process(std::vector<std::string> args) {
-        std::vector<char*> argv;
-        for (auto& a : args)
-            argv.push_back(a.data());
-        argv.push_back(nullptr);
-        if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) pid = -1;
-    }
-    int stop() {
-        if (pid <= 0) return -1;
-        kill(pid, SIGINT);
-        int st = 0;
-        waitpid(pid, &st, 0);
-        pid = -1;
-        return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    }
-    ~Process() {
-        if (pid > 0) stop();
-    }
-};
+using Process = test::ChildProcess;
 
 // What the master read in one cycle, and when its frame was on the wire.
 struct MasterRead {

@@ -2,8 +2,6 @@
 // end, the project's master runs on the other; the capture is checked with tshark.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -11,14 +9,13 @@
 #include <sstream>
 #include <thread>
 
+#include "child_process.hpp"
 #include "esc/registers.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "test_support.hpp"
-
-extern char** environ;
 
 using namespace vecat;
 using esc::AlState;
@@ -28,30 +25,20 @@ namespace {
 bool g_netns = false;
 int g_pair = 0;
 
-struct VecatProcess {
-    pid_t pid = -1;
+// `vecat run` on an interface with n slaves and a capture, given a moment to open its socket.
+struct VecatProcess : test::ChildProcess {
     VecatProcess(const std::string& iface, unsigned slaves, const std::string& pcap,
-                 const std::vector<std::string>& extra = {}) {
+                 const std::vector<std::string>& extra = {})
+        : ChildProcess(arguments(iface, slaves, pcap, extra)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    }
+    static std::vector<std::string> arguments(const std::string& iface, unsigned slaves,
+                                              const std::string& pcap,
+                                              const std::vector<std::string>& extra) {
         std::vector<std::string> args{VECAT_BINARY,           "run",    "--iface", iface, "--slaves",
                                       std::to_string(slaves), "--pcap", pcap};
         args.insert(args.end(), extra.begin(), extra.end());
-        std::vector<char*> argv;
-        for (auto& a : args)
-            argv.push_back(a.data());
-        argv.push_back(nullptr);
-        if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) pid = -1;
-        std::this_thread::sleep_for(std::chrono::milliseconds(300));
-    }
-    int stop() {
-        if (pid <= 0) return -1;
-        kill(pid, SIGINT);
-        int st = 0;
-        waitpid(pid, &st, 0);
-        pid = -1;
-        return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    }
-    ~VecatProcess() {
-        if (pid > 0) stop();
+        return args;
     }
 };
 

@@ -2,19 +2,17 @@
 // network namespace, the project's master on the other end, `vecat fault ...` on the control socket.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
 #include <filesystem>
 #include <fstream>
 #include <thread>
 
+#include "child_process.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "test_support.hpp"
 
-extern char** environ;
 using namespace vecat;
 using esc::AlState;
 
@@ -22,22 +20,7 @@ namespace {
 
 bool g_netns = false;
 
-struct Process {
-    pid_t pid = -1;
-    explicit Process(std::vector<std::string> args) {
-        std::vector<char*> argv;
-        for (auto& a : args)
-            argv.push_back(a.data());
-        argv.push_back(nullptr);
-        if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) pid = -1;
-    }
-    ~Process() {
-        if (pid <= 0) return;
-        kill(pid, SIGINT);
-        int st = 0;
-        waitpid(pid, &st, 0);
-    }
-};
+using Process = test::ChildProcess;
 
 std::string temp(const std::string& name) {
     return (std::filesystem::temp_directory_path() / (name + "-" + std::to_string(getpid()))).string();
