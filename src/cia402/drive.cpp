@@ -636,27 +636,14 @@ void Drive::servo_step() {
 
 namespace {
 
+// The MSD display numbers the DriveCom states from 1 in the order of CiA 402's (0 is its start-up).
 twinsync::DriveComState drivecom_state(State s) {
-    using D = twinsync::DriveComState;
-    switch (s) {
-        case State::NotReadyToSwitchOn:
-            return D::NotReadyToSwitchOn;
-        case State::SwitchOnDisabled:
-            return D::SwitchOnDisabled;
-        case State::ReadyToSwitchOn:
-            return D::ReadyToSwitchOn;
-        case State::SwitchedOn:
-            return D::SwitchedOn;
-        case State::OperationEnabled:
-            return D::OperationEnabled;
-        case State::QuickStopActive:
-            return D::QuickStopActive;
-        case State::FaultReactionActive:
-            return D::FaultReactionActive;
-        case State::Fault:
-            return D::Fault;
-    }
-    return D::Start;
+    static_assert(static_cast<int>(State::NotReadyToSwitchOn) + 1 ==
+                      static_cast<int>(twinsync::DriveComState::NotReadyToSwitchOn) &&
+                  static_cast<int>(State::OperationEnabled) + 1 ==
+                      static_cast<int>(twinsync::DriveComState::OperationEnabled) &&
+                  static_cast<int>(State::Fault) + 1 == static_cast<int>(twinsync::DriveComState::Fault));
+    return static_cast<twinsync::DriveComState>(static_cast<std::uint8_t>(s) + 1);
 }
 
 double rpm_of_rad(double rad_per_s) {

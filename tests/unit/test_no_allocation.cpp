@@ -6,37 +6,13 @@
 #include <new>
 #include <thread>
 
+#include "allocation_counter.hpp"
 #include "cia402/drive.hpp"
 #include "coe/coe_application.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "net/server.hpp"
 #include "test_support.hpp"
-
-namespace {
-std::atomic<std::uint64_t> g_allocs{0};
-}
-
-void* operator new(std::size_t n) {
-    g_allocs.fetch_add(1, std::memory_order_relaxed);
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-    return operator new(n);
-}
-void operator delete(void* p) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p) noexcept {
-    std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-    std::free(p);
-}
 
 using namespace vecat;
 using namespace vecat::test;
@@ -53,13 +29,13 @@ TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
                                      {esc::Command::FRMW, 0x09101001, Bytes(t, 8)}};
     for (int i = 0; i < 10; ++i)
         ASSERT_TRUE(b.master.transact_frame(dg));
-    const auto before = g_allocs.load();
+    const auto before = test::allocations();
     for (int i = 0; i < 10000; ++i) {
         b.link.set_time(2'000'000'000ull + static_cast<std::uint64_t>(i) * 1'000'000);
         ASSERT_TRUE(b.master.transact_frame(dg));
         ASSERT_EQ(dg[0].wkc, 12);
     }
-    EXPECT_EQ(g_allocs.load() - before, 0u);
+    EXPECT_EQ(test::allocations() - before, 0u);
 }
 
 // The drive's servo steps in every mode (profile planning, homing, interpolation, mechanics) allocate
@@ -97,9 +73,9 @@ TEST(NoAllocation, DriveMovingInEveryMode) {
         run(5, 3, 0x00, 0, 0);
     };
     all_modes();  // the first pass may set up what it needs
-    const auto before = g_allocs.load();
+    const auto before = test::allocations();
     all_modes();
-    EXPECT_EQ(g_allocs.load() - before, 0u);
+    EXPECT_EQ(test::allocations() - before, 0u);
 }
 
 // The serve loop and the master's socket, blocking and busy-polling, with enough drives that the process
@@ -138,11 +114,11 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if)
     ASSERT_EQ(m.process_data_frames(), 2u);
     for (int i = 0; i < 50; ++i)
         m.exchange_process_data();
-    const auto before = g_allocs.load();
+    const auto before = test::allocations();
     int ok = 0;
     for (int i = 0; i < 1000; ++i)
         ok += m.exchange_process_data().value_or(0) == m.expected_wkc();
-    const auto allocs = g_allocs.load() - before;
+    const auto allocs = test::allocations() - before;
     EXPECT_EQ(ok, 1000);
     EXPECT_EQ(allocs, 0u);
 }

@@ -9,39 +9,12 @@
 #include <new>
 #include <thread>
 
+#include "allocation_counter.hpp"
 #include "cia402/drive.hpp"
 #include "telemetry/plot.hpp"
 #include "telemetry/recording.hpp"
 #include "telemetry/sampler.hpp"
 #include "test_support.hpp"
-
-// Allocations counted while g_count is set (the sampler's cyclic path must make none). GCC sees the
-// replaced operator new and delete as malloc and free inlined into new/delete expressions and warns.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-namespace {
-std::atomic<bool> g_count{false};
-std::atomic<std::uint64_t> g_allocations{0};
-}  // namespace
-void* operator new(std::size_t n) {
-    if (g_count.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-    return operator new(n);
-}
-void operator delete(void* p) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p) noexcept {
-    std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-    std::free(p);
-}
 
 namespace vecat::telemetry {
 namespace {
@@ -214,12 +187,10 @@ TEST_F(SamplerTest, CyclicPathAllocatesNothingAndAFullQueueIsCountedNotWaitedFor
     Sampler s(*b.seg, q);
     for (int i = 0; i < 10; ++i)
         cycle(s, 0, 0, 0);
-    g_allocations = 0;
-    g_count = true;
+    const std::uint64_t before = test::allocations();
     for (int i = 0; i < 20'000; ++i)  // nobody empties the queue: it fills up
         s.sample_all(b.now + static_cast<std::uint64_t>(i));
-    g_count = false;
-    EXPECT_EQ(g_allocations.load(), 0u);
+    EXPECT_EQ(test::allocations() - before, 0u);
     EXPECT_GT(q.overflows(), 0u);
     EXPECT_EQ(q.size_approx(), TelemetryQueue::capacity());
     // Once there is room, the loss is reported as an event.
