@@ -667,8 +667,7 @@ twinsync::LocalState Drive::twinsync_local() const {
     l.transition = sm_.stop() != StopKind::None;
     l.controlword = rd<std::uint16_t>(o_->controlword, 0);
     l.homing_mode = mode_ == Mode::Homing;
-    l.fieldbus_synchronised = const_cast<Drive*>(this)->sync_mode() == coe::SyncMode::DcSync0 ||
-                              const_cast<Drive*>(this)->sync_mode() == coe::SyncMode::DcSync1;
+    l.fieldbus_synchronised = sync_mode() == coe::SyncMode::DcSync0 || sync_mode() == coe::SyncMode::DcSync1;
     l.position = actual_user_;
     l.speed_rpm = rpm_of_rad(mech_->velocity());
     l.torque_nm = mech_->torque();

@@ -255,8 +255,7 @@ SdoAbort Port::validate_write(Entry& e, ConstBytes value) {
     std::array<std::uint8_t, 8> old{};
     const std::size_t n = std::min(e.size(), old.size());
     std::copy_n(e.value().begin(), n, old.begin());
-    if (&e == c_->send[0] || &e == c_->receive[0] ||
-        std::find(std::begin(c_->send), std::end(c_->send), &e) != std::end(c_->send) ||
+    if (std::find(std::begin(c_->send), std::end(c_->send), &e) != std::end(c_->send) ||
         std::find(std::begin(c_->receive), std::end(c_->receive), &e) != std::end(c_->receive)) {
         const ModeInfo* info = mode_info(rd<std::uint8_t>(c_->setting));
         if (info && automatic_mapping(info->setting)) {
