@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "cia402/drive.hpp"
+#include "coe/coe_application.hpp"
 #include "device/device_description.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
@@ -57,9 +58,33 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
     }
 }
 
+// Parameter persistence: one file per slave position in dir; a stored set is applied before the first
+// frame. Returns false when the directory cannot be used.
+bool attach_parameter_stores(vecat::esc::Segment& seg, const std::string& dir) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) {
+        fmt::print(stderr, "vecat: cannot create the parameter directory {}: {}\n", dir, ec.message());
+        return false;
+    }
+    for (std::size_t i = 0; i < seg.size(); ++i) {
+        auto* app = dynamic_cast<vecat::coe::CoeApplication*>(&seg.slave(i).app());
+        if (!app) continue;
+        const auto rep = app->attach_parameter_store(fmt::format("{}/slave-{}.param", dir, i));
+        using vecat::coe::LoadStatus;
+        if (rep.load.status == LoadStatus::Loaded)
+            fmt::print("vecat: slave {}: {} stored parameters applied{}\n", i, rep.applied,
+                       rep.refused ? fmt::format(", {} refused (kept their defaults)", rep.refused) : "");
+        else if (rep.load.status != LoadStatus::Missing)
+            fmt::print(stderr, "vecat: slave {}: stored parameters {} ({}); using the defaults\n", i,
+                       vecat::coe::to_string(rep.load.status), rep.load.detail);
+    }
+    return true;
+}
+
 int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
             bool allow_busy_if, double drift_ppm, const std::string& esi_path,
-            const vecat::esi::DeviceSelector& sel) {
+            const vecat::esi::DeviceSelector& sel, const std::string& param_dir) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -73,6 +98,7 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     if (!loaded) return 1;
     const auto& dev = *loaded;
     auto seg = vecat::cia402::make_drive_segment(dev, slaves);
+    if (!param_dir.empty() && !attach_parameter_stores(*seg, param_dir)) return 1;
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
         seg->slave(i).esc().dc().set_drift_ppm(i % 2 ? -drift_ppm : drift_ppm, vecat::net::monotonic_ns());
@@ -291,6 +317,9 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(-1000.0, 1000.0));
     run->add_flag("--allow-used-interface", allow_used,
                   "Serve even on an interface that has an IP address or the default route");
+    std::string param_dir;
+    run->add_option("--param-dir", param_dir,
+                    "Keep each slave's parameters (0x1010 store / 0x1011 restore) in DIR/slave-N.param");
     std::string esi_path, device_type;
     std::uint32_t product = 0;
     auto add_esi_options = [&](CLI::App* c, bool esi_option) {
@@ -336,7 +365,7 @@ int main(int argc, char** argv) {
     vecat::esi::DeviceSelector sel;
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
-    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel);
+    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, param_dir);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);

@@ -960,8 +960,8 @@ TEST_F(Sdo, OdListLengths) {
     EXPECT_EQ(ld_le16(r.data.data() + 6), count(device::access::TxPdoMappable));
     EXPECT_EQ(ld_le16(r.data.data() + 8), count(device::access::Backup));
     EXPECT_EQ(ld_le16(r.data.data() + 10), count(device::access::Settings));
-    // The default drive: 102 objects, 28 RxPDO-mappable, 24 TxPDO-mappable, none backup/settings.
-    EXPECT_EQ(r.data, cat({le16(0), le16(102), le16(28), le16(24), le16(0), le16(0)}));
+    // The default drive: 104 objects, 28 RxPDO-mappable, 24 TxPDO-mappable, none backup/settings.
+    EXPECT_EQ(r.data, cat({le16(0), le16(104), le16(28), le16(24), le16(0), le16(0)}));
 }
 
 TEST_F(Sdo, OdListOfPdoMappableObjects) {
