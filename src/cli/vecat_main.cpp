@@ -20,6 +20,7 @@
 #include "esi/esi_writer.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
+#include "net/privileges.hpp"
 #include "net/raw_socket.hpp"
 #include "net/server.hpp"
 
@@ -111,6 +112,10 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     }
     std::unique_ptr<vecat::net::PcapngWriter> pcap;
     if (!pcap_path.empty()) pcap = std::make_unique<vecat::net::PcapngWriter>(pcap_path, iface);
+    // Socket and files are open: from here on the process needs no capability (see net/privileges.hpp).
+    std::string cap_why;
+    if (!vecat::net::drop_all_capabilities(&cap_why))
+        fmt::print(stderr, "vecat: cannot drop capabilities: {}\n", cap_why);
     install_signals();
     fmt::print("vecat: {} x \"{}\" on {} (vendor 0x{:08X}, product 0x{:08X}); Ctrl-C stops\n", slaves,
                dev.name, iface, dev.identity.vendor_id, dev.identity.product_code);
@@ -315,8 +320,9 @@ int main(int argc, char** argv) {
     run->add_option("--dc-drift-ppm", drift_ppm,
                     "DC clock drift of the slaves in ppm (alternating sign along the line)")
         ->check(CLI::Range(-1000.0, 1000.0));
-    run->add_flag("--allow-used-interface", allow_used,
-                  "Serve even on an interface that has an IP address or the default route");
+    run->add_flag(
+        "--allow-used-interface", allow_used,
+        "Serve even on an interface that has an IP address, the default route or a bridge/bond master");
     std::string param_dir;
     run->add_option("--param-dir", param_dir,
                     "Keep each slave's parameters (0x1010 store / 0x1011 restore) in DIR/slave-N.param");
