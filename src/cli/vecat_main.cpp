@@ -83,8 +83,8 @@ bool attach_parameter_stores(vecat::esc::Segment& seg, const std::string& dir) {
     return true;
 }
 
-int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
-            bool allow_busy_if, double drift_ppm, const std::string& esi_path,
+int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, unsigned pcap_limit_mb,
+            bool busy, bool allow_busy_if, double drift_ppm, const std::string& esi_path,
             const vecat::esi::DeviceSelector& sel, const std::string& param_dir) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
@@ -111,7 +111,9 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
         return 1;
     }
     std::unique_ptr<vecat::net::PcapngWriter> pcap;
-    if (!pcap_path.empty()) pcap = std::make_unique<vecat::net::PcapngWriter>(pcap_path, iface);
+    if (!pcap_path.empty())
+        pcap =
+            std::make_unique<vecat::net::PcapngWriter>(pcap_path, iface, std::uint64_t{pcap_limit_mb} << 20);
     // Socket and files are open: from here on the process needs no capability (see net/privileges.hpp).
     std::string cap_why;
     if (!vecat::net::drop_all_capabilities(&cap_why))
@@ -125,7 +127,10 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     const auto st = vecat::net::serve(*seg, *sock, opt, g_stop);
     fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
                seg->counters().dropped);
-    if (pcap) fmt::print("vecat: capture written to {} ({} frames)\n", pcap_path, pcap->frames());
+    if (pcap)
+        fmt::print(
+            "vecat: capture written to {} ({} frames{})\n", pcap_path, pcap->frames(),
+            pcap->dropped() ? fmt::format(", {} not written: --pcap-limit-mb reached", pcap->dropped()) : "");
     for (std::size_t i = 0; i < seg->size(); ++i) {
         const auto& dc = seg->slave(i).esc().dc();
         const auto sync = dc.sync_state();
@@ -315,6 +320,9 @@ int main(int argc, char** argv) {
         ->required();
     run->add_option("-n,--slaves", slaves, "Number of slaves on the line")->check(CLI::Range(1u, 512u));
     run->add_option("--pcap", pcap, "Write every frame in and out to this pcapng file");
+    unsigned pcap_limit_mb = 1024;
+    run->add_option("--pcap-limit-mb", pcap_limit_mb, "Largest capture file in MiB (0: no limit)")
+        ->capture_default_str();
     run->add_flag("--busy-poll", busy,
                   "Spin on the socket instead of sleeping (lowest latency, one core busy)");
     run->add_option("--dc-drift-ppm", drift_ppm,
@@ -371,7 +379,9 @@ int main(int argc, char** argv) {
     vecat::esi::DeviceSelector sel;
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
-    if (*run) return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, param_dir);
+    if (*run)
+        return cmd_run(iface, slaves, pcap, pcap_limit_mb, busy, allow_used, drift_ppm, esi_path, sel,
+                       param_dir);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);
