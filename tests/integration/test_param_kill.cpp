@@ -22,12 +22,24 @@ namespace {
 
 constexpr int kRounds = 150;
 
+// Starts the writer and returns once it has loaded its set and begun storing (its first line of output),
+// so the kill lands among the stores, not during the start-up.
 pid_t start_writer(const std::string& dir) {
+    int out[2];
+    if (::pipe(out) != 0) return -1;
     const pid_t pid = ::fork();
     if (pid == 0) {
+        ::dup2(out[1], STDOUT_FILENO);
+        ::close(out[0]);
+        ::close(out[1]);
         ::execl(VECAT_PARAM_WRITER, VECAT_PARAM_WRITER, dir.c_str(), static_cast<char*>(nullptr));
         ::_exit(127);
     }
+    ::close(out[1]);
+    char c = 0;
+    while (::read(out[0], &c, 1) == 1 && c != '\n') {
+    }
+    ::close(out[0]);
     return pid;
 }
 
@@ -37,7 +49,7 @@ TEST(ParameterKill, EveryRestartFindsACompleteSet) {
     fs::create_directories(dir);
     const std::string file = (dir / "slave-0.param").string();
     std::mt19937 rng(12345);
-    std::uniform_int_distribution<int> delay_us(500, 25'000);
+    std::uniform_int_distribution<int> delay_us(0, 10'000);
     std::uint32_t last_generation = 0;
     int progressed = 0, temp_left = 0;
     for (int round = 0; round < kRounds; ++round) {
@@ -82,7 +94,7 @@ TEST(ParameterKill, EveryRestartFindsACompleteSet) {
     std::printf(
         "%d kill rounds: the set advanced in %d, a temporary file was left by %d, last generation %u\n",
         kRounds, progressed, temp_left, last_generation);
-    EXPECT_GT(progressed, kRounds / 2) << "the writer hardly stored anything: the test proves little";
+    EXPECT_GT(progressed, kRounds / 4) << "the writer hardly stored anything: the test proves little";
     fs::remove_all(dir);
 }
 
