@@ -46,6 +46,13 @@ std::int32_t wrap32(std::int64_t v) {
     return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
 }
 
+// floor() as a 64-bit integer, saturated: with absurd parameters the simulated machine can run away past
+// the 64-bit range, and converting such a double is undefined (found by the random-values test under UBSan).
+std::int64_t floor64(double v) {
+    if (!(v == v)) return 0;
+    return static_cast<std::int64_t>(std::floor(std::clamp(v, -9.2e18, 9.2e18)));
+}
+
 std::int32_t sat32(double v) {
     if (!(v == v)) return 0;
     v = std::clamp(v, -2147483648.0, 2147483647.0);
@@ -617,7 +624,7 @@ void Drive::servo_step() {
     mech_->step(dt);
     const double machine_inc = machine_increments();
     previous_machine_inc_ = machine_inc;
-    increments_ = static_cast<std::int64_t>(std::floor(machine_inc));
+    increments_ = floor64(machine_inc);
     actual_user_ = static_cast<double>(factors_.increments_to_user(increments_)) + home_shift_;
     velocity_user_ = factors_.radians_to_user(mech_->velocity());
     if (loop_ != LoopMode::Position)
@@ -1189,10 +1196,9 @@ void Drive::run_touch_probe(double previous_inc, double machine_inc) {
                     at_inc = crossing;
                 }
             }
-            const double user = static_cast<double>(factors_.increments_to_user(
-                                    static_cast<std::int64_t>(std::floor(at_inc)))) +
-                                home_shift_;
-            const std::int32_t latched = wrap32(static_cast<std::int64_t>(std::floor(user)));
+            const double user =
+                static_cast<double>(factors_.increments_to_user(floor64(at_inc))) + home_shift_;
+            const std::int32_t latched = wrap32(floor64(user));
             if (rise && (f & 0x10) && (continuous || !(st & 0x02))) {
                 wr(values[n][0], latched);
                 st |= 0x02;
@@ -1292,7 +1298,7 @@ void Drive::write_feedback() {
     wr(o_->position_demand_internal,
        wrap32(factors_.user_to_increments(static_cast<std::int64_t>(std::llround(demand_.p - home_shift_)))));
     wr(o_->position_internal, wrap32(increments_));
-    wr(o_->position_actual, wrap32(static_cast<std::int64_t>(std::floor(actual_user_))));
+    wr(o_->position_actual, wrap32(floor64(actual_user_)));
     wr(o_->following_error_actual, sat32(following_error_));
     wr(o_->velocity_demand, sat32(loop_ == LoopMode::Velocity ? velocity_cmd_ : demand_.v));
     wr(o_->velocity_actual, sat32(velocity_user_));

@@ -15,6 +15,7 @@
 #include "cia402/profile_generator.hpp"
 #include "cli/fault_cli.hpp"
 #include "cli/telemetry_commands.hpp"
+#include "coe/coe_application.hpp"
 #include "device/device_description.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
@@ -23,6 +24,7 @@
 #include "esi/esi_writer.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
+#include "net/privileges.hpp"
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
 #include "net/server.hpp"
@@ -62,11 +64,35 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
     }
 }
 
-int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, bool busy,
-            bool allow_busy_if, double drift_ppm, const std::string& esi_path,
-            const vecat::esi::DeviceSelector& sel, const vecat::cli::RunFaultOptions& fault_opts,
-            const vecat::cli::TelemetryOptions& telemetry, vecat::cia402::TwinsyncPreset twinsync,
-            const vecat::net::RealtimeOptions& rt, std::int64_t tick_us) {
+// Parameter persistence: one file per slave position in dir; a stored set is applied before the first
+// frame. Returns false when the directory cannot be used.
+bool attach_parameter_stores(vecat::esc::Segment& seg, const std::string& dir) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) {
+        fmt::print(stderr, "vecat: cannot create the parameter directory {}: {}\n", dir, ec.message());
+        return false;
+    }
+    for (std::size_t i = 0; i < seg.size(); ++i) {
+        auto* app = dynamic_cast<vecat::coe::CoeApplication*>(&seg.slave(i).app());
+        if (!app) continue;
+        const auto rep = app->attach_parameter_store(fmt::format("{}/slave-{}.param", dir, i));
+        using vecat::coe::LoadStatus;
+        if (rep.load.status == LoadStatus::Loaded)
+            fmt::print("vecat: slave {}: {} stored parameters applied{}\n", i, rep.applied,
+                       rep.refused ? fmt::format(", {} refused (kept their defaults)", rep.refused) : "");
+        else if (rep.load.status != LoadStatus::Missing)
+            fmt::print(stderr, "vecat: slave {}: stored parameters {} ({}); using the defaults\n", i,
+                       vecat::coe::to_string(rep.load.status), rep.load.detail);
+    }
+    return true;
+}
+
+int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, unsigned pcap_limit_mb,
+            bool busy, bool allow_busy_if, double drift_ppm, const std::string& esi_path,
+            const vecat::esi::DeviceSelector& sel, const std::string& param_dir,
+            const vecat::cli::RunFaultOptions& fault_opts, const vecat::cli::TelemetryOptions& telemetry,
+            vecat::cia402::TwinsyncPreset twinsync, const vecat::net::RealtimeOptions& rt, std::int64_t tick_us) {
     std::string why;
     if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
         fmt::print(stderr,
@@ -80,6 +106,7 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     if (!loaded) return 1;
     const auto& dev = *loaded;
     auto seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
+    if (!param_dir.empty() && !attach_parameter_stores(*seg, param_dir)) return 1;
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
         seg->slave(i).esc().dc().set_drift_ppm(i % 2 ? -drift_ppm : drift_ppm, vecat::net::monotonic_ns());
@@ -91,7 +118,9 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
         return 1;
     }
     std::unique_ptr<vecat::net::PcapngWriter> pcap;
-    if (!pcap_path.empty()) pcap = std::make_unique<vecat::net::PcapngWriter>(pcap_path, iface);
+    if (!pcap_path.empty())
+        pcap =
+            std::make_unique<vecat::net::PcapngWriter>(pcap_path, iface, std::uint64_t{pcap_limit_mb} << 20);
     bool faults_ok = true;
     auto faults = vecat::cli::start_fault_session(*seg, fault_opts, faults_ok);
     if (!faults_ok) return 1;
@@ -110,12 +139,20 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
         fmt::print(stderr, "vecat: {}\n", why);
         return 1;
     }
+    // Socket, files, control socket, DDS and scheduling are set up: from here on the process needs no
+    // capability (see net/privileges.hpp).
+    std::string cap_why;
+    if (!vecat::net::drop_all_capabilities(&cap_why))
+        fmt::print(stderr, "vecat: cannot drop capabilities: {}\n", cap_why);
     const auto st = vecat::net::serve(*seg, *sock, opt, g_stop);
     tel.reset();
     if (faults) vecat::cli::print_fault_summary(*faults);
     fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
                seg->counters().dropped);
-    if (pcap) fmt::print("vecat: capture written to {} ({} frames)\n", pcap_path, pcap->frames());
+    if (pcap)
+        fmt::print(
+            "vecat: capture written to {} ({} frames{})\n", pcap_path, pcap->frames(),
+            pcap->dropped() ? fmt::format(", {} not written: --pcap-limit-mb reached", pcap->dropped()) : "");
     for (std::size_t i = 0; i < seg->size(); ++i) {
         const auto& dc = seg->slave(i).esc().dc();
         const auto sync = dc.sync_state();
@@ -367,11 +404,18 @@ int main(int argc, char** argv) {
                     "Run the slaves' firmware this often between frames (watchdogs, drive model); longer "
                     "saves CPU with many slaves")
         ->check(CLI::Range(10, 100000));
+    unsigned pcap_limit_mb = 1024;
+    run->add_option("--pcap-limit-mb", pcap_limit_mb, "Largest capture file in MiB (0: no limit)")
+        ->capture_default_str();
     run->add_option("--dc-drift-ppm", drift_ppm,
                     "DC clock drift of the slaves in ppm (alternating sign along the line)")
         ->check(CLI::Range(-1000.0, 1000.0));
-    run->add_flag("--allow-used-interface", allow_used,
-                  "Serve even on an interface that has an IP address or the default route");
+    run->add_flag(
+        "--allow-used-interface", allow_used,
+        "Serve even on an interface that has an IP address, the default route or a bridge/bond master");
+    std::string param_dir;
+    run->add_option("--param-dir", param_dir,
+                    "Keep each slave's parameters (0x1010 store / 0x1011 restore) in DIR/slave-N.param");
     std::string esi_path, device_type;
     std::uint32_t product = 0;
     auto add_esi_options = [&](CLI::App* c, bool esi_option) {
@@ -426,8 +470,8 @@ int main(int argc, char** argv) {
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
     if (*run)
-        return cmd_run(iface, slaves, pcap, busy, allow_used, drift_ppm, esi_path, sel, fault_opts, telemetry,
-                       twinsync, rt, tick_us);
+        return cmd_run(iface, slaves, pcap, pcap_limit_mb, busy, allow_used, drift_ppm, esi_path, sel, param_dir,
+                       fault_opts, telemetry, twinsync, rt, tick_us);
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);

@@ -2,7 +2,8 @@
 
 namespace vecat::coe {
 
-CoeApplication::CoeApplication(const device::DeviceDescription& d) : od_(device::dictionary_objects(d)) {
+CoeApplication::CoeApplication(const device::DeviceDescription& d)
+    : od_(device::dictionary_objects(d)), identity_(d.identity) {
     map_ = std::make_unique<ProcessDataMap>(od_, d);
     sdo_ = std::make_unique<SdoServer>(od_, [this] { return state_; });
     sync_ = std::make_unique<SyncParameters>(od_, d);
@@ -14,6 +15,16 @@ CoeApplication::CoeApplication(const device::DeviceDescription& d) : od_(device:
             return SdoAbort::MappedToRxPdo;
         return SdoAbort::None;
     };
+    install_parameter_objects(od_, nullptr);
+}
+
+RestoreReport CoeApplication::attach_parameter_store(std::string path) {
+    store_ = std::make_unique<ParameterStore>(od_, identity_, std::move(path));
+    install_parameter_objects(od_, store_.get());
+    auto rep = store_->restore_at_start();
+    if (rep.load.status == LoadStatus::Corrupt || rep.load.status == LoadStatus::OtherDevice)
+        sdo_->emergency({emcy::DataSet, 0, {'P', 'R', 'M', static_cast<std::uint8_t>(rep.load.status), 0}});
+    return rep;
 }
 
 CoeApplication::~CoeApplication() = default;

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "coe/object_dictionary.hpp"
+#include "coe/parameter_store.hpp"
 #include "coe/pdo_mapping.hpp"
 #include "coe/sdo_server.hpp"
 #include "coe/sync_parameters.hpp"
@@ -34,6 +35,7 @@ inline constexpr std::uint16_t LifeGuard = 0x8130;  // used for the SyncManager 
 inline constexpr std::uint16_t PdoLength = 0x8210;
 inline constexpr std::uint16_t PreOpToSafeOp = 0xA000;
 inline constexpr std::uint16_t SafeOpToOp = 0xA001;
+inline constexpr std::uint16_t DataSet = 0x6300;  // CiA 301: stored parameters unusable
 }  // namespace emcy
 
 class CoeApplication : public esc::Application {
@@ -68,6 +70,12 @@ class CoeApplication : public esc::Application {
     void attach(esc::Slave& slave) override;
     esc::OpReadiness op_readiness(std::uint64_t now_ns, std::uint64_t since_ns) override;
 
+    // Parameter persistence (0x1010/0x1011) in the file at path: applies the stored set now. A corrupted
+    // or foreign file leaves the defaults and queues an emergency 0x6300 (data set) with "PRM" and the
+    // LoadStatus in its manufacturer bytes; the caller reports the returned detail on stderr.
+    RestoreReport attach_parameter_store(std::string path);
+    ParameterStore* parameter_store() { return store_.get(); }
+
     std::uint64_t exchanges() const { return exchanges_; }
     // Synchronisation chosen at PREOP -> SAFEOP (0x1C32:01) and the application cycle: the SYNC0 (SYNC1)
     // cycle time in DC mode, 0x1C32:02 otherwise, 0 if unknown.
@@ -87,6 +95,8 @@ class CoeApplication : public esc::Application {
     std::unique_ptr<ProcessDataMap> map_;
     std::unique_ptr<SdoServer> sdo_;
     std::unique_ptr<SyncParameters> sync_;
+    std::unique_ptr<ParameterStore> store_;
+    device::Identity identity_;
     bool outputs_received_ = false;  // in OP, outputs were applied (DC mode cycles use the last ones)
     AlState state_ = AlState::Init;
     AlState requested_ = AlState::Init;  // target of the transition being checked (emergency code)

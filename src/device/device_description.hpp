@@ -139,8 +139,9 @@ struct DeviceDescription {
 };
 
 // Every object of the device's dictionary, sorted by index: the generated communication area
-// (0x1000, 0x1001, 0x1008-0x100A, 0x1018, 0x10F1, 0x16xx, 0x1Axx, 0x1C00, 0x1C1x, 0x1C32, 0x1C33) and
-// the application objects. The CoE dictionary, the ESI Dictionary and the SDO information come from this.
+// (0x1000, 0x1001, 0x1008-0x100A, 0x1010, 0x1011, 0x1018, 0x10F1, 0x16xx, 0x1Axx, 0x1C00, 0x1C1x, 0x1C32,
+// 0x1C33) and the application objects. The CoE dictionary, the ESI Dictionary and the SDO information come
+// from this.
 std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d);
 
 // The objects of the CiA 402 drive profile the vecat drive core implements (0x603F-0x60FF, 0x6502) and

@@ -97,6 +97,17 @@ std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d) {
     objs.push_back(make_string_var(0x1008, "Device name", d.name));
     objs.push_back(make_string_var(0x1009, "Hardware version", d.hardware_version));
     objs.push_back(make_string_var(0x100A, "Software version", d.software_version));
+    // CiA 301 store parameters / restore default parameters: sub 1 all, 2 communication, 3 application,
+    // 4 manufacturer area. A read gives the capability (bit 0: on command); "save" / "load" act.
+    const std::vector<std::int64_t> groups = {1, 1, 1, 1};
+    objs.push_back(make_array(0x1010, "Store parameters", DT::Unsigned32, access::RW, groups));
+    objs.push_back(make_array(0x1011, "Restore default parameters", DT::Unsigned32, access::RW, groups));
+    for (auto* o : {&objs[objs.size() - 2], &objs.back()}) {
+        const char* names[] = {"All parameters", "Communication parameters", "Application parameters",
+                               "Manufacturer parameters"};
+        for (std::size_t i = 1; i < o->entries.size(); ++i)
+            o->entries[i].name = names[i - 1];
+    }
     objs.push_back(
         make_record(0x1018, "Identity",
                     {make_entry(1, "Vendor ID", DT::Unsigned32, access::RO, d.identity.vendor_id),

@@ -117,10 +117,16 @@ Slave::Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::uniq
     sm_mbx_in_ = idx(device::SmType::MailboxIn);
     sm_out_ = idx(device::SmType::Outputs);
     sm_in_ = idx(device::SmType::Inputs);
-    rx_.resize(kMaxMailboxSize);
-    last_reply_.resize(kMaxMailboxSize);
+    // Mailbox buffers of the mailbox sizes the description declares (an ESI may declare more than the
+    // usual 1486 bytes; a master fills such a mailbox with several datagrams).
+    const auto mbx_size = [&](device::SmType t) {
+        const auto* c = desc_.sm_of_type(t);
+        return std::max<std::size_t>(kMaxMailboxSize, c ? c->length : 0);
+    };
+    rx_.resize(mbx_size(device::SmType::MailboxOut));
+    last_reply_.resize(mbx_size(device::SmType::MailboxIn));
     for (auto& q : queue_)
-        q.resize(kMaxMailboxSize);
+        q.resize(mbx_size(device::SmType::MailboxIn));
     outputs_.resize(2048);
     inputs_.resize(2048);
     sink_ = std::make_unique<SlaveReplySink>(*this);
@@ -312,7 +318,8 @@ void Slave::service_mailbox() {
             esc_.pdi_set_repeat_ack(in_idx, req);
         }
     }
-    const std::size_t rx_len = esc_.sm_config(out_idx).length;
+    // The ESC copies at most rx_.size() bytes: never look further.
+    const std::size_t rx_len = std::min<std::size_t>(esc_.sm_config(out_idx).length, rx_.size());
     if (esc_.sm_mailbox_full(out_idx) && esc_.pdi_mailbox_take(out_idx, Bytes(rx_.data(), rx_.size()))) {
         ++counters_.mailbox_requests;
         const auto h = parse_mailbox_header(ConstBytes(rx_.data(), std::min(rx_len, rx_.size())));

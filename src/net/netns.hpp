@@ -13,7 +13,8 @@ bool enter_private_netns(std::string* why = nullptr);
 // Creates a veth pair inside the current namespace and brings both ends up. Returns false with a reason.
 bool create_veth_pair(const std::string& a, const std::string& b, std::string* why = nullptr);
 
-// True when the interface carries an IPv4/IPv6 address or is the default route's interface.
+// True when the interface carries an IPv4 or IPv6 address (link-local IPv6 aside: every interface that is
+// up has one), is the IPv4 or IPv6 default route's interface, or is a port of a bridge or bond.
 bool interface_in_use(const std::string& ifname, std::string* why = nullptr);
 
 }  // namespace vecat::net

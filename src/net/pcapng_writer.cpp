@@ -29,7 +29,8 @@ void put_padded(std::FILE* f, const void* p, std::size_t n) {
 
 }  // namespace
 
-PcapngWriter::PcapngWriter(const std::string& path, const std::string& ifname) {
+PcapngWriter::PcapngWriter(const std::string& path, const std::string& ifname, std::uint64_t limit_bytes)
+    : limit_(limit_bytes) {
     f_ = std::fopen(path.c_str(), "wb");
     if (!f_) throw std::system_error(errno, std::generic_category(), "pcapng " + path);
     // Section Header Block
@@ -65,6 +66,7 @@ PcapngWriter::PcapngWriter(const std::string& path, const std::string& ifname) {
     std::fwrite(tsresol, 1, 4, f_);
     put32(f_, 0);
     put32(f_, idb_len);
+    bytes_ = static_cast<std::uint64_t>(std::ftell(f_));
 }
 
 PcapngWriter::~PcapngWriter() {
@@ -75,6 +77,11 @@ void PcapngWriter::write(ConstBytes frame, std::uint64_t unix_ns, int direction)
     if (!f_) return;
     const std::uint32_t opts = 4 + 4 + 4;  // epb_flags + opt_endofopt
     const std::uint32_t len = 32 + pad4(frame.size()) + opts;
+    if (limit_ && bytes_ + len > limit_) {
+        ++dropped_;
+        return;
+    }
+    bytes_ += len;
     put32(f_, 0x00000006);
     put32(f_, len);
     put32(f_, 0);  // interface 0

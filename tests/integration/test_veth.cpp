@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -436,6 +437,66 @@ TEST(VethCli, RefusesAnInterfaceWithAnAddress) {
         test::run_capture(std::string(VECAT_BINARY) + " run --iface ips 2>&1; echo rc=$?");
     EXPECT_NE(out.find("refusing"), std::string::npos) << out;
     EXPECT_NE(out.find("rc=2"), std::string::npos) << out;
+}
+
+// vecat run on an interface set up by `setup` (inside our namespace): refused with exit code 2, and served
+// with --allow-used-interface.
+void expect_refused(const std::string& iface, const std::string& setup, const std::string& reason) {
+    std::string why;
+    ASSERT_TRUE(net::create_veth_pair(iface + "m", iface, &why)) << why;
+    ASSERT_EQ(system(setup.c_str()), 0) << setup;
+    const std::string out =
+        test::run_capture(std::string(VECAT_BINARY) + " run --iface " + iface + " 2>&1; echo rc=$?");
+    EXPECT_NE(out.find("refusing"), std::string::npos) << out;
+    EXPECT_NE(out.find(reason), std::string::npos) << out;
+    EXPECT_NE(out.find("rc=2"), std::string::npos) << out;
+    VecatProcess v(iface, 1, "/dev/null", {"--allow-used-interface"});
+    EXPECT_EQ(kill(v.pid, 0), 0) << "--allow-used-interface: vecat should be serving";
+    EXPECT_EQ(v.stop(), 0);
+}
+
+TEST(VethCli, RefusesTheDefaultRouteInterface) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    expect_refused("drs", "ip route add default dev drs", "default route");
+}
+
+TEST(VethCli, RefusesTheIpv6DefaultRouteInterface) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    expect_refused("d6s", "ip -6 route add default dev d6s", "IPv6 default route");
+}
+
+TEST(VethCli, RefusesABridgePort) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    expect_refused("brs", "ip link add vbr0 type bridge && ip link set brs master vbr0", "port of vbr0");
+}
+
+// Capability sets of a running vecat (/proc/PID/status): empty once the socket is open.
+TEST(VethCli, ServesWithoutCapabilities) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    std::string why;
+    ASSERT_TRUE(net::create_veth_pair("capm", "caps", &why)) << why;
+    VecatProcess v("caps", 1, "/dev/null");
+    std::ifstream f("/proc/" + std::to_string(v.pid) + "/status");
+    std::map<std::string, std::string> st;
+    for (std::string line; std::getline(f, line);) {
+        const auto colon = line.find(':');
+        if (colon == std::string::npos) continue;
+        const auto value = line.find_first_not_of(" \t", colon + 1);
+        st[line.substr(0, colon)] = value == std::string::npos ? "" : line.substr(value);
+    }
+    ASSERT_TRUE(st.count("CapEff")) << "no status of the vecat process";
+    EXPECT_EQ(st["CapEff"], "0000000000000000");
+    EXPECT_EQ(st["CapPrm"], "0000000000000000");
+    EXPECT_EQ(st["CapInh"], "0000000000000000");
+    EXPECT_EQ(st["CapAmb"], "0000000000000000");
+    EXPECT_EQ(st["CapBnd"], "0000000000000000");
+    EXPECT_EQ(st["NoNewPrivs"], "1");
+    // Still serving: the master sees the slave.
+    net::RawSocket sock("capm");
+    master::Master m(sock);
+    ASSERT_TRUE(m.startup(AlState::PreOp, &why)) << why;
+    EXPECT_EQ(m.slaves().size(), 1u);
+    EXPECT_EQ(v.stop(), 0);
 }
 
 int main(int argc, char** argv) {

@@ -122,3 +122,63 @@ TEST(BadInput, RandomCoeMessagesAlwaysGetAnAnswer) {
     ASSERT_TRUE(v.ok());
     EXPECT_EQ(ld_le32(v.data.data()), b.desc.identity.vendor_id);
 }
+
+// A mailbox protocol that reads every byte it is given: answers with their sum (32 bits) and count.
+class SummingProtocol final : public esc::MailboxProtocol {
+  public:
+    esc::MailboxType type() const override { return esc::MailboxType::CoE; }
+    void handle(const esc::MailboxHeader&, ConstBytes payload, esc::MailboxReplySink& out) override {
+        std::uint32_t sum = 0;
+        for (auto x : payload)
+            sum += x;
+        auto r = out.reply_buffer();
+        st_le32(r.data(), sum);
+        st_le32(r.data() + 4, static_cast<std::uint32_t>(payload.size()));
+        out.commit(esc::MailboxType::CoE, 8);
+    }
+};
+class SummingApplication final : public esc::ProcessImageApplication {
+  public:
+    using ProcessImageApplication::ProcessImageApplication;
+    esc::MailboxProtocol* mailbox_protocol(esc::MailboxType t) override {
+        return t == esc::MailboxType::CoE ? &proto_ : nullptr;
+    }
+
+  private:
+    SummingProtocol proto_;
+};
+std::unique_ptr<esc::Segment> summing_segment(const device::DeviceDescription& d, std::size_t n,
+                                              const esc::EscConfig& cfg) {
+    return esc::make_segment(
+        d, n, cfg, [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
+            return std::make_unique<SummingApplication>(dd.output_bytes(), dd.input_bytes());
+        });
+}
+
+// A device (from an ESI file) whose mailbox is larger than the usual 1486 bytes: a message filling it
+// reaches the protocol whole (the mailbox layer used to hand over 2000 bytes of a 1486-byte buffer).
+TEST(BadInput, MailboxLargerThanAnEthernetFrame) {
+    auto dev = device::default_drive();
+    dev.sync_managers[0] = {0x1000, 2048, 0x26, 0x01, device::SmType::MailboxOut};
+    dev.sync_managers[1] = {0x1800, 2048, 0x22, 0x01, device::SmType::MailboxIn};
+    dev.sync_managers[2].start = 0x2000;
+    dev.sync_managers[3].start = 0x2100;
+    Bench b(1, {}, dev, &summing_segment);
+    std::string why;
+    ASSERT_TRUE(b.master.startup(esc::AlState::PreOp, &why)) << why;
+    const auto st = b.master.slaves()[0].station;
+    // 2000 bytes of 0x01 after the header, written in two datagrams (no frame holds 2048 bytes).
+    std::vector<std::uint8_t> m(2048, 0x01);
+    st_le16(&m[0], 2000);
+    st_le16(&m[2], 0);
+    m[4] = 0;
+    m[5] = 0x13;  // CoE, counter 1
+    ASSERT_EQ(b.master.fpwr(st, 0x1000, Bytes(m.data(), 1024)), 1);
+    ASSERT_EQ(b.master.fpwr(st, 0x1000 + 1024, Bytes(m.data() + 1024, 1024)), 1);
+    b.advance(1'000'000);
+    std::vector<std::uint8_t> r(1024);
+    ASSERT_EQ(b.master.fprd(st, 0x1800, Bytes(r.data(), r.size())), 1);
+    EXPECT_EQ(r[5] & 0x0F, 0x03);
+    EXPECT_EQ(ld_le32(&r[10]), 2000u) << "payload bytes handed over";
+    EXPECT_EQ(ld_le32(&r[6]), 2000u) << "sum of the payload";
+}

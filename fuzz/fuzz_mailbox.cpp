@@ -1,0 +1,102 @@
+// Fuzz target: the mailbox layer and the CoE stack of one CiA 402 drive (esc::Slave mailbox handling,
+// coe::SdoServer: expedited/normal/segmented SDO, complete access, SDO information, emergencies, the
+// drive's value checks). The slave is brought to PREOP like a master does; the input is a sequence of
+// steps, each an opcode byte and its argument:
+//   0, 1  a mailbox write into SM0 (length-prefixed bytes, padded to the SM0 length)
+//   2     the master reads SM1
+//   3     the master toggles the SM1 repeat request
+//   4     AL control write (one byte)
+//   5     time passes (up to 25.5 ms in steps of 100 us; the drive simulates every servo step)
+//   6     the application raises a fault (an emergency to queue)
+// Invariants: every reply fits SM1 with its header length; replies are mailbox errors or CoE messages the
+// server may send; the slave stays in a valid AL state.
+#include <cstdint>
+#include <vector>
+
+#include "cia402/drive.hpp"
+#include "coe/coe_protocol.hpp"
+#include "esc/mailbox.hpp"
+#include "fuzz_support.hpp"
+
+using namespace vecat;
+
+namespace {
+
+void check_reply(ConstBytes r) {
+    const auto h = esc::parse_mailbox_header(r);
+    VECAT_FUZZ_CHECK(h.has_value());
+    VECAT_FUZZ_CHECK(h->length <= r.size() - esc::kMailboxHeaderSize);
+    const auto type = static_cast<esc::MailboxType>(h->type);
+    VECAT_FUZZ_CHECK(type == esc::MailboxType::Error || type == esc::MailboxType::CoE);
+    if (type == esc::MailboxType::Error) {
+        VECAT_FUZZ_CHECK(h->length >= 4 && ld_le16(&r[6]) == 0x0001);
+        return;
+    }
+    VECAT_FUZZ_CHECK(h->length >= coe::kCoeHeaderSize);
+    const auto service = coe::coe_service(ld_le16(&r[6]));
+    VECAT_FUZZ_CHECK(service == coe::CoeService::Emergency || service == coe::CoeService::SdoRequest ||
+                     service == coe::CoeService::SdoResponse || service == coe::CoeService::SdoInformation);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    static const auto dev = device::default_drive();
+    static const auto sm0 = dev.sync_managers.at(0);
+    static const auto sm1 = dev.sync_managers.at(1);
+    auto seg = cia402::make_drive_segment(dev, 1);
+    std::uint64_t now = 1'000'000'000;
+    if (!fuzz::bring_to_preop(*seg, dev, now)) std::abort();
+    auto& slave = seg->slave(0);
+    auto* app = dynamic_cast<coe::CoeApplication*>(&slave.app());
+    const std::uint16_t st = fuzz::kFirstStation;
+    std::vector<std::uint8_t> buf;
+    fuzz::Input in(data, size);
+    unsigned steps = 0;
+    while (!in.empty() && ++steps < 512) {
+        switch (in.u8() % 7) {
+            case 0:
+            case 1: {
+                const ConstBytes m = in.chunk(sm0.length);
+                buf.assign(sm0.length, 0);
+                std::copy(m.begin(), m.end(), buf.begin());
+                fuzz::fpwr(*seg, st, sm0.start, buf, now);
+                break;
+            }
+            case 2: {
+                // The reply is checked when SM1 said "full" (otherwise the read sees plain memory).
+                std::uint8_t status = 0;
+                fuzz::transact(*seg, esc::Command::FPRD, st, esc::sm_addr(1) + esc::sm::Status,
+                               Bytes(&status, 1), now);
+                buf.assign(sm1.length, 0);
+                const auto wkc = fuzz::transact(*seg, esc::Command::FPRD, st, sm1.start, buf, now);
+                if (wkc == 1 && (status & esc::sm::StatusMailboxFull)) check_reply(buf);
+                break;
+            }
+            case 3: {
+                const std::uint16_t act = esc::sm_addr(1) + esc::sm::Activate;
+                std::uint8_t v = 0;
+                fuzz::transact(*seg, esc::Command::FPRD, st, act, Bytes(&v, 1), now);
+                v ^= esc::sm::ActRepeatRequest;
+                fuzz::fpwr(*seg, st, act, ConstBytes(&v, 1), now);
+                break;
+            }
+            case 4: {
+                const std::uint8_t ctl[2] = {in.u8(), 0};
+                fuzz::fpwr(*seg, st, esc::addr(esc::Reg::AlControl), ConstBytes(ctl, 2), now);
+                break;
+            }
+            case 5:
+                now += 100'000ull * in.u8();
+                break;
+            case 6:
+                if (app) app->raise_fault(in.u16(), in.u8());
+                break;
+        }
+        now += 100'000;
+        seg->tick(now);
+        const auto s = static_cast<std::uint8_t>(slave.state());
+        VECAT_FUZZ_CHECK(s == 1 || s == 2 || s == 3 || s == 4 || s == 8);
+    }
+    return 0;
+}
