@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <thread>
 #include <vector>
@@ -129,6 +130,19 @@ TEST(ChainVeth, ThreeProcessesFormTheSameLineAsOne) {
     EXPECT_EQ(r.expected_wkc, ref.expected_wkc);
     EXPECT_EQ(ref.good_cycles, 200u);
     EXPECT_EQ(r.good_cycles, 200u);
+    // Unplugged behind B (C's end of the cable goes down): B closes the line, which now ends after three
+    // slaves; plugged in again, C is back.
+    auto count = [] {
+        net::RawSocket sock("chm");
+        master::Master m(sock);
+        return m.count_slaves();
+    };
+    ASSERT_EQ(system("ip link set chc down"), 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // vecat looks at the link every 10 ms
+    EXPECT_EQ(count(), 3);
+    ASSERT_EQ(system("ip link set chc up"), 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    EXPECT_EQ(count(), 5);
     EXPECT_EQ(a.stop(), 0);
     EXPECT_EQ(b.stop(), 0);
     EXPECT_EQ(c.stop(), 0);
