@@ -165,9 +165,9 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
             Esc& esc = slaves_[k]->esc();
             bool addressed = false;
             for (std::size_t i = 0; i < pf.count; ++i) {
-                const bool hit_k = esc.process(pf.datagram(frame, i), t);
-                addressed |= hit_k;
-                if (i == latch_pos && hit_k) latched_[k] = 1;
+                const bool took = esc.process(pf.datagram(frame, i), t);
+                addressed |= took;
+                if (i == latch_pos && took) latched_[k] = 1;
             }
             // Marks the slave for its firmware run below (0: run now).
             if (addressed) last_run_ns_[k] = 0;

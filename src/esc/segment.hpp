@@ -86,7 +86,8 @@ class Segment {
     // A frame back from the downstream segment at port 1 of the last slave. The ESCs forward it unchanged
     // (port 1 -> port 0); a receive-time latch in it (a write to 0x0900) sets the port 1 receive times of
     // the slaves that latched on the way out, from the line model (see return_receive_times()). Returns
-    // true when the frame goes on to the master side.
+    // true when the frame goes on to the master side. now_ns (its arrival) is not used: the port 1 times
+    // come from the line model, not from the real transit through the processes behind.
     bool return_frame(Bytes frame, std::size_t len, std::uint64_t now_ns);
 
     // Line model: delay of a frame per hop (cable + PHY + forwarding) in ns. The cable to the next segment
