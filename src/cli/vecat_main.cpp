@@ -92,14 +92,20 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
             bool busy, bool allow_busy_if, double drift_ppm, const std::string& esi_path,
             const vecat::esi::DeviceSelector& sel, const std::string& param_dir,
             const vecat::cli::RunFaultOptions& fault_opts, const vecat::cli::TelemetryOptions& telemetry,
-            vecat::cia402::TwinsyncPreset twinsync, const vecat::net::RealtimeOptions& rt, std::int64_t tick_us) {
+            vecat::cia402::TwinsyncPreset twinsync, const vecat::net::RealtimeOptions& rt, std::int64_t tick_us,
+            const std::string& downstream) {
     std::string why;
-    if (!allow_busy_if && vecat::net::interface_in_use(iface, &why)) {
+    for (const std::string& i : {iface, downstream}) {
+        if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
         fmt::print(stderr,
                    "vecat: refusing to serve on {}: {}.\n"
                    "       EtherCAT takes over the whole link; use a veth pair or a dedicated NIC, or pass "
                    "--allow-used-interface.\n",
-                   iface, why);
+                   i, why);
+        return 2;
+    }
+    if (!downstream.empty() && downstream == iface) {
+        fmt::print(stderr, "vecat: --downstream must be another interface than --iface\n");
         return 2;
     }
     auto loaded = load_device(esi_path, sel, true);
@@ -110,9 +116,10 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
         seg->slave(i).esc().dc().set_drift_ppm(i % 2 ? -drift_ppm : drift_ppm, vecat::net::monotonic_ns());
-    std::unique_ptr<vecat::net::RawSocket> sock;
+    std::unique_ptr<vecat::net::RawSocket> sock, down;
     try {
         sock = std::make_unique<vecat::net::RawSocket>(iface);
+        if (!downstream.empty()) down = std::make_unique<vecat::net::RawSocket>(downstream);
     } catch (const std::exception& e) {
         fmt::print(stderr, "vecat: {}\n", e.what());
         return 1;
@@ -132,6 +139,10 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     opt.pcap = pcap.get();
     if (faults) opt.filter = faults->injector.get();
     opt.tick_us = tick_us;
+    opt.downstream = down.get();
+    if (down)
+        fmt::print("vecat: port 1 of the last slave cabled to {} ({})\n", downstream,
+                   down->carrier() ? "link up: the line goes on" : "no link yet: the line closes here");
     auto tel = vecat::cli::RunTelemetry::start(*seg, telemetry, opt);
     if (!tel) return 2;
     // The serve loop runs on this thread: pinning, SCHED_FIFO and locked memory apply to it.
@@ -149,6 +160,9 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     if (faults) vecat::cli::print_fault_summary(*faults);
     fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
                seg->counters().dropped);
+    if (down)
+        fmt::print("vecat: {} frames passed on to {}, {} came back\n", st.sent_downstream, downstream,
+                   st.returned);
     if (pcap)
         fmt::print(
             "vecat: capture written to {} ({} frames{})\n", pcap_path, pcap->frames(),
@@ -388,6 +402,10 @@ int main(int argc, char** argv) {
            "TWINsync between drives 1 and 2 preset: off (configure it by CoE), gantry (P2580 29/30), "
            "position (PCON 7/8) or speed (SCON 5/6); drive 2 is then controlled through TWINsync")
         ->transform(CLI::CheckedTransformer(presets, CLI::ignore_case));
+    std::string downstream;
+    run->add_option("--downstream", downstream,
+                    "Chained segments: cable port 1 of the last slave to this interface (a veth pair to the "
+                    "next vecat run); frames go on along the line while it has a link");
     run->add_option("--pcap", pcap, "Write every frame in and out to this pcapng file");
     run->add_flag("--busy-poll,!--blocking", busy,
                   "Spin on the socket instead of sleeping in poll() (lowest latency, one core busy); "
@@ -471,7 +489,7 @@ int main(int argc, char** argv) {
     if (product != 0) sel.product_code = product;
     if (*run)
         return cmd_run(iface, slaves, pcap, pcap_limit_mb, busy, allow_used, drift_ppm, esi_path, sel, param_dir,
-                       fault_opts, telemetry, twinsync, rt, tick_us);
+                       fault_opts, telemetry, twinsync, rt, tick_us, downstream);
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);

@@ -244,6 +244,10 @@ void DistributedClock::after_write(std::uint16_t lo, std::uint16_t hi, std::uint
     }
 }
 
+void DistributedClock::latch_port1_receive_time(std::uint64_t host_ns) {
+    st_le32(&regs_[addr(Reg::DcRecvTimePort1)], static_cast<std::uint32_t>(local_time(host_ns)));
+}
+
 // ---------------------------------------------------------------------------------------------
 // SYNC out unit
 

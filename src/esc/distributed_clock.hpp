@@ -82,6 +82,9 @@ class DistributedClock {
     // before holds the register bytes 0x0980..0x0981 before the write (the SYNC unit may belong to the PDI).
     void after_write(std::uint16_t lo, std::uint16_t hi, std::uint64_t port0_ns, std::uint64_t port1_ns,
                      bool port1_open, std::uint8_t activation_before);
+    // Port 1 receive time of the last latch, set when the frame came back through port 1 later than the
+    // write was processed (chained segments: the frame returns from another process).
+    void latch_port1_receive_time(std::uint64_t host_ns);
 
     // ---- SYNC out unit (PDI side)
     // Generates the pulses due up to host_ns, in time order; at most max are returned, further ones are

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "esc/datagram.hpp"
+#include "esc/registers.hpp"
 
 namespace vecat::esc {
 
@@ -12,6 +13,7 @@ void Segment::add(std::unique_ptr<Slave> s) {
     cable_up_.push_back(1);
     halted_.push_back(0);
     last_run_ns_.push_back(0);
+    latched_.push_back(0);
     // Port 1 of every slave but the last one has a link to its successor.
     for (std::size_t i = 0; i < slaves_.size(); ++i)
         update_links(i);
@@ -20,7 +22,62 @@ void Segment::add(std::unique_ptr<Slave> s) {
 void Segment::update_links(std::size_t i) {
     Esc& e = slaves_[i]->esc();
     e.set_port_link(0, cable(i));
-    e.set_port_link(1, i + 1 < slaves_.size() && cable(i + 1));
+    e.set_port_link(1, i + 1 < slaves_.size() ? cable(i + 1) : downstream_);
+}
+
+void Segment::set_downstream_link(bool up) {
+    downstream_ = up;
+    pending_latch_.valid = false;
+    if (!slaves_.empty()) update_links(slaves_.size() - 1);
+}
+
+namespace {
+// A write of 0x0900 (receive time port 0) makes every port latch the time the frame passes it.
+bool latches_receive_times(DatagramView d) {
+    switch (d.command()) {
+        case Command::APWR:
+        case Command::APRW:
+        case Command::FPWR:
+        case Command::FPRW:
+        case Command::BWR:
+        case Command::BRW:
+            return d.ado() <= addr(Reg::DcRecvTimePort0) + 3u &&
+                   d.ado() + d.length() > addr(Reg::DcRecvTimePort0);
+        default:
+            return false;
+    }
+}
+}  // namespace
+
+bool Segment::return_frame(Bytes frame, std::size_t len, std::uint64_t /*now_ns*/) {
+    if (len > frame.size()) len = frame.size();
+    const ParsedFrame pf = parse_frame(ConstBytes(frame.data(), len));
+    if (pf.error == FrameError::NotEtherCat || (pf.error == FrameError::TooShort && len < kEthHeaderSize)) {
+        ++counters_.ignored;
+        return false;
+    }
+    // On the way back an ESC forwards whatever comes (errors were counted on the way out).
+    if (pf.error == FrameError::None) return_receive_times(pf, frame);
+    ++counters_.returned;
+    return true;
+}
+
+void Segment::return_receive_times(const ParsedFrame& pf, Bytes frame) {
+    const PendingLatch p = pending_latch_;
+    if (!p.valid || p.position >= pf.count) return;
+    const DatagramView d = pf.datagram(frame, p.position);
+    if (d.index() != p.index || !latches_receive_times(d) || d.wkc() < p.wkc_after) return;
+    pending_latch_.valid = false;
+    // Slaves behind this segment: what the latch added downstream (one per slave for a broadcast, the way
+    // masters latch). The frame was back at port 1 of slave k after 2 (n - 1 + behind) - k hops from the
+    // arrival at slave 0, as in one segment: only per-slave differences of these times matter to a master,
+    // so the processes' different clocks and the real transit time between them do not.
+    const std::size_t behind = static_cast<std::size_t>(d.wkc() - p.wkc_after);
+    const std::size_t n = slaves_.size();
+    for (std::size_t k = 0; k < n; ++k)
+        if (latched_[k])
+            slaves_[k]->esc().dc().latch_port1_receive_time(p.port0_ns +
+                                                            (2 * (n - 1 + behind) - k) * hop_delay_ns);
 }
 
 void Segment::set_cable(std::size_t k, bool connected) {
@@ -63,6 +120,7 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
 }
 
 bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage) {
+    onward_ = false;
     if (len > frame.size()) len = frame.size();
     ConstBytes in(frame.data(), len);
     const ParsedFrame pf = parse_frame(in);
@@ -90,6 +148,14 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
         // SYNC pulses that fell due before this frame arrived happen first (the server may be late).
         for (std::size_t k = 0; k < slaves_.size(); ++k)
             if (slaves_[k]->esc().dc().next_pulse_host_ns() <= now_ns) run(k, now_ns);
+        // A latch that goes on downstream: remembered until it returns (see return_frame()).
+        const bool onward = downstream_ && m == slaves_.size() && !hit;
+        std::size_t latch_pos = pf.count;
+        if (onward) {
+            for (std::size_t i = 0; i < pf.count && latch_pos == pf.count; ++i)
+                if (latches_receive_times(pf.datagram(frame, i))) latch_pos = i;
+            if (latch_pos < pf.count) std::fill(latched_.begin(), latched_.end(), std::uint8_t{0});
+        }
         for (std::size_t k = 0; k < intact; ++k) {
             FrameTiming t;
             t.port0_ns = now_ns + k * hop_delay_ns;
@@ -98,10 +164,17 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
             t.port1_ns = now_ns + (2 * (m - 1) - k) * hop_delay_ns;
             Esc& esc = slaves_[k]->esc();
             bool addressed = false;
-            for (std::size_t i = 0; i < pf.count; ++i)
-                addressed |= esc.process(pf.datagram(frame, i), t);
+            for (std::size_t i = 0; i < pf.count; ++i) {
+                const bool took = esc.process(pf.datagram(frame, i), t);
+                addressed |= took;
+                if (i == latch_pos && took) latched_[k] = 1;
+            }
             // Marks the slave for its firmware run below (0: run now).
             if (addressed) last_run_ns_[k] = 0;
+        }
+        if (latch_pos < pf.count) {
+            const DatagramView d = pf.datagram(frame, latch_pos);
+            pending_latch_ = PendingLatch{true, d.index(), latch_pos, d.wkc(), now_ns};
         }
         for (std::size_t k = 0; k < slaves_.size(); ++k)
             if (last_run_ns_[k] == 0 || now_ns - last_run_ns_[k] >= kMaxRunGapNs || now_ns < last_run_ns_[k])
@@ -117,7 +190,11 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
         std::memset(frame.data() + len, 0, kMinEthFrame - len);
         len = kMinEthFrame;
     }
-    ++counters_.replies;
+    onward_ = downstream_ && m == slaves_.size();
+    if (onward_)
+        ++counters_.onward;
+    else
+        ++counters_.replies;
     return true;
 }
 

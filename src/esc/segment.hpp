@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/bytes.hpp"
+#include "esc/datagram.hpp"
 #include "esc/slave.hpp"
 
 namespace vecat::esc {
@@ -16,9 +17,11 @@ namespace vecat::esc {
 struct SegmentCounters {
     std::uint64_t frames = 0;
     std::uint64_t replies = 0;
-    std::uint64_t dropped = 0;  // malformed EtherCAT frames
-    std::uint64_t ignored = 0;  // not EtherCAT
-    std::uint64_t lost = 0;     // lost or corrupted on the line, or no link at the master's cable
+    std::uint64_t dropped = 0;   // malformed EtherCAT frames
+    std::uint64_t ignored = 0;   // not EtherCAT
+    std::uint64_t lost = 0;      // lost or corrupted on the line, or no link at the master's cable
+    std::uint64_t onward = 0;    // passed on to the downstream segment (chained segments)
+    std::uint64_t returned = 0;  // came back from the downstream segment, forwarded to the master
 };
 
 // Damage a frame suffers on one cable of the line (fault injection). Cable k joins the master (k == 0) or
@@ -72,7 +75,23 @@ class Segment {
     bool restart_slave(std::size_t i);
     void set_application_factory(ApplicationFactory f) { factory_ = std::move(f); }
 
-    // Line model: delay of a frame per hop (cable + PHY + forwarding) in ns.
+    // ---- Chained segments (one line over several processes or machines)
+    // Port 1 of the last slave has a link to the next segment. process_frame() then lets the frame go on
+    // (its true result means "send it downstream" while downstream_link() holds) instead of closing the
+    // loop, and the frame comes back through return_frame().
+    void set_downstream_link(bool up);
+    bool downstream_link() const { return downstream_; }
+    // The frame process_frame() last returned true for goes downstream (else back to the master).
+    bool frame_goes_downstream() const { return onward_; }
+    // A frame back from the downstream segment at port 1 of the last slave. The ESCs forward it unchanged
+    // (port 1 -> port 0); a receive-time latch in it (a write to 0x0900) sets the port 1 receive times of
+    // the slaves that latched on the way out, from the line model (see return_receive_times()). Returns
+    // true when the frame goes on to the master side. now_ns (its arrival) is not used: the port 1 times
+    // come from the line model, not from the real transit through the processes behind.
+    bool return_frame(Bytes frame, std::size_t len, std::uint64_t now_ns);
+
+    // Line model: delay of a frame per hop (cable + PHY + forwarding) in ns. The cable to the next segment
+    // counts as one hop too, so a chained line measures the same delays as one process with all slaves.
     std::uint64_t hop_delay_ns = 500;
 
   private:
@@ -80,6 +99,22 @@ class Segment {
     void run(std::size_t k, std::uint64_t now_ns);
     void count_corruption(const FrameDamage& d, std::size_t reached);
     void update_links(std::size_t i);
+    void return_receive_times(const ParsedFrame& pf, Bytes frame);
+
+    // The receive-time latch last sent downstream, until it returns (one slot: masters wait for the reply
+    // of the latch frame; a newer latch replaces an unanswered one). Its working counter on return tells
+    // how many slaves lie behind this segment.
+    struct PendingLatch {
+        bool valid = false;
+        std::uint8_t index = 0;       // datagram index byte
+        std::size_t position = 0;     // datagram number in the frame
+        std::uint16_t wkc_after = 0;  // its working counter as it left this segment
+        std::uint64_t port0_ns = 0;   // arrival at the first slave
+    };
+    PendingLatch pending_latch_;
+    std::vector<std::uint8_t> latched_;  // per slave: took part in the pending latch
+    bool downstream_ = false;
+    bool onward_ = false;
 
     std::vector<std::unique_ptr<Slave>> slaves_;
     std::vector<std::uint8_t> cable_up_;  // cable k into slave k

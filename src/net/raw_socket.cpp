@@ -5,6 +5,7 @@
 #include <net/ethernet.h>
 #include <net/if.h>
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
@@ -71,6 +72,13 @@ RawSocket::~RawSocket() {
 bool RawSocket::send(ConstBytes frame) {
     const ssize_t n = ::send(fd_, frame.data(), frame.size(), 0);
     return n == static_cast<ssize_t>(frame.size());
+}
+
+bool RawSocket::carrier() const {
+    ifreq ifr{};
+    std::strncpy(ifr.ifr_name, ifname_.c_str(), IFNAMSIZ - 1);
+    if (::ioctl(fd_, SIOCGIFFLAGS, &ifr) < 0) return false;
+    return (ifr.ifr_flags & IFF_UP) && (ifr.ifr_flags & IFF_RUNNING);
 }
 
 long RawSocket::try_receive(Bytes buf) {

@@ -27,6 +27,8 @@ class RawSocket final : public Link {
     // Kernel receive time (CLOCK_REALTIME, ns) of the last frame try_receive/receive returned; 0 if unknown.
     std::uint64_t last_receive_realtime_ns() const { return last_rx_realtime_ns_; }
     const std::string& ifname() const { return ifname_; }
+    // Link state of the interface: up with a carrier (a veth end whose peer is up).
+    bool carrier() const;
 
   private:
     int fd_ = -1;

@@ -1,5 +1,6 @@
 #include "net/server.hpp"
 
+#include <poll.h>
 #include <time.h>
 
 #include <algorithm>
@@ -37,6 +38,32 @@ void send_due_replies(RawSocket& sock, const ServeOptions& opt, std::array<std::
         wait_us = std::min<std::int64_t>(wait_us, due > t ? static_cast<std::int64_t>((due - t) / 1000) : 0);
 }
 
+// Chained segments: waits for a frame on the master side (sock) or back from the next segment (down).
+// from_down tells where it came from.
+long receive_either(RawSocket& sock, RawSocket& down, Bytes buf, std::int64_t wait_us, bool spin,
+                    bool& from_down) {
+    for (int pass = 0; pass < 2; ++pass) {
+        // Returning frames first: they complete a frame the master already waits for.
+        if (long n = down.try_receive(buf); n != 0) {
+            from_down = true;
+            return n;
+        }
+        if (long n = sock.try_receive(buf); n != 0) {
+            from_down = false;
+            return n;
+        }
+        if (pass == 1 || spin) return 0;
+        pollfd p[2] = {{sock.fd(), POLLIN, 0}, {down.fd(), POLLIN, 0}};
+        const std::int64_t us = wait_us <= 0 ? 0 : wait_us;
+        const timespec ts{static_cast<time_t>(us / 1'000'000), static_cast<long>((us % 1'000'000) * 1000)};
+        if (::ppoll(p, 2, &ts, nullptr) <= 0) return 0;
+    }
+    return 0;
+}
+
+// How often the serve loop looks at the link of the downstream interface.
+constexpr std::uint64_t kLinkCheckNs = 10'000'000;
+
 }  // namespace
 
 ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, const std::atomic<bool>& stop) {
@@ -45,6 +72,8 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     std::uint64_t last_tick = monotonic_ns();
     std::uint64_t last_time = 0;  // latest time given to the segment
     const std::uint64_t tick_ns = static_cast<std::uint64_t>(opt.tick_us) * 1000;
+    std::uint64_t last_link_check = monotonic_ns();
+    if (opt.downstream) seg.set_downstream_link(opt.downstream->carrier());
     while (!stop.load(std::memory_order_relaxed)) {
         // Wake up for the next SYNC pulse of the DC units, or after one tick, whichever comes first.
         const std::uint64_t next_sync = seg.next_event_ns();
@@ -56,10 +85,32 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
         }
         if (opt.filter) send_due_replies(sock, opt, buf, st, wait_us);
         const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
-        const long n = spin ? sock.try_receive(Bytes(buf.data(), buf.size()))
-                            : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
+        bool from_down = false;
+        long n = 0;
+        if (opt.downstream)
+            n = receive_either(sock, *opt.downstream, Bytes(buf.data(), buf.size()), wait_us, spin,
+                               from_down);
+        else
+            n = spin ? sock.try_receive(Bytes(buf.data(), buf.size()))
+                     : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
         const std::uint64_t now = monotonic_ns();
-        if (n > 0) {
+        if (opt.downstream && now - last_link_check >= kLinkCheckNs) {
+            last_link_check = now;
+            if (const bool up = opt.downstream->carrier(); up != seg.downstream_link())
+                seg.set_downstream_link(up);
+        }
+        if (n > 0 && from_down) {
+            // Back from the next segment: through the ESCs' port 1 -> port 0 path to the master side.
+            std::size_t len = static_cast<std::size_t>(n);
+            if (seg.return_frame(Bytes(buf.data(), buf.size()), len, now)) {
+                ++st.returned;
+                if (sock.send(ConstBytes(buf.data(), len)))
+                    ++st.sent;
+                else
+                    ++st.send_errors;
+                if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), 2);
+            }
+        } else if (n > 0) {
             ++st.received;
             std::size_t len = static_cast<std::size_t>(n);
             // The frame counts as of its kernel receive time (on the monotonic clock), never before what
@@ -74,7 +125,13 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), rx_real ? rx_real : real, 1);
             const bool reply = opt.filter ? opt.filter->process_frame(Bytes(buf.data(), buf.size()), len, at)
                                           : seg.process_frame(Bytes(buf.data(), buf.size()), len, at);
-            if (reply) {
+            if (reply && opt.downstream && seg.frame_goes_downstream()) {
+                // Port 1 of the last slave has a link: the frame goes on along the line.
+                if (opt.downstream->send(ConstBytes(buf.data(), len)))
+                    ++st.sent_downstream;
+                else
+                    ++st.send_errors;
+            } else if (reply) {
                 if (sock.send(ConstBytes(buf.data(), len)))
                     ++st.sent;
                 else

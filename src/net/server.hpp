@@ -24,12 +24,18 @@ struct ServeOptions {
     // While this flag is true a busy-polling loop sleeps in poll() like the blocking mode (the round-trip
     // benchmark parks one server while it measures another on the same two cores).
     const std::atomic<bool>* park = nullptr;
+    // Chained segments: the interface port 1 of the last slave is cabled to (towards the next vecat
+    // process). While it has a link, processed frames go out of it instead of back to the master, and the
+    // frames coming back on it are forwarded to the master side; without a link the line closes here.
+    RawSocket* downstream = nullptr;
 };
 
 struct ServeStats {
     std::uint64_t received = 0;
     std::uint64_t sent = 0;
     std::uint64_t send_errors = 0;
+    std::uint64_t sent_downstream = 0;  // chained segments: frames passed on to the next segment
+    std::uint64_t returned = 0;         // ... and frames back from it, forwarded to the master side
 };
 
 // Runs until stop becomes true.
