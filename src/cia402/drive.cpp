@@ -1,6 +1,7 @@
 #include "cia402/drive.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -46,15 +47,38 @@ std::int32_t wrap32(std::int64_t v) {
     return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
 }
 
+// std::lround for |v| < 2^52 without the library call (several per servo step): halves away from zero.
+// v - trunc(v) is exact, so the result is the same.
+double round_half_away(double v) {
+    double r = std::trunc(v);
+    const double frac = v - r;
+    if (frac >= 0.5)
+        r += 1.0;
+    else if (frac <= -0.5)
+        r -= 1.0;
+    return r;
+}
+
 std::int32_t sat32(double v) {
     if (!(v == v)) return 0;
     v = std::clamp(v, -2147483648.0, 2147483647.0);
-    return static_cast<std::int32_t>(std::lround(v));
+    return static_cast<std::int32_t>(round_half_away(v));
 }
 
 std::int16_t sat16(double v) {
     if (!(v == v)) return 0;
-    return static_cast<std::int16_t>(std::lround(std::clamp(v, -32768.0, 32767.0)));
+    return static_cast<std::int16_t>(round_half_away(std::clamp(v, -32768.0, 32767.0)));
+}
+
+// 10^index for every int8 index, from std::pow once (the interpolation period is read every servo step).
+double pow10_of(std::int8_t index) {
+    static const std::array<double, 256> table = [] {
+        std::array<double, 256> t{};
+        for (int i = -128; i < 128; ++i)
+            t[static_cast<std::size_t>(i + 128)] = std::pow(10.0, i);
+        return t;
+    }();
+    return table[static_cast<std::size_t>(index + 128)];
 }
 
 constexpr std::uint16_t kNewSetpoint = 1u << 4;
@@ -355,8 +379,8 @@ ProfileLimits Drive::profile_limits() const {
 
 double Drive::interpolation_period() const {
     const double value = rd<std::uint8_t>(o_->interpolation_value, 1);
-    const int index = rd<std::int8_t>(o_->interpolation_index, -3);
-    const double t = value * std::pow(10.0, index);
+    const std::int8_t index = rd<std::int8_t>(o_->interpolation_index, -3);
+    const double t = value * pow10_of(index);
     return t > 0 ? std::max(t, kServoPeriodNs * 1e-9) : 1e-3;
 }
 

@@ -12,6 +12,29 @@ namespace vecat {
 inline void copy_bits(std::uint8_t* dst, std::size_t dst_off, const std::uint8_t* src, std::size_t src_off,
                       std::size_t n) noexcept {
     if (n == 0) return;
+    if ((dst_off | src_off | n) % 8 == 0) {
+        // Whole objects of 1, 2, 4 or 8 bytes (nearly every mapped entry): fixed-size copies the compiler
+        // inlines, instead of a library call per entry.
+        std::uint8_t* d = dst + dst_off / 8;
+        const std::uint8_t* s = src + src_off / 8;
+        switch (n / 8) {
+            case 1:
+                *d = *s;
+                return;
+            case 2:
+                std::memcpy(d, s, 2);
+                return;
+            case 4:
+                std::memcpy(d, s, 4);
+                return;
+            case 8:
+                std::memcpy(d, s, 8);
+                return;
+            default:
+                std::memcpy(d, s, n / 8);
+                return;
+        }
+    }
     if ((dst_off | src_off) % 8 == 0) {
         std::memcpy(dst + dst_off / 8, src + src_off / 8, n / 8);
         if (n % 8 == 0) return;
