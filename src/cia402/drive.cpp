@@ -345,7 +345,13 @@ void Drive::read_configuration() {
     f.gear_shaft_revolutions = rd<std::uint32_t>(o_->gear_shaft, 1);
     f.feed = rd<std::uint32_t>(o_->feed, f.feed);
     f.feed_shaft_revolutions = rd<std::uint32_t>(o_->feed_shaft, 1);
-    if (f.valid()) factors_ = f;
+    // factors_ only ever holds a valid group, so an unchanged one needs no check.
+    const bool same = f.encoder_increments == factors_.encoder_increments &&
+                      f.motor_revolutions == factors_.motor_revolutions &&
+                      f.gear_motor_revolutions == factors_.gear_motor_revolutions &&
+                      f.gear_shaft_revolutions == factors_.gear_shaft_revolutions &&
+                      f.feed == factors_.feed && f.feed_shaft_revolutions == factors_.feed_shaft_revolutions;
+    if (!same && f.valid()) factors_ = f;
 }
 
 double Drive::nm_per_permille() const {

@@ -62,20 +62,19 @@ Fraction reduce(const FactorGroup& f) {
 // Every servo step converts several values with the same factors, and the gcd of 128-bit products is
 // costly (hundreds of ns): the last result is kept, per thread, keyed by the six factors.
 Fraction reduced(const FactorGroup& f) {
-    using Key = std::array<std::uint32_t, 6>;
     struct Memo {
-        Key key{};
+        std::uint64_t k0 = 0, k1 = 0, k2 = 0;  // the six factors, two per word
         Fraction r;
         bool set = false;
     };
     thread_local Memo memo;
-    const Key key{f.encoder_increments,
-                  f.motor_revolutions,
-                  f.gear_motor_revolutions,
-                  f.gear_shaft_revolutions,
-                  f.feed,
-                  f.feed_shaft_revolutions};
-    if (!memo.set || memo.key != key) memo = {key, reduce(f), true};
+    const auto pair = [](std::uint32_t lo, std::uint32_t hi) {
+        return lo | static_cast<std::uint64_t>(hi) << 32;
+    };
+    const std::uint64_t k0 = pair(f.encoder_increments, f.motor_revolutions);
+    const std::uint64_t k1 = pair(f.gear_motor_revolutions, f.gear_shaft_revolutions);
+    const std::uint64_t k2 = pair(f.feed, f.feed_shaft_revolutions);
+    if (!memo.set || memo.k0 != k0 || memo.k1 != k1 || memo.k2 != k2) memo = {k0, k1, k2, reduce(f), true};
     return memo.r;
 }
 
