@@ -714,7 +714,7 @@ bool Esc::pdi_buffer_write(unsigned i, ConstBytes in) {
     std::uint8_t* dst = &mem_[s.start + static_cast<std::size_t>(s.buf_pdi) * s.length];
     const std::size_t n = std::min<std::size_t>(in.size(), s.length);
     std::memcpy(dst, in.data(), n);
-    std::memset(dst + n, 0, s.length - n);
+    if (n < s.length) std::memset(dst + n, 0, s.length - n);
     s.buf_next = s.buf_pdi;
     s.buf_pdi = static_cast<std::uint8_t>(3 - s.buf_next - s.buf_ecat);
     update_sm_status(i);
