@@ -1,6 +1,7 @@
 #include "cia402/drive.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -53,15 +54,38 @@ std::int64_t floor64(double v) {
     return static_cast<std::int64_t>(std::floor(std::clamp(v, -9.2e18, 9.2e18)));
 }
 
+// std::lround for |v| < 2^52 without the library call (several per servo step): halves away from zero.
+// v - trunc(v) is exact, so the result is the same.
+double round_half_away(double v) {
+    double r = std::trunc(v);
+    const double frac = v - r;
+    if (frac >= 0.5)
+        r += 1.0;
+    else if (frac <= -0.5)
+        r -= 1.0;
+    return r;
+}
+
 std::int32_t sat32(double v) {
     if (!(v == v)) return 0;
     v = std::clamp(v, -2147483648.0, 2147483647.0);
-    return static_cast<std::int32_t>(std::lround(v));
+    return static_cast<std::int32_t>(round_half_away(v));
 }
 
 std::int16_t sat16(double v) {
     if (!(v == v)) return 0;
-    return static_cast<std::int16_t>(std::lround(std::clamp(v, -32768.0, 32767.0)));
+    return static_cast<std::int16_t>(round_half_away(std::clamp(v, -32768.0, 32767.0)));
+}
+
+// 10^index for every int8 index, from std::pow once (the interpolation period is read every servo step).
+double pow10_of(std::int8_t index) {
+    static const std::array<double, 256> table = [] {
+        std::array<double, 256> t{};
+        for (int i = -128; i < 128; ++i)
+            t[static_cast<std::size_t>(i + 128)] = std::pow(10.0, i);
+        return t;
+    }();
+    return table[static_cast<std::size_t>(index + 128)];
 }
 
 constexpr std::uint16_t kNewSetpoint = 1u << 4;
@@ -328,7 +352,13 @@ void Drive::read_configuration() {
     f.gear_shaft_revolutions = rd<std::uint32_t>(o_->gear_shaft, 1);
     f.feed = rd<std::uint32_t>(o_->feed, f.feed);
     f.feed_shaft_revolutions = rd<std::uint32_t>(o_->feed_shaft, 1);
-    if (f.valid()) factors_ = f;
+    // factors_ only ever holds a valid group, so an unchanged one needs no check.
+    const bool same = f.encoder_increments == factors_.encoder_increments &&
+                      f.motor_revolutions == factors_.motor_revolutions &&
+                      f.gear_motor_revolutions == factors_.gear_motor_revolutions &&
+                      f.gear_shaft_revolutions == factors_.gear_shaft_revolutions &&
+                      f.feed == factors_.feed && f.feed_shaft_revolutions == factors_.feed_shaft_revolutions;
+    if (!same && f.valid()) factors_ = f;
 }
 
 double Drive::nm_per_permille() const {
@@ -362,8 +392,8 @@ ProfileLimits Drive::profile_limits() const {
 
 double Drive::interpolation_period() const {
     const double value = rd<std::uint8_t>(o_->interpolation_value, 1);
-    const int index = rd<std::int8_t>(o_->interpolation_index, -3);
-    const double t = value * std::pow(10.0, index);
+    const std::int8_t index = rd<std::int8_t>(o_->interpolation_index, -3);
+    const double t = value * pow10_of(index);
     return t > 0 ? std::max(t, kServoPeriodNs * 1e-9) : 1e-3;
 }
 

@@ -1,6 +1,7 @@
 #include "cia402/factor_group.hpp"
 
 #include <array>
+#include <limits>
 #include <numbers>
 
 namespace vecat::cia402 {
@@ -10,6 +11,16 @@ namespace {
 __extension__ using i128 = __int128;  // products of two 64-bit values
 
 std::int64_t floor_div(i128 a, i128 b) {
+    // Most products fit in 64 bits, where the division is a single instruction (the 128-bit one is a
+    // library call); the result is the same.
+    constexpr i128 kLo = std::numeric_limits<std::int64_t>::min() + 1,
+                   kHi = std::numeric_limits<std::int64_t>::max();
+    if (a >= kLo && a <= kHi && b >= kLo && b <= kHi) {
+        const auto a64 = static_cast<std::int64_t>(a), b64 = static_cast<std::int64_t>(b);
+        std::int64_t q = a64 / b64;
+        if ((a64 % b64 != 0) && ((a64 < 0) != (b64 < 0))) --q;
+        return q;
+    }
     i128 q = a / b;
     if ((a % b != 0) && ((a < 0) != (b < 0))) --q;
     return static_cast<std::int64_t>(q);
@@ -51,20 +62,19 @@ Fraction reduce(const FactorGroup& f) {
 // Every servo step converts several values with the same factors, and the gcd of 128-bit products is
 // costly (hundreds of ns): the last result is kept, per thread, keyed by the six factors.
 Fraction reduced(const FactorGroup& f) {
-    using Key = std::array<std::uint32_t, 6>;
     struct Memo {
-        Key key{};
+        std::uint64_t k0 = 0, k1 = 0, k2 = 0;  // the six factors, two per word
         Fraction r;
         bool set = false;
     };
     thread_local Memo memo;
-    const Key key{f.encoder_increments,
-                  f.motor_revolutions,
-                  f.gear_motor_revolutions,
-                  f.gear_shaft_revolutions,
-                  f.feed,
-                  f.feed_shaft_revolutions};
-    if (!memo.set || memo.key != key) memo = {key, reduce(f), true};
+    const auto pair = [](std::uint32_t lo, std::uint32_t hi) {
+        return lo | static_cast<std::uint64_t>(hi) << 32;
+    };
+    const std::uint64_t k0 = pair(f.encoder_increments, f.motor_revolutions);
+    const std::uint64_t k1 = pair(f.gear_motor_revolutions, f.gear_shaft_revolutions);
+    const std::uint64_t k2 = pair(f.feed, f.feed_shaft_revolutions);
+    if (!memo.set || memo.k0 != k0 || memo.k1 != k1 || memo.k2 != k2) memo = {k0, k1, k2, reduce(f), true};
     return memo.r;
 }
 
@@ -84,29 +94,52 @@ std::int64_t FactorGroup::denominator() const {
     return r.num ? r.den : 1;
 }
 
+namespace {
+
+// The fraction as the conversions use it (1:1 when invalid), looked up once per conversion.
+Fraction effective(const FactorGroup& f) {
+    const Fraction r = reduced(f);
+    return r.num ? r : Fraction{1, 1};
+}
+
+double increments_per_revolution_of(const FactorGroup& f, const Fraction& r) {
+    if (r.num == 0) return 1u << 20;
+    return static_cast<double>(f.encoder_increments) / f.motor_revolutions;
+}
+
+}  // namespace
+
 std::int64_t FactorGroup::user_to_increments(std::int64_t user) const {
-    return floor_div(static_cast<i128>(user) * numerator(), denominator());
+    const Fraction r = effective(*this);
+    return floor_div(static_cast<i128>(user) * r.num, r.den);
 }
 
 std::int64_t FactorGroup::increments_to_user(std::int64_t increments) const {
-    return floor_div(static_cast<i128>(increments) * denominator(), numerator());
+    const Fraction r = effective(*this);
+    return floor_div(static_cast<i128>(increments) * r.den, r.num);
 }
 
 double FactorGroup::increments_per_user() const {
-    return static_cast<double>(numerator()) / static_cast<double>(denominator());
+    const Fraction r = effective(*this);
+    return static_cast<double>(r.num) / static_cast<double>(r.den);
 }
 
 double FactorGroup::increments_per_revolution() const {
-    if (!valid()) return 1u << 20;
-    return static_cast<double>(encoder_increments) / motor_revolutions;
+    return increments_per_revolution_of(*this, reduced(*this));
 }
 
 double FactorGroup::user_to_radians(double user) const {
-    return user * increments_per_user() / increments_per_revolution() * 2.0 * std::numbers::pi;
+    const Fraction raw = reduced(*this);
+    const Fraction r = raw.num ? raw : Fraction{1, 1};
+    const double per_user = static_cast<double>(r.num) / static_cast<double>(r.den);
+    return user * per_user / increments_per_revolution_of(*this, raw) * 2.0 * std::numbers::pi;
 }
 
 double FactorGroup::radians_to_user(double rad) const {
-    return rad / (2.0 * std::numbers::pi) * increments_per_revolution() / increments_per_user();
+    const Fraction raw = reduced(*this);
+    const Fraction r = raw.num ? raw : Fraction{1, 1};
+    const double per_user = static_cast<double>(r.num) / static_cast<double>(r.den);
+    return rad / (2.0 * std::numbers::pi) * increments_per_revolution_of(*this, raw) / per_user;
 }
 
 }  // namespace vecat::cia402

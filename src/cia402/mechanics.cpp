@@ -61,6 +61,9 @@ void Mechanics::derive() {
     c_ = gains_.current_bandwidth > 0.0 ? gains_.current_bandwidth : 0.0;
     peak_torque_ = std::abs(motor_.peak_current * motor_.torque_constant);
     rad_per_count_ = std::ldexp(two_pi, -static_cast<int>(motor_.encoder_bits));
+    // 2^bits, by which a multiplication is as exact as ldexp (0: too many bits, ldexp is used).
+    counts_per_turn_ =
+        motor_.encoder_bits <= 62 ? std::ldexp(1.0, static_cast<int>(motor_.encoder_bits)) : 0.0;
     cached_dt_ = -1.0;
 }
 
@@ -109,7 +112,9 @@ bool Mechanics::torque_limited() const {
 
 std::int64_t Mechanics::count_of(double p) const {
     // floor(p / 2 pi * 2^bits); the scaling by 2^bits is exact. Saturates instead of overflowing.
-    const double v = std::floor(std::ldexp(p / two_pi, static_cast<int>(motor_.encoder_bits)));
+    const double x = p / two_pi;
+    const double v = std::floor(counts_per_turn_ > 0 ? x * counts_per_turn_
+                                                     : std::ldexp(x, static_cast<int>(motor_.encoder_bits)));
     if (std::isnan(v)) return 0;
     if (v >= 9.2e18) return std::numeric_limits<std::int64_t>::max();
     if (v <= -9.2e18) return std::numeric_limits<std::int64_t>::min();

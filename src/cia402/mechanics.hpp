@@ -125,6 +125,7 @@ class Mechanics {
     ControlGains gains_;
     // Derived from motor_ and gains_.
     double inertia_ = 0, a_ = 0, c_ = 0, peak_torque_ = 0, rad_per_count_ = 0;
+    double counts_per_turn_ = 0;
     // Cached for the last dt.
     double cached_dt_ = -1, h_ = 0;
     unsigned n_ = 0;

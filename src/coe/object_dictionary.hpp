@@ -2,6 +2,7 @@
 // checked SDO access to them (access per AL state, lengths, value ranges, complete access).
 #pragma once
 
+#include <bit>
 #include <cstdint>
 #include <cstring>
 #include <functional>
@@ -47,6 +48,14 @@ class Entry {
     template <class T>
     T get() const {
         static_assert(std::is_arithmetic_v<T>);
+        // The usual case, a value of the entry's size on a little-endian host, is one load (the drive reads
+        // dozens of entries every servo step).
+        if constexpr (std::endian::native == std::endian::little && !std::is_same_v<T, bool>)
+            if (storage_.size() >= sizeof(T)) {
+                T v;
+                std::memcpy(&v, storage_.data(), sizeof(T));
+                return v;
+            }
         std::uint64_t u = 0;
         const std::size_t n = std::min(sizeof(T), storage_.size());
         for (std::size_t i = 0; i < n; ++i)
@@ -62,6 +71,11 @@ class Entry {
     template <class T>
     void set(T v) {
         static_assert(std::is_arithmetic_v<T>);
+        if constexpr (std::endian::native == std::endian::little)
+            if (storage_.size() >= sizeof(T)) {
+                std::memcpy(storage_.data(), &v, sizeof(T));
+                return;
+            }
         std::uint64_t u = 0;
         std::memcpy(&u, &v, sizeof(T));
         const std::size_t n = std::min(sizeof(T), storage_.size());

@@ -109,7 +109,8 @@ struct ParsedFrame {
     FrameError error = FrameError::None;
     std::size_t ecat_offset = 0;  // offset of the EtherCAT header
     std::size_t count = 0;
-    std::array<std::uint16_t, kMaxDatagramsPerFrame> offsets{};  // of each datagram header
+    // Of each datagram header; only the first count are set (not zeroed: parsed for every frame).
+    std::array<std::uint16_t, kMaxDatagramsPerFrame> offsets;
 
     DatagramView datagram(Bytes frame, std::size_t i) const {
         return DatagramView(frame.data() + offsets[i]);

@@ -246,14 +246,16 @@ void Esc::logical(DatagramView d, bool do_read, bool do_write, const FrameTiming
     std::uint8_t* data = d.data();
     const std::uint64_t dfirst = static_cast<std::uint64_t>(d.logical_address()) * 8;
     const std::uint64_t dlast = dfirst + dlen * 8 - 1;
+    if (dlast < fmmu_log_first_bit_ || dfirst > fmmu_log_last_bit_) return;  // no FMMU maps any of it
     bool any_read = false, any_write = false;
     // Writes take the incoming frame data, so all writes happen before any read replaces it.
     for (int pass = 0; pass < 2; ++pass) {
         const bool writing = pass == 0;
         if (writing ? !do_write : !do_read) continue;
-        for (unsigned i = 0; i < cfg_.fmmu_count; ++i) {
+        // The active FMMUs of this direction, in index order.
+        for (std::uint32_t m = writing ? fmmu_write_mask_ : fmmu_read_mask_; m; m &= m - 1) {
+            const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
             const FmmuState& f = fmmu_[i];
-            if (!f.active || (writing ? !f.write : !f.read)) continue;
             const std::uint64_t first = std::max(f.log_first_bit, dfirst);
             const std::uint64_t last = std::min(f.log_last_bit, dlast);
             if (first > last) continue;
@@ -551,6 +553,18 @@ void Esc::update_fmmu(unsigned i) {
         static_cast<std::uint32_t>(ld_le16(b + fmmu::PhysicalStart)) * 8 + (b[fmmu::PhysicalStartBit] & 7);
     f.byte_aligned = sbit == 0 && ebit == 7 && (b[fmmu::PhysicalStartBit] & 7) == 0;
     f.active = (b[fmmu::Activate] & 1) && (f.read || f.write) && len > 0 && f.log_last_bit >= f.log_first_bit;
+    static_assert(kMaxFmmus <= 32);
+    fmmu_read_mask_ = fmmu_write_mask_ = 0;
+    fmmu_log_first_bit_ = ~std::uint64_t{0};
+    fmmu_log_last_bit_ = 0;
+    for (unsigned k = 0; k < cfg_.fmmu_count; ++k) {
+        const FmmuState& g = fmmu_[k];
+        if (!g.active) continue;
+        if (g.read) fmmu_read_mask_ |= 1u << k;
+        if (g.write) fmmu_write_mask_ |= 1u << k;
+        fmmu_log_first_bit_ = std::min(fmmu_log_first_bit_, g.log_first_bit);
+        fmmu_log_last_bit_ = std::max(fmmu_log_last_bit_, g.log_last_bit);
+    }
 }
 
 Esc::SmConfigView Esc::sm_config(unsigned i) const {
@@ -700,7 +714,7 @@ bool Esc::pdi_buffer_write(unsigned i, ConstBytes in) {
     std::uint8_t* dst = &mem_[s.start + static_cast<std::size_t>(s.buf_pdi) * s.length];
     const std::size_t n = std::min<std::size_t>(in.size(), s.length);
     std::memcpy(dst, in.data(), n);
-    std::memset(dst + n, 0, s.length - n);
+    if (n < s.length) std::memset(dst + n, 0, s.length - n);
     s.buf_next = s.buf_pdi;
     s.buf_pdi = static_cast<std::uint8_t>(3 - s.buf_next - s.buf_ecat);
     update_sm_status(i);

@@ -184,6 +184,10 @@ class Esc {
     std::array<SmState, kMaxSms> sm_{};
     std::array<FmmuState, kMaxFmmus> fmmu_{};
     std::uint32_t sm_active_mask_ = 0;
+    // Active FMMUs that read / write, and the logical bit range all active FMMUs cover together (a
+    // logical datagram outside it is rejected without looking at each FMMU).
+    std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;
+    std::uint64_t fmmu_log_first_bit_ = ~std::uint64_t{0}, fmmu_log_last_bit_ = 0;
     std::uint32_t repeat_bits_ = 0;
     std::uint8_t link_mask_ = 0x01;
     std::uint8_t written_sii_cmd_ = 0;
