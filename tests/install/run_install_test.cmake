@@ -30,7 +30,7 @@ endif()
 
 # The user's project sees only the prefix (not the build tree).
 run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/install -B ${WORK_DIR}/user -G Ninja -DCMAKE_BUILD_TYPE=Release
-    -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_CXX_COMPILER_LAUNCHER=${LAUNCHER})
+    -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_CXX_COMPILER_LAUNCHER=${LAUNCHER} "-DCMAKE_CXX_FLAGS=${USER_FLAGS}")
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/user -j2)
 run(${WORK_DIR}/user/user_test)
 message(STATUS "install test: find_package(vecat) from ${prefix} and vecat::testing work")
