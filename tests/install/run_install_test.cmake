@@ -1,7 +1,8 @@
 # The install test: cmake --install of the (already built) project into a temporary prefix, then the user
-# project beside this file configured and built against it, and its test run.
-# cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -P run_install_test.cmake
-foreach(v BUILD_DIR SOURCE_DIR WORK_DIR)
+# project beside this file configured and built against it (find_package), its test run, and a
+# program built with the flags of pkg-config alone.
+# cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DCXX=<compiler> -P run_install_test.cmake
+foreach(v BUILD_DIR SOURCE_DIR WORK_DIR CXX)
   if(NOT DEFINED ${v})
     message(FATAL_ERROR "run_install_test.cmake needs -D${v}=...")
   endif()
@@ -33,5 +34,17 @@ run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/install -B ${WORK_DIR}/user -G Ninja
     -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_CXX_COMPILER_LAUNCHER=${LAUNCHER} "-DCMAKE_CXX_FLAGS=${USER_FLAGS}")
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/user -j2)
 run(${WORK_DIR}/user/user_test)
+# The same through pkg-config (vecat.pc) with the plain compiler.
+find_program(PKG_CONFIG pkg-config REQUIRED)
+get_filename_component(pcdir ${pc} DIRECTORY)
+execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${pcdir} ${PKG_CONFIG} --cflags --libs vecat
+                RESULT_VARIABLE rc OUTPUT_VARIABLE flags OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "pkg-config --cflags --libs vecat failed")
+endif()
+separate_arguments(flags UNIX_COMMAND "${flags} ${USER_FLAGS}")
+run(${CXX} ${SOURCE_DIR}/tests/install/pkgconfig_user.cpp ${flags} -o ${WORK_DIR}/pkgconfig_user)
+run(${WORK_DIR}/pkgconfig_user)
+
 message(STATUS "install test: find_package(vecat) from ${prefix} and vecat::testing work")
 file(REMOVE_RECURSE ${WORK_DIR})
