@@ -127,7 +127,13 @@ TEST(VethTelemetry, SubscriberReceivesWhatTheMasterReadWithinOneCycle) {
             }
             return std::pair{lo, hi};
         };
-        const auto [lo, hi] = range(k - 1, k + 2);
+        // Between two reads the axis can also turn (overshoot while it settles): the sample may lie beyond
+        // the reads by as much as the axis moves between two consecutive reads of the window.
+        const auto [lo_read, hi_read] = range(k - 1, k + 2);
+        std::int32_t step = 0;
+        for (std::size_t j = k - 1; j < k + 2; ++j)
+            step = std::max(step, std::abs(reads[j + 1].position[a.slave] - reads[j].position[a.slave]));
+        const std::int32_t lo = lo_read - step, hi = hi_read + step;
         EXPECT_TRUE(a.position_actual >= lo && a.position_actual <= hi)
             << "slave " << a.slave << " sample position " << a.position_actual << " master read " << lo
             << ".." << hi << " around cycle " << k;
