@@ -92,8 +92,8 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
             bool busy, bool allow_busy_if, double drift_ppm, const std::string& esi_path,
             const vecat::esi::DeviceSelector& sel, const std::string& param_dir,
             const vecat::cli::RunFaultOptions& fault_opts, const vecat::cli::TelemetryOptions& telemetry,
-            vecat::cia402::TwinsyncPreset twinsync, const vecat::net::RealtimeOptions& rt, std::int64_t tick_us,
-            const std::string& downstream) {
+            vecat::cia402::TwinsyncPreset twinsync, const vecat::net::RealtimeOptions& rt,
+            std::int64_t tick_us, const std::string& downstream) {
     std::string why;
     for (const std::string& i : {iface, downstream}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -488,8 +488,8 @@ int main(int argc, char** argv) {
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
     if (*run)
-        return cmd_run(iface, slaves, pcap, pcap_limit_mb, busy, allow_used, drift_ppm, esi_path, sel, param_dir,
-                       fault_opts, telemetry, twinsync, rt, tick_us, downstream);
+        return cmd_run(iface, slaves, pcap, pcap_limit_mb, busy, allow_used, drift_ppm, esi_path, sel,
+                       param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream);
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
