@@ -282,7 +282,11 @@ Drive::Drive(const device::DeviceDescription& d)
     write_feedback();
 }
 
-Drive::~Drive() = default;
+Drive::~Drive() {
+    // A drive that goes (a slave powered off and rebuilt) leaves its partner with a dead cable, not with a
+    // dangling partner.
+    if (twin_partner_) twin_partner_->twin_partner_ = nullptr;
+}
 
 void Drive::tick(std::uint64_t now_ns) {
     advance(now_ns);

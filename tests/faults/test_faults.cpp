@@ -269,6 +269,11 @@ TEST_F(FaultTest, PoweredOffSlaveBreaksTheLineAndRestartsInInit) {
     ASSERT_EQ(b->master.aprd(1, esc::addr(esc::Reg::AlStatus), Bytes(&al, 1)), 1);
     EXPECT_EQ(al, static_cast<std::uint8_t>(AlState::Init));
     EXPECT_EQ(b->master.read_al_status(b->station(2)).state(), AlState::PreOp);
+    // Slave 1 was drive 0's TWINsync partner: the rebuilt drive is not on the cable, and drive 0 keeps
+    // running without touching the old one (ASan would see it).
+    b->advance(10 * kMs);
+    auto& d0 = dynamic_cast<cia402::Drive&>(b->seg->slave(0).app());
+    EXPECT_GT(d0.servo_steps(), 0u);
 }
 
 TEST_F(FaultTest, HungFirmwareLeavesTheAlStateWhileTheEscAnswers) {
