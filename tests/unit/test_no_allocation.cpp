@@ -1,14 +1,23 @@
-// The cyclic path (receive, process, send) allocates no memory: every operator new is counted.
+// The cyclic path (receive, process, send) allocates no memory and takes no lock: every operator new is
+// counted (allocation_counter.cpp), and so is every mutex, condition variable, semaphore and futex call
+// (lock_counter.cpp).
 #include <gtest/gtest.h>
+#include <linux/futex.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <condition_variable>
 #include <cstdlib>
+#include <mutex>
 #include <new>
+#include <shared_mutex>
 #include <thread>
 
 #include "allocation_counter.hpp"
 #include "cia402/drive.hpp"
 #include "coe/coe_application.hpp"
+#include "lock_counter.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "net/server.hpp"
@@ -18,6 +27,30 @@ using namespace vecat;
 using namespace vecat::test;
 
 static bool g_netns = false;
+
+// The lock counter sees what the standard library's locks end in (else the tests below prove nothing).
+TEST(NoLock, CounterSeesTheStandardLocks) {
+    std::mutex m;
+    std::shared_mutex sm;
+    std::condition_variable cv;
+    auto before = test::lock_calls();
+    { std::lock_guard g(m); }
+    EXPECT_GE(test::lock_calls() - before, 1u);
+    before = test::lock_calls();
+    { std::shared_lock g(sm); }
+    EXPECT_GE(test::lock_calls() - before, 1u);
+    before = test::lock_calls();
+    {
+        std::unique_lock g(m);
+        cv.wait_for(g, std::chrono::microseconds(1));
+    }
+    EXPECT_GE(test::lock_calls() - before, 2u);
+    // What std::atomic::wait/notify and std::latch end in when they have to wait.
+    int word = 0;
+    before = test::lock_calls();
+    syscall(SYS_futex, &word, FUTEX_WAKE_PRIVATE, 1, nullptr, nullptr, 0);
+    EXPECT_EQ(test::lock_calls() - before, 1u);
+}
 
 TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
     Bench b(4);
@@ -30,12 +63,14 @@ TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
     for (int i = 0; i < 10; ++i)
         ASSERT_TRUE(b.master.transact_frame(dg));
     const auto before = test::allocations();
+    const auto locks_before = test::lock_calls();
     for (int i = 0; i < 10000; ++i) {
         b.link.set_time(2'000'000'000ull + static_cast<std::uint64_t>(i) * 1'000'000);
         ASSERT_TRUE(b.master.transact_frame(dg));
         ASSERT_EQ(dg[0].wkc, 12);
     }
     EXPECT_EQ(test::allocations() - before, 0u);
+    EXPECT_EQ(test::lock_calls() - locks_before, 0u);
 }
 
 // The drive's servo steps in every mode (profile planning, homing, interpolation, mechanics) allocate
@@ -74,8 +109,10 @@ TEST(NoAllocation, DriveMovingInEveryMode) {
     };
     all_modes();  // the first pass may set up what it needs
     const auto before = test::allocations();
+    const auto locks_before = test::lock_calls();
     all_modes();
     EXPECT_EQ(test::allocations() - before, 0u);
+    EXPECT_EQ(test::lock_calls() - locks_before, 0u);
 }
 
 // The serve loop and the master's socket, blocking and busy-polling, with enough drives that the process
@@ -115,12 +152,16 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if)
     for (int i = 0; i < 50; ++i)
         m.exchange_process_data();
     const auto before = test::allocations();
+    const auto locks_before = test::lock_calls();
     int ok = 0;
     for (int i = 0; i < 1000; ++i)
         ok += m.exchange_process_data().value_or(0) == m.expected_wkc();
     const auto allocs = test::allocations() - before;
+    const auto locks = test::lock_calls() - locks_before;
     EXPECT_EQ(ok, 1000);
     EXPECT_EQ(allocs, 0u);
+    // Both threads count: the master's and the serve loop's.
+    EXPECT_EQ(locks, 0u);
 }
 
 TEST(NoAllocation, RawSocketServeLoop) {
