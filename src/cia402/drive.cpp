@@ -311,6 +311,8 @@ void Drive::advance(std::uint64_t now_ns) {
     // receives the other's telegram of the previous control cycle whatever order the line runs them in.
     Drive* partner = twin_partner_;
     const bool first = twin_->end() == 0;
+    // The dictionary cannot change while the steps run (frames and SDO requests come in between calls).
+    if (now_ns - sim_ns_ >= kServoPeriodNs) read_configuration();
     while (now_ns - sim_ns_ >= kServoPeriodNs) {
         sim_ns_ += kServoPeriodNs;
         if (partner && !first) partner->step_to(sim_ns_);
@@ -326,6 +328,7 @@ void Drive::step_to(std::uint64_t t_ns) {
         return;
     }
     if (t_ns > sim_ns_ + 200'000'000) sim_ns_ = t_ns - 200'000'000;
+    if (sim_ns_ + kServoPeriodNs <= t_ns) read_configuration();
     while (sim_ns_ + kServoPeriodNs <= t_ns) {
         sim_ns_ += kServoPeriodNs;
         servo_step();
@@ -362,19 +365,21 @@ void Drive::read_configuration() {
                       f.gear_motor_revolutions == factors_.gear_motor_revolutions &&
                       f.gear_shaft_revolutions == factors_.gear_shaft_revolutions &&
                       f.feed == factors_.feed && f.feed_shaft_revolutions == factors_.feed_shaft_revolutions;
-    if (!same && f.valid()) factors_ = f;
-}
-
-double Drive::nm_per_permille() const {
+    if (!same && f.valid()) {
+        factors_ = f;
+        ratios_ = f.ratios();
+    }
     const double rated = static_cast<double>(rd<std::uint32_t>(o_->rated_torque, 1000)) * 1e-3;  // Nm
-    return rated / 1000.0;
+    nm_per_permille_ = rated / 1000.0;
+    // Velocity threshold 0x606F, at least one unit per second.
+    standstill_velocity_ = std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0);
 }
 
 double Drive::max_velocity() const {
     double v = static_cast<double>(rd<std::uint32_t>(o_->max_profile_velocity, 0xFFFFFFFFu));
     // Max motor speed 0x6080 (rpm) converted to user units/s.
     const double rpm = static_cast<double>(rd<std::uint32_t>(o_->max_motor_speed, 0));
-    if (rpm > 0) v = std::min(v, factors_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi));
+    if (rpm > 0) v = std::min(v, ratios_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi));
     return std::max(v, 1.0);
 }
 
@@ -415,12 +420,7 @@ double Drive::clamp_to_software_limits(double p) const {
 }
 
 double Drive::machine_increments() const {
-    return mech_->position() / (2.0 * std::numbers::pi) * factors_.increments_per_revolution();
-}
-
-double Drive::standstill_velocity() const {
-    // Velocity threshold 0x606F, at least one unit per second.
-    return std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0);
+    return mech_->position() / (2.0 * std::numbers::pi) * ratios_.per_revolution;
 }
 
 void Drive::update_inputs() {
@@ -538,13 +538,13 @@ void Drive::run_stop(StopKind k, double dt) {
 void Drive::servo_step() {
     const double dt = kServoPeriodNs * 1e-9;
     ++steps_;
-    read_configuration();
     const std::uint16_t own_controlword = rd<std::uint16_t>(o_->controlword, 0);
     controlword_ = own_controlword;
 
     // TWINsync: the telegram of the partner drive's last cycle. A slave controlled through TWINsync obeys
     // the master drive's control word (P2611) instead of 0x6040.
-    twin_->receive(sim_ns_, twinsync_local());
+    // (The drive's own state matters to the port only while TWINsync is on.)
+    twin_->receive(sim_ns_, twin_->active() ? twinsync_local() : twinsync::LocalState{});
     previous_twin_control_ = twin_control_;
     twin_control_ = twin_->received_control_word();
     if (twin_->controlled_by_twinsync() && twin_->has_data())
@@ -659,8 +659,8 @@ void Drive::servo_step() {
     const double machine_inc = machine_increments();
     previous_machine_inc_ = machine_inc;
     increments_ = floor64(machine_inc);
-    actual_user_ = static_cast<double>(factors_.increments_to_user(increments_)) + home_shift_;
-    velocity_user_ = factors_.radians_to_user(mech_->velocity());
+    actual_user_ = static_cast<double>(ratios_.increments_to_user(increments_)) + home_shift_;
+    velocity_user_ = ratios_.radians_to_user(mech_->velocity());
     if (loop_ != LoopMode::Position)
         demand_ = {actual_user_, loop_ == LoopMode::Velocity ? velocity_cmd_ : velocity_user_, 0.0};
     following_error_ = loop_ == LoopMode::Position ? demand_.p - actual_user_ : 0.0;
@@ -669,8 +669,11 @@ void Drive::servo_step() {
     write_feedback();
     // The TWINsync values every cycle while the link is on; otherwise only for SDO reads, every 4 ms.
     if (twin_->active() || steps_ % 16 == 0) write_twinsync_values();
-    twinsync::LocalState local = twinsync_local();
-    local.controlword = own_controlword;
+    twinsync::LocalState local;
+    if (twin_->active()) {
+        local = twinsync_local();
+        local.controlword = own_controlword;
+    }
     twin_->transmit(sim_ns_, local);
     previous_controlword_ = controlword_;
 }
@@ -736,7 +739,7 @@ void Drive::write_twinsync_values() {
     wr(o_->tw_local_act_pos, act);
     wr(o_->tw_position_actual, act);
     // Single-turn angle of the motor, 16 bit (the virtual encoder's raw value).
-    const double per_rev = factors_.increments_per_revolution();
+    const double per_rev = ratios_.per_revolution;
     const double turn = std::fmod(machine_increments(), per_rev) / per_rev;
     wr(o_->tw_local_eps,
        static_cast<std::uint16_t>(std::llround((turn < 0 ? turn + 1.0 : turn) * 65536.0) & 0xFFFF));
@@ -799,7 +802,7 @@ void Drive::run_twinsync(double dt) {
     auto speed = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_speed_ref; };    // rpm
     auto torque = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_torque_ref; };  // Nm
     auto rpm_to_user = [&](double rpm) {
-        return factors_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi);
+        return ratios_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi);
     };
     const double still = standstill_velocity();
     // The master's speed arrives as a 16-bit fraction of P2609: standstill within two of its steps.
@@ -1138,13 +1141,13 @@ void Drive::run_homing(double dt) {
     // Bit 4 rising starts the homing method 0x6098; bit 4 falling or halt interrupts it.
     const bool edge = (controlword_ & kHomingStart) && !(previous_controlword_ & kHomingStart);
     if (edge) {
-        const double ipu = factors_.increments_per_user();
+        const double ipu = ratios_.per_user;
         HomingParameters hp;
         hp.speed_switch = rd<std::uint32_t>(o_->homing_speed_switch, 0);
         hp.speed_zero = rd<std::uint32_t>(o_->homing_speed_zero, 0);
         hp.acceleration = rd<std::uint32_t>(o_->homing_acceleration, 0);
         hp.home_offset = rd<std::int32_t>(o_->home_offset, 0);
-        hp.index_period = factors_.increments_per_revolution() / ipu;
+        hp.index_period = ratios_.per_revolution / ipu;
         hp.index_phase = rd<std::int32_t>(o_->machine[4], 0) / ipu + home_shift_;
         hp.standstill_velocity = standstill_velocity();
         homing_active_ = homing_->start(rd<std::int8_t>(o_->homing_method, 0), hp, actual_user_);
@@ -1219,7 +1222,7 @@ void Drive::run_touch_probe(double previous_inc, double machine_inc) {
                 fall = !now && before;
             } else if (source == 1) {
                 // Index pulse once per motor revolution at the configured offset: the exact crossing.
-                const double period = factors_.increments_per_revolution();
+                const double period = ratios_.per_revolution;
                 const double offset = rd<std::int32_t>(o_->machine[4], 0);
                 const double lo = std::min(previous_inc, machine_inc),
                              hi = std::max(previous_inc, machine_inc);
@@ -1231,7 +1234,7 @@ void Drive::run_touch_probe(double previous_inc, double machine_inc) {
                 }
             }
             const double user =
-                static_cast<double>(factors_.increments_to_user(floor64(at_inc))) + home_shift_;
+                static_cast<double>(ratios_.increments_to_user(floor64(at_inc))) + home_shift_;
             const std::int32_t latched = wrap32(floor64(user));
             if (rise && (f & 0x10) && (continuous || !(st & 0x02))) {
                 wr(values[n][0], latched);
@@ -1330,7 +1333,7 @@ void Drive::write_feedback() {
     wr(o_->modes_display, static_cast<std::int8_t>(mode_));
     wr(o_->position_demand, sat32(demand_.p));
     wr(o_->position_demand_internal,
-       wrap32(factors_.user_to_increments(static_cast<std::int64_t>(std::llround(demand_.p - home_shift_)))));
+       wrap32(ratios_.user_to_increments(static_cast<std::int64_t>(std::llround(demand_.p - home_shift_)))));
     wr(o_->position_internal, wrap32(increments_));
     wr(o_->position_actual, wrap32(floor64(actual_user_)));
     wr(o_->following_error_actual, sat32(following_error_));

@@ -122,16 +122,20 @@ class Drive : public coe::CoeApplication {
     double clamp_to_software_limits(double p) const;
     bool software_limits_enabled() const;
     double machine_increments() const;  // motor position in encoder increments (homing does not move it)
-    double standstill_velocity() const;
-    double nm_per_permille() const;
-    double user_to_rad(double user) const { return factors_.user_to_radians(user - home_shift_); }
-    double rad_to_user(double rad) const { return factors_.radians_to_user(rad) + home_shift_; }
-    double user_velocity_to_rad(double v) const { return factors_.user_to_radians(v); }
+    // From the dictionary by read_configuration(), before the servo steps of each advance.
+    double standstill_velocity() const { return standstill_velocity_; }
+    double nm_per_permille() const { return nm_per_permille_; }
+    double user_to_rad(double user) const { return ratios_.user_to_radians(user - home_shift_); }
+    double rad_to_user(double rad) const { return ratios_.radians_to_user(rad) + home_shift_; }
+    double user_velocity_to_rad(double v) const { return ratios_.user_to_radians(v); }
 
     std::unique_ptr<Objects> o_;
     StateMachine sm_;
     OptionCodes options_;
     FactorGroup factors_;
+    FactorRatios ratios_ = factors_.ratios();  // kept with factors_
+    double nm_per_permille_ = 1e-3;
+    double standstill_velocity_ = 10.0;
     std::unique_ptr<Mechanics> mech_;
     ProfileGenerator profile_;
     std::unique_ptr<Homing> homing_;

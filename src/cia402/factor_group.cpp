@@ -94,52 +94,48 @@ std::int64_t FactorGroup::denominator() const {
     return r.num ? r.den : 1;
 }
 
-namespace {
-
-// The fraction as the conversions use it (1:1 when invalid), looked up once per conversion.
-Fraction effective(const FactorGroup& f) {
-    const Fraction r = reduced(f);
-    return r.num ? r : Fraction{1, 1};
+FactorRatios FactorGroup::ratios() const {
+    const Fraction raw = reduced(*this);
+    FactorRatios r;
+    if (raw.num != 0) {
+        r.num = raw.num;
+        r.den = raw.den;
+        r.per_revolution = static_cast<double>(encoder_increments) / motor_revolutions;
+    }
+    r.per_user = static_cast<double>(r.num) / static_cast<double>(r.den);
+    return r;
 }
 
-double increments_per_revolution_of(const FactorGroup& f, const Fraction& r) {
-    if (r.num == 0) return 1u << 20;
-    return static_cast<double>(f.encoder_increments) / f.motor_revolutions;
+std::int64_t FactorRatios::user_to_increments(std::int64_t user) const {
+    return floor_div(static_cast<i128>(user) * num, den);
 }
 
-}  // namespace
+std::int64_t FactorRatios::increments_to_user(std::int64_t increments) const {
+    return floor_div(static_cast<i128>(increments) * den, num);
+}
 
 std::int64_t FactorGroup::user_to_increments(std::int64_t user) const {
-    const Fraction r = effective(*this);
-    return floor_div(static_cast<i128>(user) * r.num, r.den);
+    return ratios().user_to_increments(user);
 }
 
 std::int64_t FactorGroup::increments_to_user(std::int64_t increments) const {
-    const Fraction r = effective(*this);
-    return floor_div(static_cast<i128>(increments) * r.den, r.num);
+    return ratios().increments_to_user(increments);
 }
 
 double FactorGroup::increments_per_user() const {
-    const Fraction r = effective(*this);
-    return static_cast<double>(r.num) / static_cast<double>(r.den);
+    return ratios().per_user;
 }
 
 double FactorGroup::increments_per_revolution() const {
-    return increments_per_revolution_of(*this, reduced(*this));
+    return ratios().per_revolution;
 }
 
 double FactorGroup::user_to_radians(double user) const {
-    const Fraction raw = reduced(*this);
-    const Fraction r = raw.num ? raw : Fraction{1, 1};
-    const double per_user = static_cast<double>(r.num) / static_cast<double>(r.den);
-    return user * per_user / increments_per_revolution_of(*this, raw) * 2.0 * std::numbers::pi;
+    return ratios().user_to_radians(user);
 }
 
 double FactorGroup::radians_to_user(double rad) const {
-    const Fraction raw = reduced(*this);
-    const Fraction r = raw.num ? raw : Fraction{1, 1};
-    const double per_user = static_cast<double>(r.num) / static_cast<double>(r.den);
-    return rad / (2.0 * std::numbers::pi) * increments_per_revolution_of(*this, raw) / per_user;
+    return ratios().radians_to_user(rad);
 }
 
 }  // namespace vecat::cia402

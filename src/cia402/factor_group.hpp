@@ -6,8 +6,26 @@
 #pragma once
 
 #include <cstdint>
+#include <numbers>
 
 namespace vecat::cia402 {
+
+// The conversions of a factor group with its reduced fraction worked out once: the gcd of 128-bit
+// products costs hundreds of instructions, and a drive converts several values every servo step, so it
+// keeps these for its current factors. FactorGroup's own conversions go through the same functions.
+struct FactorRatios {
+    std::int64_t num = 1, den = 1;     // increments = user * num / den (1:1 for an invalid group)
+    double per_user = 1.0;             // num / den
+    double per_revolution = 1u << 20;  // encoder increments per motor revolution
+    std::int64_t user_to_increments(std::int64_t user) const;
+    std::int64_t increments_to_user(std::int64_t increments) const;
+    double user_to_radians(double user) const {
+        return user * per_user / per_revolution * 2.0 * std::numbers::pi;
+    }
+    double radians_to_user(double rad) const {
+        return rad / (2.0 * std::numbers::pi) * per_revolution / per_user;
+    }
+};
 
 struct FactorGroup {
     std::uint32_t encoder_increments = 1u << 20;  // 0x608F:1
@@ -30,6 +48,7 @@ struct FactorGroup {
     // Motor angle (rad) of a position in user units, and back.
     double user_to_radians(double user) const;
     double radians_to_user(double rad) const;
+    FactorRatios ratios() const;
 };
 
 }  // namespace vecat::cia402

@@ -63,7 +63,8 @@ std::size_t for_each_ca_entry(const Object& o, std::uint8_t from, std::uint8_t l
 // ---- Entry ----
 
 Entry::Entry(device::EntryDescription d) : desc_(std::move(d)) {
-    storage_.assign(std::max<std::size_t>(1, (desc_.bit_length + 7u) / 8u), 0);
+    capacity_ = static_cast<std::uint32_t>(std::max<std::size_t>(1, (desc_.bit_length + 7u) / 8u));
+    if (capacity_ > kInline) heap_ = std::make_unique<std::uint8_t[]>(capacity_);
     reset_to_default();
 }
 
@@ -75,27 +76,29 @@ bool Entry::writable(AlState s) const {
 }
 
 void Entry::assign(ConstBytes v) {
-    const std::size_t n = std::min(v.size(), storage_.size());
-    std::copy_n(v.begin(), n, storage_.begin());
+    const std::size_t n = std::min<std::size_t>(v.size(), capacity_);
+    std::uint8_t* d = data();
+    std::copy_n(v.begin(), n, d);
     if (device::is_variable_length(desc_.type)) {
-        std::fill(storage_.begin() + static_cast<std::ptrdiff_t>(n), storage_.end(), 0);
-        size_ = n;
+        std::fill(d + n, d + capacity_, 0);
+        size_ = static_cast<std::uint32_t>(n);
     } else {
         size_ = (desc_.bit_length + 7u) / 8u;
     }
 }
 
 void Entry::reset_to_default() {
-    std::fill(storage_.begin(), storage_.end(), 0);
+    std::fill(data(), data() + capacity_, 0);
     assign(ConstBytes(desc_.default_value.data(), desc_.default_value.size()));
     if (!device::is_variable_length(desc_.type)) size_ = (desc_.bit_length + 7u) / 8u;
 }
 
 std::int64_t Entry::as_int64() const {
     const std::size_t n = std::min<std::size_t>(8, size_);
+    const std::uint8_t* d = data();
     std::uint64_t u = 0;
     for (std::size_t i = 0; i < n; ++i)
-        u |= static_cast<std::uint64_t>(storage_[i]) << (8 * i);
+        u |= static_cast<std::uint64_t>(d[i]) << (8 * i);
     const unsigned bits = desc_.bit_length;
     if (device::is_signed(desc_.type) && bits > 0 && bits < 64 && (u >> (bits - 1)) & 1u)
         u |= ~std::uint64_t{0} << bits;
