@@ -647,8 +647,15 @@ bool Demo::fault() {
     unsigned seen_after = 0;
     if (!cycle_until([&] { return ++seen_after, (d1.statusword & kSwFault) != 0; }, 500))
         return fail("drive 1 did not report the fault");
-    // Let the partner's monitoring see it too, then collect the emergencies from the mailboxes.
+    // A reset is only taken once the fault reaction is over: wait for it (drive 2's monitoring reacts to
+    // its partner's fault over TWINsync a few cycles later).
     cycle_until([] { return false; }, 20);
+    cycle_until(
+        [&] {
+            return std::none_of(axes_.begin(), axes_.end(),
+                                [](const Axis& a) { return a.state() == DriveState::FaultReaction; });
+        },
+        2000);
     for (std::size_t i = 0; i < axes_.size() && i < 2; ++i)
         note("       drive {}: statusword 0x{:04X} ({}), error code 0x603F = 0x{:04X}{}", i + 1,
              axes_[i].statusword, to_string(axes_[i].state()), axes_[i].error_code,
@@ -666,19 +673,28 @@ bool Demo::fault() {
         }
     }
     const auto cleared = injector_.submit("clear demo-fault", milliseconds(1000));
-    // Fault reset: bit 7 rising (drive 2 gets it over TWINsync), then enable again.
-    for (auto& a : axes_)
-        a.controlword = 0;
-    cycle();
-    for (auto& a : axes_)
-        a.controlword = kFaultReset;
-    const bool reset = cycle_until(
-        [&] {
-            return std::none_of(axes_.begin(), axes_.end(),
-                                [](const Axis& a) { return a.statusword & kSwFault; });
-        },
-        500);
-    if (!reset) return fail(interrupted() ? "interrupted" : "the fault reset did not clear the fault");
+    // Fault reset: bit 7 rising (drive 2 gets it over TWINsync); pulsed again if a drive missed the edge.
+    auto no_fault = [&] {
+        return std::none_of(axes_.begin(), axes_.end(),
+                            [](const Axis& a) { return a.statusword & kSwFault; });
+    };
+    bool reset = false;
+    for (int pulse = 0; pulse < 5 && !reset && !interrupted(); ++pulse) {
+        for (auto& a : axes_)
+            a.controlword = 0;
+        cycle_until([] { return false; }, 5);
+        for (auto& a : axes_)
+            a.controlword = kFaultReset;
+        reset = cycle_until(no_fault, 200);
+    }
+    if (!reset)
+        return fail(
+            interrupted()
+                ? "interrupted"
+                : fmt::format("the fault reset did not clear the fault: statuswords 0x{:04X} 0x{:04X}, "
+                              "error codes 0x{:04X} 0x{:04X}",
+                              axes_[0].statusword, axes_.back().statusword, axes_[0].error_code,
+                              axes_.back().error_code));
     note(
         "       injector: clear demo-fault: {}; fault reset (controlword 0x80) cleared both drives; enabling "
         "again",
