@@ -242,7 +242,7 @@ const Demo::Phase Demo::kPhases[] = {
     {"safeop", "PREOP -> SAFEOP, cyclic frames phase-locked to SYNC0", &Demo::safeop},
     {"op", "SAFEOP -> OP", &Demo::op},
     {"enable", "CiA 402: controlword 6, 7, 15 in CSP", &Demo::enable},
-    {"csp-move", "jerk-limited CSP move of the gantry, one revolution out and back", &Demo::csp_move},
+    {"csp-move", "jerk-limited CSP move, one revolution out and back", &Demo::csp_move},
     {"homing", "drive 1 in homing mode (6), method 19 on the home switch", &Demo::homing},
     {"fault", "injected following error on drive 1, then fault reset and a move", &Demo::fault},
     {"disable", "controlword 6, then 0", &Demo::disable},
@@ -609,12 +609,13 @@ bool Demo::homing() {
     const auto t0 = Clock::now();
     const bool ended = cycle_until(
         [&] {
-            return (d1.statusword & kSwHomingError) ||
+            return (d1.statusword & (kSwHomingError | kSwFault)) ||
                    ((d1.statusword & kSwHomingAttained) && (d1.statusword & kSwTargetReached));
         },
         15000);
     tracking_ = false;
     if (!ended) return fail(interrupted() ? "interrupted" : "homing did not end within 15 s");
+    if (d1.statusword & kSwFault) return fail(left_enabled());
     if (d1.statusword & kSwHomingError)
         return fail(fmt::format("homing error, statusword 0x{:04X}", d1.statusword));
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -625,10 +626,10 @@ bool Demo::homing() {
     if (!cycle_until([&] { return d1.mode_display == kCsp; }, 100))
         return fail("drive 1 did not return to CSP");
     note(
-        "       homing attained (statusword 0x{:04X}) after {:.0f} ms: drive 1 at {} (was {}), home switch "
-        "edge "
-        "reads as 0x607C = {}",
-        d1.statusword, ms, d1.position, before, kHomeSwitch);
+        "       homing attained (statusword 0x{:04X}) after {:.0f} ms: the switch edge now reads {} "
+        "(0x607C); drive 1 "
+        "stopped at {}, {} beyond it (it started at {})",
+        d1.statusword, ms, kHomeSwitch, d1.position, kHomeSwitch - d1.position, before);
     if (gantry_)
         note(
             "       drive 2 followed the search over TWINsync and is at {} (difference {}); the home offset "
