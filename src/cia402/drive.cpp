@@ -524,8 +524,10 @@ void Drive::run_stop(StopKind k, double dt) {
         static_cast<double>(k == StopKind::QuickStopRamp ? rd<std::uint32_t>(o_->quick_stop_deceleration, 1)
                                                          : rd<std::uint32_t>(o_->profile_deceleration, 1));
     if (stopping_ != k) {
-        // Starts from the current demand in position modes, from the actual motion otherwise.
-        if (loop_ != LoopMode::Position) profile_.reset({actual_user_, velocity_user_, 0.0});
+        // Starts from the current demand in position modes, from the actual motion otherwise. A slave that
+        // followed TWINsync has a demand the profile never made: it brakes from its actual motion too
+        // (the profile left from its enable would make the ramp jump back there).
+        if (loop_ != LoopMode::Position || coupled_) profile_.reset({actual_user_, velocity_user_, 0.0});
         profile_.stop(std::max(dec, 1.0), profile_limits().jerk);
         stopping_ = k;
     }

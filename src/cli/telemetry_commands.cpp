@@ -200,19 +200,20 @@ DemoScope::DemoScope(esc::Segment& seg, net::ServeOptions& serve) : impl_(std::m
 
 DemoScope::~DemoScope() = default;
 
-void DemoScope::write(const std::string& dir, const std::string& title, const std::string& signals) {
+std::vector<std::string> DemoScope::write(const std::string& dir, const std::string& title,
+                                          const std::string& signals) {
     const tm::Recording& rec = impl_->recorder.stop();
     std::string why;
     const std::string csv = dir + "/scope.csv", svg = dir + "/scope.svg", png = dir + "/scope.png";
     if (!tm::write_csv(rec, csv, &why)) {
         fmt::print(stderr, "vecat demo: {}\n", why);
-        return;
+        return {};
     }
     const auto plot = tm::make_plot(rec, tm::parse_signal_groups(signals), title);
     std::ofstream(svg) << tm::render_svg(plot);
-    const bool have_png = tm::svg_to_png(svg, png, &why);
-    fmt::print("vecat demo: scope {} ({} samples), picture {}{}\n", csv, rec.axes.size(), svg,
-               have_png ? " and " + png : "");
+    std::vector<std::string> files{fmt::format("{} ({} samples)", csv, rec.axes.size()), svg};
+    if (tm::svg_to_png(svg, png, &why)) files.push_back(png);
+    return files;
 }
 
 }  // namespace vecat::cli

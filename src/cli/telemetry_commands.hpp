@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "esc/segment.hpp"
 #include "net/server.hpp"
@@ -45,8 +46,10 @@ class DemoScope {
   public:
     DemoScope(esc::Segment& seg, net::ServeOptions& serve);
     ~DemoScope();
-    // After the serve loop stopped. signals: as `vecat scope --signals`.
-    void write(const std::string& dir, const std::string& title, const std::string& signals);
+    // After the serve loop stopped. signals: as `vecat scope --signals`. Returns the files written (CSV, SVG,
+    // and PNG when rsvg-convert exists); problems go to stderr.
+    std::vector<std::string> write(const std::string& dir, const std::string& title,
+                                   const std::string& signals);
     struct Impl;
 
   private:

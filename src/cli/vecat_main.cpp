@@ -13,6 +13,7 @@
 
 #include "cia402/drive.hpp"
 #include "cia402/profile_generator.hpp"
+#include "cli/demo.hpp"
 #include "cli/fault_cli.hpp"
 #include "cli/telemetry_commands.hpp"
 #include "coe/coe_application.hpp"
@@ -182,135 +183,6 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     return 0;
 }
 
-int cmd_demo(unsigned slaves, const std::string& outdir, unsigned cycles) {
-    using vecat::esc::AlState;
-    std::string why;
-    if (!vecat::net::enter_private_netns(&why) || !vecat::net::create_veth_pair("vecat-m", "vecat-s", &why)) {
-        fmt::print(stderr, "vecat demo: cannot create its network namespace and veth pair: {}\n", why);
-        return 1;
-    }
-    std::filesystem::create_directories(outdir);
-    const std::string pcap_path = outdir + "/demo.pcapng";
-    const std::string sii_path = outdir + "/vecat-drive.sii";
-    install_signals();
-
-    auto dev = vecat::device::default_drive();
-    // Drives 1 and 2 form a gantry coupled by TWINsync: the master commands drive 1, drive 2 follows.
-    const bool gantry = slaves >= 2;
-    auto seg = vecat::cia402::make_drive_segment(
-        dev, slaves, {},
-        gantry ? vecat::cia402::TwinsyncPreset::Gantry : vecat::cia402::TwinsyncPreset::None);
-    vecat::net::RawSocket slave_sock("vecat-s");
-    vecat::net::RawSocket master_sock("vecat-m");
-    vecat::net::PcapngWriter pcap(pcap_path, "vecat-s");
-    std::atomic<bool> stop{false};
-    vecat::net::ServeOptions opt;
-    opt.pcap = &pcap;
-    vecat::cli::DemoScope scope(*seg, opt);
-    std::thread server([&] { vecat::net::serve(*seg, slave_sock, opt, stop); });
-
-    int rc = 0;
-    vecat::master::Master m(master_sock);
-    fmt::print(
-        "vecat demo: {} virtual drive(s) on veth pair vecat-m <-> vecat-s in a private network namespace{}\n",
-        slaves, gantry ? "; drives 1 and 2 are a TWINsync gantry (drive 2 follows drive 1)" : "");
-    std::string fail;
-    if (!m.startup(AlState::Op, &fail)) {
-        fmt::print(stderr, "vecat demo: start-up failed: {}\n", fail);
-        rc = 1;
-    } else {
-        for (const auto& s : m.slaves())
-            fmt::print(
-                "  slave {} @0x{:04X}: \"{}\" vendor 0x{:08X} product 0x{:08X} rev 0x{:08X}, {} out / {} in "
-                "bytes\n",
-                s.position, s.station, s.sii.device_name(), s.sii.identity.vendor_id,
-                s.sii.identity.product_code, s.sii.identity.revision, s.out_bytes, s.in_bytes);
-        fmt::print(
-            "  all slaves in OP; enabling the drives (6, 7, 15) in CSP and moving them with a jerk-limited "
-            "profile, 1 ms cycle\n");
-        // Default mapping: controlword, mode of operation, pad, target position / statusword, mode
-        // display, pad, position actual value, velocity actual value.
-        unsigned misses = 0;
-        double worst_tracking = 0;
-        std::vector<std::int32_t> start(m.slaves().size(), 0);
-        // One revolution out and back (2^20 increments) at up to 1 rev/s, 10 rev/s^2, 100 rev/s^3.
-        constexpr double kRev = 1 << 20;
-        const vecat::cia402::ProfileLimits limits{kRev, 10 * kRev, 10 * kRev, 100 * kRev};
-        std::vector<vecat::cia402::ProfileGenerator> gen(m.slaves().size());
-        auto next = std::chrono::steady_clock::now();
-        for (unsigned c = 0; c < cycles && !g_stop; ++c) {
-            next += std::chrono::milliseconds(1);
-            const std::uint16_t cw = c < 10 ? 0x06 : c < 20 ? 0x07 : (c + 20 < cycles ? 0x0F : 0x00);
-            for (std::size_t i = 0; i < m.slaves().size(); ++i) {
-                auto out = m.outputs(i);
-                auto in = m.inputs(i);
-                if (out.size() < 8 || in.size() < 12) continue;
-                if (c == 1) {
-                    start[i] = static_cast<std::int32_t>(vecat::ld_le32(in.data() + 4));
-                    gen[i].reset({static_cast<double>(start[i]), 0, 0});
-                }
-                // Drive 2 of the gantry takes its set-points through TWINsync; the others each get their own.
-                const double dir = (i % 2) ? -1.0 : 1.0;
-                if (c == 30) gen[i].move_to(start[i] + dir * kRev, limits);
-                if (c == cycles / 2) gen[i].move_to(start[i], limits);
-                const double p = c >= 1 ? gen[i].step(1e-3).p : 0.0;
-                vecat::st_le16(out.data(), cw);
-                out[2] = 8;
-                vecat::st_le32(out.data() + 4,
-                               static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(p))));
-            }
-            auto w = m.exchange_process_data();
-            if (!w || *w != m.expected_wkc()) ++misses;
-            if (gantry && m.slaves().size() >= 2 && m.inputs(1).size() >= 8)
-                worst_tracking =
-                    std::max(worst_tracking,
-                             std::abs(static_cast<double>(
-                                          static_cast<std::int32_t>(vecat::ld_le32(m.inputs(0).data() + 4))) -
-                                      static_cast<std::int32_t>(vecat::ld_le32(m.inputs(1).data() + 4))));
-            if (c % 250 == 0 || c + 1 == cycles) {
-                fmt::print("\r  cycle {:5}/{}  WKC {}/{}  misses {}", c + 1, cycles, w ? *w : 0,
-                           m.expected_wkc(), misses);
-                for (std::size_t i = 0; i < m.slaves().size() && i < 4; ++i) {
-                    auto in = m.inputs(i);
-                    if (in.size() >= 12)
-                        fmt::print("  drive {}: status 0x{:04X} pos {:8}", i + 1, vecat::ld_le16(in.data()),
-                                   static_cast<std::int32_t>(vecat::ld_le32(in.data() + 4)));
-                }
-            }
-            std::fflush(stdout);
-            std::this_thread::sleep_until(next);
-        }
-        fmt::print("\n");
-        if (gantry)
-            fmt::print(
-                "  gantry: largest position difference drive 1 - drive 2 read over EtherCAT: {:.0f} "
-                "increments "
-                "({:.3f} % of a revolution)\n",
-                worst_tracking, worst_tracking / kRev * 100.0);
-        if (!m.request_state(AlState::Init)) {
-            fmt::print(stderr, "vecat demo: back to INIT failed\n");
-            rc = 1;
-        } else {
-            fmt::print("  back in INIT; {} cycles with {} working-counter misses\n", cycles, misses);
-        }
-        if (misses) rc = 1;
-    }
-    stop = true;
-    server.join();
-    pcap.flush();
-    if (gantry)
-        scope.write(outdir, "vecat demo: TWINsync gantry, drive 1 commanded in CSP, drive 2 following",
-                    "position_actual+position_demand,twinsync.tracking_error,velocity_actual");
-    else
-        scope.write(outdir, "vecat demo: drives in CSP",
-                    "position_actual+position_demand,following_error,velocity_actual");
-    const auto img = vecat::esc::build_sii_image(dev);
-    std::ofstream(sii_path, std::ios::binary)
-        .write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));
-    fmt::print("vecat demo: capture {} ({} frames), SII image {}\n", pcap_path, pcap.frames(), sii_path);
-    return rc;
-}
-
 int write_output(const std::string& out, const std::string& data) {
     if (out.empty() || out == "-") {
         std::fwrite(data.data(), 1, data.size(), stdout);
@@ -451,11 +323,22 @@ int main(int argc, char** argv) {
 
     auto* demo =
         app.add_subcommand("demo", "Run virtual slaves and the bundled master on a private veth pair");
-    unsigned demo_slaves = 2, demo_cycles = 3000;
-    std::string outdir = "vecat-demo";
-    demo->add_option("-n,--slaves", demo_slaves, "Number of slaves")->check(CLI::Range(1u, 64u));
-    demo->add_option("--cycles", demo_cycles, "Process data cycles at 1 ms");
-    demo->add_option("-o,--output", outdir, "Directory for the capture and generated files");
+    vecat::cli::DemoOptions demo_opt;
+    demo->add_option("-n,--slaves", demo_opt.slaves,
+                     "Number of slaves (drives 1 and 2 are a TWINsync gantry when there are two or more)")
+        ->check(CLI::Range(1u, 64u))
+        ->capture_default_str();
+    demo->add_option("--cycles", demo_opt.cycles,
+                     "Cycles of 1 ms of the CSP move (out for half of them, back for the other half)")
+        ->check(CLI::Range(100u, 600000u))
+        ->capture_default_str();
+    demo->add_option("-o,--output", demo_opt.outdir,
+                     "Directory for the ESI file, SII image, capture and scope plot")
+        ->capture_default_str();
+    demo->footer(
+        "Phases: scan, preop, pdo-mapping, dc, safeop, op, enable, csp-move, homing, fault, disable, init.\n"
+        "Exit code 0 when every phase is done, 1 when one failed, 130 after Ctrl-C (128 + the signal); the "
+        "files are written in every case.");
 
     auto* sii = app.add_subcommand("sii", "SII EEPROM tools");
     sii->require_subcommand(1);
@@ -494,7 +377,7 @@ int main(int argc, char** argv) {
     if (*scope) return vecat::cli::run_scope();
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
-    if (*demo) return cmd_demo(demo_slaves, outdir, demo_cycles);
+    if (*demo) return vecat::cli::run_demo(demo_opt);
     if (*sii_gen) return cmd_sii_generate(sii_out, esi_path, sel);
     return 0;
 }

@@ -178,6 +178,29 @@ TEST_F(TwinBench, CableBreakFaultsBothDrivesWithin40_00WithinTheMaxFaultTime) {
     EXPECT_EQ(e(0, 0x603F).get<std::uint16_t>(), 0);
 }
 
+TEST_F(TwinBench, GantrySlaveBrakesFromWhereItIsWhenItsPartnerFaultsInMotion) {
+    // Found by `vecat demo`: the slave's demand comes from TWINsync, not from its profile generator; its
+    // fault reaction (quick stop ramp) once started from the profile left at its enable, so the axis ran
+    // back to where it had been enabled.
+    enable_gantry();
+    const std::int32_t enabled_at = pos(1);
+    std::int32_t p = pos(0);
+    for (int i = 0; i < 300; ++i)
+        cycle(0x0F, p += 500);  // 0.5 rev/s for 300 ms: the slave follows, 150000 increments away
+    ASSERT_GT(pos(1) - enabled_at, 100'000);
+    const std::int32_t at_fault = pos(1);
+    e(0, 0x2101).set<std::uint16_t>(0x8611);  // drive 1: following error fault, in motion
+    std::int32_t lowest = at_fault;
+    for (int i = 0; i < 300 && drive(1).cia402_state() != State::Fault; ++i) {
+        cycle(0x0F, p);
+        lowest = std::min(lowest, pos(1));
+    }
+    EXPECT_EQ(drive(1).cia402_state(), State::Fault);
+    // Braking from 0.5 rev/s goes on forward; it never heads back towards the enable position.
+    EXPECT_GE(lowest, at_fault - 1000) << "enabled at " << enabled_at;
+    e(0, 0x2101).set<std::uint16_t>(0);
+}
+
 TEST_F(TwinBench, TwoMastersGive40_02) {
     // Drive 2 parametrised as master too, and enabled over EtherCAT by its own controlword.
     master::CoeClient c(b.master, 0x1002);
