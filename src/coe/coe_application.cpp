@@ -7,6 +7,7 @@ CoeApplication::CoeApplication(const device::DeviceDescription& d)
     map_ = std::make_unique<ProcessDataMap>(od_, d);
     sdo_ = std::make_unique<SdoServer>(od_, [this] { return state_; });
     sync_ = std::make_unique<SyncParameters>(od_, d);
+    pending_outputs_.reserve(1536);  // a whole frame's worth: no allocation in the cycle
     error_register_ = od_.find(0x1001, 0);
     error_code_ = od_.find(0x603F, 0);
     // An object mapped into the active RxPDOs is written by the master's outputs in SAFEOP and OP.
@@ -61,6 +62,7 @@ void CoeApplication::on_state_change(AlState from, AlState to) {
     state_ = to;
     requested_ = to;
     if (to != AlState::Op) outputs_received_ = false;
+    outputs_pending_ = false;
     sync_->on_state_change(from, to);
 }
 
@@ -77,8 +79,12 @@ void CoeApplication::tick(std::uint64_t now_ns) {
 }
 
 void CoeApplication::sync_event(unsigned signal, std::uint64_t now_ns) {
-    if (sync_->on_sync_event(signal, now_ns, state_))
-        cycle(now_ns, state_ == AlState::Op && outputs_received_);
+    if (!sync_->on_sync_event(signal, now_ns, state_)) return;
+    if (outputs_pending_) {
+        map_->copy_outputs(pending_outputs_);
+        outputs_pending_ = false;
+    }
+    cycle(now_ns, state_ == AlState::Op && outputs_received_);
 }
 
 bool CoeApplication::refresh_inputs(Bytes inputs) {
@@ -110,7 +116,15 @@ void CoeApplication::on_al_error(esc::AlStatusCode code) {
 
 void CoeApplication::exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) {
     const bool applied = apply && !outputs.empty();
-    if (applied) map_->copy_outputs(outputs);
+    if (applied && sync_->dc_mode()) {
+        // DC synchronous: the outputs take effect at the next SYNC0 (SYNC1) event, whenever in the cycle
+        // the frame came (ETG.1020 synchronisation: the application reads SM2 at the sync event). Taken at
+        // once, a set-point would start its interpolation at a time that jitters with the frame's arrival.
+        pending_outputs_.assign(outputs.begin(), outputs.end());
+        outputs_pending_ = true;
+    } else if (applied) {
+        map_->copy_outputs(outputs);
+    }
     outputs_received_ |= applied && state_ == AlState::Op;
     if (!sync_->dc_mode()) cycle(now_ns, applied);
     map_->copy_inputs(inputs);

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "coe/object_dictionary.hpp"
 #include "coe/parameter_store.hpp"
@@ -86,8 +87,8 @@ class CoeApplication : public esc::Application {
   protected:
     // The device's own step, after new outputs were stored in the dictionary and before the inputs are
     // read from it. outputs_applied is false below OP or without new outputs. In free run and SM-synchronous
-    // mode it runs on every process data exchange; in DC mode on every SYNC0 (SYNC1) event, with the outputs
-    // last received (outputs_applied: in OP with valid outputs).
+    // mode it runs on every process data exchange; in DC mode on every SYNC0 (SYNC1) event, after the outputs
+    // received since the previous event were stored (outputs_applied: in OP with valid outputs).
     virtual void cycle(std::uint64_t /*now_ns*/, bool /*outputs_applied*/) {}
 
   private:
@@ -98,6 +99,9 @@ class CoeApplication : public esc::Application {
     std::unique_ptr<ParameterStore> store_;
     device::Identity identity_;
     bool outputs_received_ = false;  // in OP, outputs were applied (DC mode cycles use the last ones)
+    // DC mode: the outputs of the last frame, stored into the dictionary at the next sync event.
+    std::vector<std::uint8_t> pending_outputs_;
+    bool outputs_pending_ = false;
     AlState state_ = AlState::Init;
     AlState requested_ = AlState::Init;  // target of the transition being checked (emergency code)
     Entry* error_register_ = nullptr;

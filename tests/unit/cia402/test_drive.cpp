@@ -8,9 +8,11 @@
 #include <cstdio>
 #include <functional>
 #include <random>
+#include <thread>
 
 #include "cia402/drive.hpp"
 #include "master/coe_client.hpp"
+#include "net/in_process_link.hpp"
 #include "test_support.hpp"
 
 namespace vecat::cia402 {
@@ -651,6 +653,50 @@ TEST_F(DriveCyclic, CyclicSynchronousVelocityAndTorque) {
     const double decel = (w0 - drive().mechanics().velocity()) / 0.010;
     EXPECT_NEAR(decel, (0.0254 + 0.01 + 5e-5 * w0) / 3.6e-5, 60);
     EXPECT_NEAR(static_cast<std::int16_t>(ld_le16(in().data() + 12)), -20, 1);
+}
+
+// In DC synchronous mode (0x1C32:01 = 2) the outputs take effect at the next SYNC0, not when the frame
+// comes: the drive's set-points are then sampled on the SYNC0 grid whatever the frames' jitter. In free
+// run they are taken at once. Runs on the host's clock (SYNC0 every 1 ms); a try on which a SYNC0 fell
+// during the exchange itself is repeated.
+TEST(DriveSync, OutputsTakeEffectAtSync0InDcModeAndAtOnceInFreeRun) {
+    for (const bool dc : {true, false}) {
+        SCOPED_TRACE(dc ? "DC SYNC0" : "free run");
+        auto dev = device::default_drive();
+        auto seg = make_drive_segment(dev, 1);
+        net::InProcessLink link(*seg);  // host time: SYNC0 pulses come as time passes
+        master::MasterOptions mo;
+        mo.dc.enable = dc;
+        mo.dc.sync0_cycle_ns = 1'000'000;
+        mo.dc.static_drift_frames = 10;
+        mo.dc.start_delay_ns = 5'000'000;
+        master::Master m(link, mo);
+        std::string why;
+        ASSERT_TRUE(m.startup(esc::AlState::Op, &why)) << why;
+        auto& od = dynamic_cast<Drive&>(seg->slave(0).app()).dictionary();
+        EXPECT_EQ(od.find(0x1C32, 1)->get<std::uint16_t>(), dc ? 2 : 1);
+        const auto& pulses = seg->slave(0).esc().dc().counters().sync_pulses[0];
+        bool checked = false;
+        for (std::int32_t target = 1000; target < 1100 && !checked; ++target) {
+            st_le32(m.outputs(0).data() + 4, static_cast<std::uint32_t>(target));
+            const auto before = pulses;
+            ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+            if (pulses != before) continue;  // a SYNC0 fell during the exchange
+            const std::int32_t now = od.find(0x607A, 0)->get<std::int32_t>();
+            if (!dc) {
+                EXPECT_EQ(now, target);
+            } else {
+                EXPECT_NE(now, target);
+                // Past the next SYNC0 (the firmware runs on the next frame).
+                std::this_thread::sleep_for(std::chrono::microseconds(1200));
+                ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+                EXPECT_GT(pulses, before);
+                EXPECT_EQ(od.find(0x607A, 0)->get<std::int32_t>(), target);
+            }
+            checked = true;
+        }
+        EXPECT_TRUE(checked);
+    }
 }
 
 }  // namespace
