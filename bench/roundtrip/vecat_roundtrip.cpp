@@ -107,6 +107,7 @@ struct Options {
     unsigned period_us = 1000;
     unsigned slaves = 1;
     bool busy = false;
+    bool rx_ring = false;
     std::string cpu;  // "M,S": master thread on M, server threads on S
     int fifo = 0;
     bool mlock = false;
@@ -202,6 +203,12 @@ int run(const Options& o) {
     net::RawSocket m_refl_sock("rt-m0"), m_vecat_sock("rt-m1");
     m_refl_sock.set_busy_poll(o.busy);
     m_vecat_sock.set_busy_poll(o.busy);
+    if (o.rx_ring)
+        for (net::RawSocket* sk : {&refl_sock, &vecat_sock, &m_refl_sock, &m_vecat_sock})
+            if (!sk->enable_rx_ring(&why)) {
+                fmt::print(stderr, "vecat-roundtrip: {}: no receive ring: {}\n", sk->ifname(), why);
+                return 1;
+            }
 
     std::atomic<bool> stop{false}, park_vecat{false}, park_refl{true};
     // The reflector: receive, send the same bytes back. Nothing else.
@@ -233,7 +240,8 @@ int run(const Options& o) {
     int rc = 0;
     fmt::print(
         "vecat-roundtrip: {} mode, {} cycles, period {} us, {} slave(s), {} receive{}{}{}\n", o.mode, cycles,
-        o.period_us, o.slaves, o.busy ? "busy-poll" : "blocking",
+        o.period_us, o.slaves,
+        std::string(o.busy ? "busy-poll" : "blocking") + (o.rx_ring ? " (RX ring)" : ""),
         cpu.master >= 0 ? fmt::format(", master on CPU {}, servers on CPU {}", cpu.master, cpu.server) : "",
         o.fifo ? fmt::format(", SCHED_FIFO {}", o.fifo) : "", o.mlock ? ", memory locked" : "");
     if (!m.startup(esc::AlState::Op, &why)) {
@@ -383,6 +391,8 @@ int main(int argc, char** argv) {
     app.add_option("--period-us", o.period_us, "Cycle period in us (0: back to back)");
     app.add_option("--slaves", o.slaves, "Virtual drives on the line")->check(CLI::Range(1u, 512u));
     app.add_flag("--busy-poll,!--blocking", o.busy, "Spin on the sockets (default: sleep in poll)");
+    app.add_flag("--rx-ring", o.rx_ring,
+                 "All four sockets receive through PACKET_MMAP rings (default: one recvmsg per frame)");
     app.add_option("--cpu", o.cpu, "Pin the master thread to CPU M and the server threads to S: M,S");
     app.add_option("--fifo", o.fifo, "SCHED_FIFO priority of all threads (1..99)")->check(CLI::Range(0, 99));
     app.add_flag("--mlock", o.mlock, "Lock all memory (mlockall)");

@@ -89,12 +89,30 @@ bool attach_parameter_stores(vecat::esc::Segment& seg, const std::string& dir) {
     return true;
 }
 
-int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_path, unsigned pcap_limit_mb,
-            bool busy, bool allow_busy_if, double drift_ppm, const std::string& esi_path,
-            const vecat::esi::DeviceSelector& sel, const std::string& param_dir,
-            const vecat::cli::RunFaultOptions& fault_opts, const vecat::cli::TelemetryOptions& telemetry,
-            vecat::cia402::TwinsyncPreset twinsync, const vecat::net::RealtimeOptions& rt,
-            std::int64_t tick_us, const std::string& downstream) {
+// Everything `vecat run` is given on its command line.
+struct RunOptions {
+    std::string iface;
+    unsigned slaves = 2;
+    std::string pcap_path;
+    unsigned pcap_limit_mb = 1024;
+    bool busy = false;     // --busy-poll
+    bool rx_ring = false;  // --rx-ring: PACKET_MMAP receive ring
+    bool allow_busy_if = false;
+    double drift_ppm = 0.0;
+    std::string esi_path;
+    vecat::esi::DeviceSelector sel;
+    std::string param_dir;
+    vecat::cli::RunFaultOptions fault_opts;
+    vecat::cli::TelemetryOptions telemetry;
+    vecat::cia402::TwinsyncPreset twinsync = vecat::cia402::TwinsyncPreset::None;
+    vecat::net::RealtimeOptions rt;
+    std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
+    std::string downstream;
+};
+
+int cmd_run(const RunOptions& o) {
+    const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
+                 sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream] = o;
     std::string why;
     for (const std::string& i : {iface, downstream}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -124,6 +142,11 @@ int cmd_run(const std::string& iface, unsigned slaves, const std::string& pcap_p
     } catch (const std::exception& e) {
         fmt::print(stderr, "vecat: {}\n", e.what());
         return 1;
+    }
+    if (rx_ring) {
+        for (auto* s : {sock.get(), down.get()})
+            if (s && !s->enable_rx_ring(&why))
+                fmt::print(stderr, "vecat: {}: no receive ring ({}); using recvmsg\n", s->ifname(), why);
     }
     std::unique_ptr<vecat::net::PcapngWriter> pcap;
     if (!pcap_path.empty())
@@ -258,14 +281,11 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
 
     auto* run = app.add_subcommand("run", "Serve virtual slaves on a network interface");
-    std::string iface, pcap;
-    unsigned slaves = 2;
-    vecat::cia402::TwinsyncPreset twinsync = vecat::cia402::TwinsyncPreset::None;
-    bool busy = false, allow_used = false;
-    double drift_ppm = 0.0;
-    run->add_option("-i,--iface", iface, "Interface to serve on (one end of a veth pair, or a dedicated NIC)")
+    RunOptions ro;
+    run->add_option("-i,--iface", ro.iface,
+                    "Interface to serve on (one end of a veth pair, or a dedicated NIC)")
         ->required();
-    run->add_option("-n,--slaves", slaves,
+    run->add_option("-n,--slaves", ro.slaves,
                     "Number of slaves on the line (drives 1 and 2 are connected by a TWINsync cable)")
         ->check(CLI::Range(1u, 512u));
     const std::map<std::string, vecat::cia402::TwinsyncPreset> presets = {
@@ -274,41 +294,39 @@ int main(int argc, char** argv) {
         {"position", vecat::cia402::TwinsyncPreset::Position},
         {"speed", vecat::cia402::TwinsyncPreset::Speed}};
     run->add_option(
-           "--twinsync", twinsync,
+           "--twinsync", ro.twinsync,
            "TWINsync between drives 1 and 2 preset: off (configure it by CoE), gantry (P2580 29/30), "
            "position (PCON 7/8) or speed (SCON 5/6); drive 2 is then controlled through TWINsync")
         ->transform(CLI::CheckedTransformer(presets, CLI::ignore_case));
-    std::string downstream;
-    run->add_option("--downstream", downstream,
+    run->add_option("--downstream", ro.downstream,
                     "Chained segments: cable port 1 of the last slave to this interface (a veth pair to the "
                     "next vecat run); frames go on along the line while it has a link");
-    run->add_option("--pcap", pcap, "Write every frame in and out to this pcapng file");
-    run->add_flag("--busy-poll,!--blocking", busy,
+    run->add_option("--pcap", ro.pcap_path, "Write every frame in and out to this pcapng file");
+    run->add_flag("--busy-poll,!--blocking", ro.busy,
                   "Spin on the socket instead of sleeping in poll() (lowest latency, one core busy); "
                   "--blocking (the default) suits laptops");
-    vecat::net::RealtimeOptions rt;
-    run->add_option("--cpu", rt.cpu, "Pin the serve loop to this CPU");
-    run->add_option("--fifo", rt.fifo_priority,
+    run->add_option("--cpu", ro.rt.cpu, "Pin the serve loop to this CPU");
+    run->add_option("--fifo", ro.rt.fifo_priority,
                     "Run the serve loop under SCHED_FIFO with this priority (1..99; with --busy-poll the "
                     "kernel's RT throttling stalls it for 50 ms a second unless that is turned off)")
         ->check(CLI::Range(1, 99));
-    run->add_flag("--mlock", rt.lock_memory, "Lock all memory (mlockall): no page faults while serving");
-    std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
-    run->add_option("--tick-us", tick_us,
+    run->add_flag("--mlock", ro.rt.lock_memory, "Lock all memory (mlockall): no page faults while serving");
+    run->add_option("--tick-us", ro.tick_us,
                     "Run the slaves' firmware this often between frames (watchdogs, drive model); longer "
                     "saves CPU with many slaves")
         ->check(CLI::Range(10, 100000));
-    unsigned pcap_limit_mb = 1024;
-    run->add_option("--pcap-limit-mb", pcap_limit_mb, "Largest capture file in MiB (0: no limit)")
+    run->add_flag("--rx-ring", ro.rx_ring,
+                  "Receive through a PACKET_MMAP ring shared with the kernel instead of one recvmsg() per "
+                  "frame");
+    run->add_option("--pcap-limit-mb", ro.pcap_limit_mb, "Largest capture file in MiB (0: no limit)")
         ->capture_default_str();
-    run->add_option("--dc-drift-ppm", drift_ppm,
+    run->add_option("--dc-drift-ppm", ro.drift_ppm,
                     "DC clock drift of the slaves in ppm (alternating sign along the line)")
         ->check(CLI::Range(-1000.0, 1000.0));
     run->add_flag(
-        "--allow-used-interface", allow_used,
+        "--allow-used-interface", ro.allow_busy_if,
         "Serve even on an interface that has an IP address, the default route or a bridge/bond master");
-    std::string param_dir;
-    run->add_option("--param-dir", param_dir,
+    run->add_option("--param-dir", ro.param_dir,
                     "Keep each slave's parameters (0x1010 store / 0x1011 restore) in DIR/slave-N.param");
     std::string esi_path, device_type;
     std::uint32_t product = 0;
@@ -318,12 +336,10 @@ int main(int argc, char** argv) {
         c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
     };
     add_esi_options(run, true);
-    vecat::cli::RunFaultOptions fault_opts;
-    vecat::cli::add_run_fault_options(run, fault_opts);
+    vecat::cli::add_run_fault_options(run, ro.fault_opts);
     vecat::cli::FaultCommand fault_cmd;
     vecat::cli::add_fault_command(app, fault_cmd);
-    vecat::cli::TelemetryOptions telemetry;
-    vecat::cli::add_telemetry_options(run, telemetry);
+    vecat::cli::add_telemetry_options(run, ro.telemetry);
 
     auto* demo =
         app.add_subcommand("demo", "Run virtual slaves and the bundled master on a private veth pair");
@@ -374,9 +390,11 @@ int main(int argc, char** argv) {
     vecat::esi::DeviceSelector sel;
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
-    if (*run)
-        return cmd_run(iface, slaves, pcap, pcap_limit_mb, busy, allow_used, drift_ppm, esi_path, sel,
-                       param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream);
+    if (*run) {
+        ro.esi_path = esi_path;
+        ro.sel = sel;
+        return cmd_run(ro);
+    }
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
