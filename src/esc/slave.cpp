@@ -109,7 +109,8 @@ class SlaveReplySink final : public MailboxReplySink {
 
 DeviceModel DeviceModel::of(const device::DeviceDescription& d) {
     return {std::make_shared<const device::DeviceDescription>(d),
-            std::make_shared<const std::vector<std::uint8_t>>(build_sii_image(d))};
+            std::make_shared<const std::vector<std::uint8_t>>(build_sii_image(d)),
+            std::make_shared<const std::vector<device::ObjectDescription>>(device::dictionary_objects(d))};
 }
 
 Slave::Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::unique_ptr<Application> app)

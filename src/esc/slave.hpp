@@ -107,12 +107,14 @@ struct SlaveCounters {
     std::uint64_t watchdog_expiries = 0;
 };
 
-// What every slave of one device shares, built once: the description and the SII image generated from it
-// (a segment of 128 drives, or a fuzz target building a segment per input, neither copies the description
-// nor generates the image per slave). Each slave's ESC gets its own copy of the image (writable EEPROM).
+// What every slave of one device shares, built once: the description and what is generated from it, the
+// SII image and the objects of the CoE dictionary (a segment of 128 drives, or a fuzz target building a
+// segment per input, neither copies the description nor generates these per slave). Each slave's ESC gets
+// its own copy of the image (writable EEPROM), each CoE application its own values.
 struct DeviceModel {
     std::shared_ptr<const device::DeviceDescription> description;
     std::shared_ptr<const std::vector<std::uint8_t>> sii_image;
+    std::shared_ptr<const std::vector<device::ObjectDescription>> dictionary;  // device::dictionary_objects
     static DeviceModel of(const device::DeviceDescription& d);
 };
 
