@@ -4,6 +4,7 @@
 // description whose SII image parses back with the same identity, and whose slave can be built.
 #include <cstdint>
 #include <exception>
+#include <memory>
 #include <string>
 
 #include "coe/coe_application.hpp"
@@ -23,13 +24,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         return 0;  // refused: vecat prints the reason and stops
     }
     auto& d = r.desc;
-    const auto img = esc::build_sii_image(d);
+    auto img = esc::build_sii_image(d);
     VECAT_FUZZ_CHECK(img.size() == d.eeprom_size_bytes);
     const auto info = esc::parse_sii(ConstBytes(img.data(), img.size()));
     VECAT_FUZZ_CHECK(info.checksum_ok);
     VECAT_FUZZ_CHECK(info.identity.vendor_id == d.identity.vendor_id);
     VECAT_FUZZ_CHECK(info.identity.product_code == d.identity.product_code);
-    auto seg = coe::make_coe_segment(d, 1);
+    // The model from the image checked above (DeviceModel::of would build it a second time).
+    const esc::DeviceModel model{
+        std::make_shared<const device::DeviceDescription>(d),
+        std::make_shared<const std::vector<std::uint8_t>>(std::move(img)),
+        std::make_shared<const std::vector<device::ObjectDescription>>(device::dictionary_objects(d))};
+    auto seg = coe::make_coe_segment(model, 1);
     std::uint64_t now = 1'000'000'000;
     fuzz::bring_to_preop(*seg, d, now);  // may be refused (odd mailboxes); must not crash
     return 0;

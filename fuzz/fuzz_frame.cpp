@@ -2,6 +2,7 @@
 // datagram engine, registers, SyncManagers, FMMUs, SII interface, DC, the slaves' firmware: AL state
 // machine, mailbox layer, process data). The slaves have a bare process image: the CoE stack behind the
 // mailbox has its own target (fuzz_mailbox), and building a dictionary per input would slow this one 3x.
+// The description and SII image are built once (esc::DeviceModel); every input gets a new segment from them.
 // Input: length-prefixed frames, processed in order 100 us apart against the same segment.
 // Invariants beyond "no crash": a frame is answered exactly when the parser accepts it; the reply has the
 // request's length (padded to 60); only data, working counters, IRQ fields and auto-increment addresses
@@ -76,8 +77,8 @@ void check_reply(ConstBytes in, ConstBytes out, std::size_t in_len, std::size_t 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    static const auto dev = device::default_drive();
-    auto seg = esc::make_segment(dev, kSlaves);
+    static const auto model = esc::DeviceModel::of(device::default_drive());
+    auto seg = esc::make_segment(model, kSlaves);
     std::uint64_t now = 1'000'000'000;
     fuzz::Input in(data, size);
     std::vector<std::uint8_t> req, buf;

@@ -41,10 +41,12 @@ void check_reply(ConstBytes r) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    static const auto dev = device::default_drive();
+    // Description, SII image and dictionary objects are built once; every input gets a new drive from them.
+    static const auto model = esc::DeviceModel::of(device::default_drive());
+    static const auto& dev = *model.description;
     static const auto sm0 = dev.sync_managers.at(0);
     static const auto sm1 = dev.sync_managers.at(1);
-    auto seg = cia402::make_drive_segment(dev, 1);
+    auto seg = cia402::make_drive_segment(model, 1);
     std::uint64_t now = 1'000'000'000;
     if (!fuzz::bring_to_preop(*seg, dev, now)) std::abort();
     auto& slave = seg->slave(0);

@@ -254,8 +254,9 @@ MotorParameters motor_from(const Entry* const* m, const Entry* rated_current) {
 
 }  // namespace
 
-Drive::Drive(const device::DeviceDescription& d)
-    : CoeApplication(d), o_(std::make_unique<Objects>(dictionary())) {
+Drive::Drive(const device::DeviceDescription& d,
+             std::shared_ptr<const std::vector<device::ObjectDescription>> objects)
+    : CoeApplication(d, std::move(objects)), o_(std::make_unique<Objects>(dictionary())) {
     read_configuration();
     const MotorParameters mp = motor_from(o_->motor, o_->rated_current);
     mech_ = std::make_unique<Mechanics>(mp, ControlGains{});
@@ -1397,9 +1398,16 @@ void apply_twinsync_preset(Drive& master, Drive& slave, TwinsyncPreset preset) {
 
 std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
                                                  const esc::EscConfig& cfg, TwinsyncPreset preset) {
+    return make_drive_segment(esc::DeviceModel::of(d), n, cfg, preset);
+}
+
+std::unique_ptr<esc::Segment> make_drive_segment(const esc::DeviceModel& m, std::size_t n,
+                                                 const esc::EscConfig& cfg, TwinsyncPreset preset) {
+    // The factory also rebuilds a restarted slave, of the same model.
     auto seg = esc::make_segment(
-        d, n, cfg, [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
-            return std::make_unique<Drive>(dd);
+        m, n, cfg,
+        [objects = m.dictionary](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
+            return std::make_unique<Drive>(dd, objects);
         });
     if (n >= 2) {
         auto* a = dynamic_cast<Drive*>(&seg->slave(0).app());

@@ -60,7 +60,9 @@ class Drive : public coe::CoeApplication {
   public:
     static constexpr std::uint64_t kServoPeriodNs = 250'000;
 
-    explicit Drive(const device::DeviceDescription& d);
+    // objects: see CoeApplication.
+    explicit Drive(const device::DeviceDescription& d,
+                   std::shared_ptr<const std::vector<device::ObjectDescription>> objects = {});
     ~Drive() override;
 
     State cia402_state() const { return sm_.state(); }
@@ -232,5 +234,9 @@ std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription
                                                  const esc::EscConfig& cfg, TwinsyncPreset preset);
 std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
                                                  const esc::EscConfig& cfg = {});
+// The same from a model built once (esc::DeviceModel::of).
+std::unique_ptr<esc::Segment> make_drive_segment(const esc::DeviceModel& m, std::size_t n,
+                                                 const esc::EscConfig& cfg = {},
+                                                 TwinsyncPreset preset = TwinsyncPreset::None);
 
 }  // namespace vecat::cia402

@@ -2,8 +2,10 @@
 
 namespace vecat::coe {
 
-CoeApplication::CoeApplication(const device::DeviceDescription& d)
-    : od_(device::dictionary_objects(d)), identity_(d.identity) {
+CoeApplication::CoeApplication(const device::DeviceDescription& d,
+                               std::shared_ptr<const std::vector<device::ObjectDescription>> objects)
+    : od_(objects ? ObjectDictionary(std::move(objects)) : ObjectDictionary(device::dictionary_objects(d))),
+      identity_(d.identity) {
     map_ = std::make_unique<ProcessDataMap>(od_, d);
     sdo_ = std::make_unique<SdoServer>(od_, [this] { return state_; });
     sync_ = std::make_unique<SyncParameters>(od_, d);
@@ -144,10 +146,17 @@ esc::MailboxProtocol* CoeApplication::mailbox_protocol(esc::MailboxType t) {
 
 std::unique_ptr<esc::Segment> make_coe_segment(const device::DeviceDescription& d, std::size_t n,
                                                const esc::EscConfig& cfg) {
-    return esc::make_segment(d, n, cfg,
-                             [](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
-                                 return std::make_unique<CoeApplication>(dd);
-                             });
+    return make_coe_segment(esc::DeviceModel::of(d), n, cfg);
+}
+
+std::unique_ptr<esc::Segment> make_coe_segment(const esc::DeviceModel& m, std::size_t n,
+                                               const esc::EscConfig& cfg) {
+    // The factory also rebuilds a restarted slave, of the same model.
+    return esc::make_segment(
+        m, n, cfg,
+        [objects = m.dictionary](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
+            return std::make_unique<CoeApplication>(dd, objects);
+        });
 }
 
 }  // namespace vecat::coe

@@ -41,7 +41,10 @@ inline constexpr std::uint16_t DataSet = 0x6300;  // CiA 301: stored parameters 
 
 class CoeApplication : public esc::Application {
   public:
-    explicit CoeApplication(const device::DeviceDescription& d);
+    // objects: dictionary_objects(d) built once for many applications (esc::DeviceModel::dictionary); empty:
+    // built here.
+    explicit CoeApplication(const device::DeviceDescription& d,
+                            std::shared_ptr<const std::vector<device::ObjectDescription>> objects = {});
     ~CoeApplication() override;
 
     ObjectDictionary& dictionary() { return od_; }
@@ -111,6 +114,9 @@ class CoeApplication : public esc::Application {
 
 // A segment of n slaves of the device, each served by a CoeApplication.
 std::unique_ptr<esc::Segment> make_coe_segment(const device::DeviceDescription& d, std::size_t n,
+                                               const esc::EscConfig& cfg = {});
+// The same from a model built once (esc::DeviceModel::of).
+std::unique_ptr<esc::Segment> make_coe_segment(const esc::DeviceModel& m, std::size_t n,
                                                const esc::EscConfig& cfg = {});
 
 }  // namespace vecat::coe

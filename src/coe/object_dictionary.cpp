@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "common/asan.hpp"
 #include "common/bits.hpp"
 
 namespace vecat::coe {
@@ -62,58 +63,55 @@ std::size_t for_each_ca_entry(const Object& o, std::uint8_t from, std::uint8_t l
 
 // ---- Entry ----
 
-Entry::Entry(device::EntryDescription d) : desc_(std::move(d)) {
-    capacity_ = static_cast<std::uint32_t>(std::max<std::size_t>(1, (desc_.bit_length + 7u) / 8u));
-    if (capacity_ > kInline) heap_ = std::make_unique<std::uint8_t[]>(capacity_);
+Entry::Entry(const device::EntryDescription& d, Bytes storage) : desc_(&d), storage_(storage) {
     reset_to_default();
 }
 
 bool Entry::readable(AlState s) const {
-    return (desc_.access & read_bit(s)) != 0;
+    return (desc_->access & read_bit(s)) != 0;
 }
 bool Entry::writable(AlState s) const {
-    return (desc_.access & write_bit(s)) != 0;
+    return (desc_->access & write_bit(s)) != 0;
 }
 
 void Entry::assign(ConstBytes v) {
-    const std::size_t n = std::min<std::size_t>(v.size(), capacity_);
-    std::uint8_t* d = data();
-    std::copy_n(v.begin(), n, d);
-    if (device::is_variable_length(desc_.type)) {
-        std::fill(d + n, d + capacity_, 0);
-        size_ = static_cast<std::uint32_t>(n);
+    const std::size_t n = std::min(v.size(), storage_.size());
+    std::copy_n(v.begin(), n, storage_.begin());
+    if (device::is_variable_length(desc_->type)) {
+        std::fill(storage_.begin() + static_cast<std::ptrdiff_t>(n), storage_.end(), 0);
+        size_ = n;
     } else {
-        size_ = (desc_.bit_length + 7u) / 8u;
+        size_ = (desc_->bit_length + 7u) / 8u;
     }
 }
 
 void Entry::reset_to_default() {
-    std::fill(data(), data() + capacity_, 0);
-    assign(ConstBytes(desc_.default_value.data(), desc_.default_value.size()));
-    if (!device::is_variable_length(desc_.type)) size_ = (desc_.bit_length + 7u) / 8u;
+    std::fill(storage_.begin(), storage_.end(), 0);
+    assign(ConstBytes(desc_->default_value.data(), desc_->default_value.size()));
+    if (!device::is_variable_length(desc_->type)) size_ = (desc_->bit_length + 7u) / 8u;
 }
 
 std::int64_t Entry::as_int64() const {
     const std::size_t n = std::min<std::size_t>(8, size_);
-    const std::uint8_t* d = data();
     std::uint64_t u = 0;
     for (std::size_t i = 0; i < n; ++i)
-        u |= static_cast<std::uint64_t>(d[i]) << (8 * i);
-    const unsigned bits = desc_.bit_length;
-    if (device::is_signed(desc_.type) && bits > 0 && bits < 64 && (u >> (bits - 1)) & 1u)
+        u |= static_cast<std::uint64_t>(storage_[i]) << (8 * i);
+    const unsigned bits = desc_->bit_length;
+    if (device::is_signed(desc_->type) && bits > 0 && bits < 64 && (u >> (bits - 1)) & 1u)
         u |= ~std::uint64_t{0} << bits;
-    if (bits < 64 && !device::is_signed(desc_.type)) u &= (std::uint64_t{1} << bits) - 1;
+    if (bits < 64 && !device::is_signed(desc_->type)) u &= (std::uint64_t{1} << bits) - 1;
     return static_cast<std::int64_t>(u);
 }
 
 // ---- Object ----
 
-Object::Object(const device::ObjectDescription& d)
-    : index_(d.index), name_(d.name), code_(d.code), type_(d.type), max_sub_(d.max_subindex()) {
-    entries_.reserve(d.entries.size());
-    for (const auto& e : d.entries)
-        entries_.emplace_back(e);
-}
+Object::Object(const device::ObjectDescription& d, std::span<Entry> entries)
+    : desc_(&d),
+      index_(d.index),
+      code_(d.code),
+      type_(d.type),
+      max_sub_(d.max_subindex()),
+      entries_(entries) {}
 
 Entry* Object::entry(std::uint8_t sub) {
     for (auto& e : entries_)
@@ -176,12 +174,43 @@ std::size_t complete_access_size(const Object& o, std::uint8_t from, std::uint8_
 
 // ---- dictionary ----
 
-ObjectDictionary::ObjectDictionary(const std::vector<device::ObjectDescription>& objects) {
-    objects_.reserve(objects.size());
-    for (const auto& o : objects)
-        objects_.emplace_back(o);
-    std::sort(objects_.begin(), objects_.end(),
-              [](const Object& a, const Object& b) { return a.index() < b.index(); });
+ObjectDictionary::ObjectDictionary(std::vector<device::ObjectDescription> objects)
+    : ObjectDictionary(std::make_shared<const std::vector<device::ObjectDescription>>(std::move(objects))) {}
+
+ObjectDictionary::ObjectDictionary(std::shared_ptr<const std::vector<device::ObjectDescription>> objects)
+    : descriptions_(std::move(objects)) {
+    std::vector<const device::ObjectDescription*> order;
+    order.reserve(descriptions_->size());
+    // Under AddressSanitizer every value starts on an 8-byte boundary with at least 8 poisoned bytes after
+    // it: an access past an entry's value is reported as with separate allocations.
+    const auto slot = [](const device::EntryDescription& e) {
+        const std::size_t n = Entry::storage_size(e);
+        return kAsan ? (n + 15) / 8 * 8 : n;
+    };
+    std::size_t n_entries = 0, n_bytes = 0;
+    for (const auto& o : *descriptions_) {
+        order.push_back(&o);
+        n_entries += o.entries.size();
+        for (const auto& e : o.entries)
+            n_bytes += slot(e);
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto* a, const auto* b) { return a->index < b->index; });
+    // Sized once: the entries' storage and the objects' entry spans must not move.
+    values_.assign(n_bytes, 0);
+    entries_.reserve(n_entries);
+    objects_.reserve(order.size());
+    std::size_t at = 0;
+    for (const auto* o : order) {
+        const std::size_t first = entries_.size();
+        for (const auto& e : o->entries) {
+            const std::size_t n = Entry::storage_size(e);
+            asan_poison(values_.data() + at + n, slot(e) - n);
+            entries_.emplace_back(e, Bytes(values_.data() + at, n));
+            at += slot(e);
+        }
+        objects_.emplace_back(*o, std::span<Entry>(entries_.data() + first, o->entries.size()));
+    }
     for (const auto& o : objects_) {
         max_transfer_ = std::max(max_transfer_, complete_access_size(o, 0, o.max_subindex()));
         for (const auto& e : o.entries())
@@ -196,6 +225,10 @@ ObjectDictionary::ObjectDictionary(const std::vector<device::ObjectDescription>&
         undo = std::max(undo, n);
     }
     undo_.resize(undo);
+}
+
+ObjectDictionary::~ObjectDictionary() {
+    asan_unpoison(values_.data(), values_.size());
 }
 
 Object* ObjectDictionary::find(std::uint16_t index) {

@@ -2,6 +2,7 @@
 // checked SDO access to them (access per AL state, lengths, value ranges, complete access).
 #pragma once
 
+#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -22,25 +23,37 @@ using device::DataType;
 using device::ObjectCode;
 using esc::AlState;
 
+// An entry refers to its description, which the dictionary keeps (shared by every dictionary built from
+// the same descriptions: a segment of many drives, or a fuzz target building a drive per input, does not
+// copy names, defaults and ranges per entry), and keeps its value in the dictionary's one value buffer
+// (a dictionary is a handful of allocations, not one per entry). Not copyable: a copy would share the value.
 class Entry {
   public:
-    explicit Entry(device::EntryDescription d);
+    // storage: storage_size(d) bytes that outlive the entry.
+    Entry(const device::EntryDescription& d, Bytes storage);
+    Entry(const Entry&) = delete;
+    Entry& operator=(const Entry&) = delete;
+    Entry(Entry&&) = default;
+    Entry& operator=(Entry&&) = default;
+    static std::size_t storage_size(const device::EntryDescription& d) {
+        return std::max<std::size_t>(1, (d.bit_length + 7u) / 8u);
+    }
 
-    const device::EntryDescription& desc() const { return desc_; }
-    std::uint8_t subindex() const { return desc_.subindex; }
-    DataType type() const { return desc_.type; }
-    unsigned bit_length() const { return desc_.bit_length; }
-    std::uint16_t access() const { return desc_.access; }
+    const device::EntryDescription& desc() const { return *desc_; }
+    std::uint8_t subindex() const { return desc_->subindex; }
+    DataType type() const { return desc_->type; }
+    unsigned bit_length() const { return desc_->bit_length; }
+    std::uint16_t access() const { return desc_->access; }
     bool readable(AlState s) const;
     bool writable(AlState s) const;
-    bool rx_mappable() const { return desc_.access & device::access::RxPdoMappable; }
-    bool tx_mappable() const { return desc_.access & device::access::TxPdoMappable; }
+    bool rx_mappable() const { return desc_->access & device::access::RxPdoMappable; }
+    bool tx_mappable() const { return desc_->access & device::access::TxPdoMappable; }
 
     // Value storage: capacity() bytes; size() of them are the current value (shorter for strings).
-    std::size_t capacity() const { return capacity_; }
+    std::size_t capacity() const { return storage_.size(); }
     std::size_t size() const { return size_; }
-    ConstBytes value() const { return ConstBytes(data(), size_); }
-    Bytes storage() { return Bytes(data(), capacity_); }
+    ConstBytes value() const { return ConstBytes(storage_.data(), size_); }
+    Bytes storage() { return Bytes(storage_.data(), storage_.size()); }
     // Stores a value without any check or hook (the application's own writes). Longer input is cut.
     void assign(ConstBytes v);
     void reset_to_default();
@@ -52,16 +65,15 @@ class Entry {
         // The usual case, a value of the entry's size on a little-endian host, is one load (the drive reads
         // dozens of entries every servo step).
         if constexpr (std::endian::native == std::endian::little && !std::is_same_v<T, bool>)
-            if (capacity_ >= sizeof(T)) {
+            if (storage_.size() >= sizeof(T)) {
                 T v;
-                std::memcpy(&v, data(), sizeof(T));
+                std::memcpy(&v, storage_.data(), sizeof(T));
                 return v;
             }
         std::uint64_t u = 0;
-        const std::size_t n = std::min<std::size_t>(sizeof(T), capacity_);
-        const std::uint8_t* d = data();
+        const std::size_t n = std::min(sizeof(T), storage_.size());
         for (std::size_t i = 0; i < n; ++i)
-            u |= static_cast<std::uint64_t>(d[i]) << (8 * i);
+            u |= static_cast<std::uint64_t>(storage_[i]) << (8 * i);
         if constexpr (std::is_floating_point_v<T>) {
             T v{};
             std::memcpy(&v, &u, sizeof(T));
@@ -74,16 +86,15 @@ class Entry {
     void set(T v) {
         static_assert(std::is_arithmetic_v<T>);
         if constexpr (std::endian::native == std::endian::little)
-            if (capacity_ >= sizeof(T)) {
-                std::memcpy(data(), &v, sizeof(T));
+            if (storage_.size() >= sizeof(T)) {
+                std::memcpy(storage_.data(), &v, sizeof(T));
                 return;
             }
         std::uint64_t u = 0;
         std::memcpy(&u, &v, sizeof(T));
-        const std::size_t n = std::min<std::size_t>(sizeof(T), capacity_);
-        std::uint8_t* d = data();
+        const std::size_t n = std::min(sizeof(T), storage_.size());
         for (std::size_t i = 0; i < n; ++i)
-            d[i] = static_cast<std::uint8_t>(u >> (8 * i));
+            storage_[i] = static_cast<std::uint8_t>(u >> (8 * i));
     }
     // The value as a signed/unsigned integer of the entry's type (sign-extended for INTEGERn).
     std::int64_t as_int64() const;
@@ -96,47 +107,51 @@ class Entry {
     std::function<void(Entry&)> before_upload;
 
   private:
-    // Values of up to 8 bytes (nearly every entry) live inside the Entry, the rest on the heap: a drive
-    // reads and writes dozens of entries every servo step, and with a hundred drives in one process one
-    // cache line per access instead of two (the Entry, then its value) is a good part of the cost.
-    static constexpr std::size_t kInline = 8;
-    std::uint8_t* data() { return capacity_ <= kInline ? inline_ : heap_.get(); }
-    const std::uint8_t* data() const { return capacity_ <= kInline ? inline_ : heap_.get(); }
-
-    std::uint32_t capacity_ = 0;
-    std::uint32_t size_ = 0;
-    alignas(8) std::uint8_t inline_[kInline] = {};
-    std::unique_ptr<std::uint8_t[]> heap_;
-    device::EntryDescription desc_;
+    const device::EntryDescription* desc_;
+    Bytes storage_;
+    std::size_t size_ = 0;
 };
 
+// Refers to its description like Entry; its entries lie in the dictionary.
 class Object {
   public:
-    explicit Object(const device::ObjectDescription& d);
+    Object(const device::ObjectDescription& d, std::span<Entry> entries);
+    Object(const Object&) = delete;
+    Object& operator=(const Object&) = delete;
+    Object(Object&&) = default;
+    Object& operator=(Object&&) = default;
     std::uint16_t index() const { return index_; }
-    const std::string& name() const { return name_; }
+    const std::string& name() const { return desc_->name; }
     ObjectCode code() const { return code_; }
     DataType type() const { return type_; }
     std::uint8_t max_subindex() const { return max_sub_; }
     Entry* entry(std::uint8_t sub);
     const Entry* entry(std::uint8_t sub) const;
-    std::vector<Entry>& entries() { return entries_; }
-    const std::vector<Entry>& entries() const { return entries_; }
+    std::span<Entry> entries() { return entries_; }
+    std::span<const Entry> entries() const { return entries_; }
     // Subindexes a complete access covers: 1..value of subindex 0 for ARRAY/RECORD.
     std::uint8_t complete_access_last() const;
 
   private:
+    const device::ObjectDescription* desc_;
     std::uint16_t index_;
-    std::string name_;
     ObjectCode code_;
     DataType type_;
     std::uint8_t max_sub_;
-    std::vector<Entry> entries_;
+    std::span<Entry> entries_;
 };
 
 class ObjectDictionary {
   public:
-    explicit ObjectDictionary(const std::vector<device::ObjectDescription>& objects);
+    explicit ObjectDictionary(std::vector<device::ObjectDescription> objects);
+    // Values start at the defaults of descriptions shared with other dictionaries (built once per device).
+    explicit ObjectDictionary(std::shared_ptr<const std::vector<device::ObjectDescription>> objects);
+    // Objects and entries point into the dictionary's buffers: moving keeps them, a copy could not.
+    ObjectDictionary(const ObjectDictionary&) = delete;
+    ObjectDictionary& operator=(const ObjectDictionary&) = delete;
+    ObjectDictionary(ObjectDictionary&&) = default;
+    ~ObjectDictionary();
+    ObjectDictionary& operator=(ObjectDictionary&&) = default;
 
     Object* find(std::uint16_t index);
     const Object* find(std::uint16_t index) const;
@@ -157,7 +172,10 @@ class ObjectDictionary {
   private:
     SdoAbort download_entry(Entry& e, AlState state, ConstBytes data, bool run_after);
     SdoAbort download_complete(Object& o, std::uint8_t sub, AlState state, ConstBytes data);
-    std::vector<Object> objects_;
+    std::shared_ptr<const std::vector<device::ObjectDescription>> descriptions_;
+    std::vector<std::uint8_t> values_;  // every entry's storage
+    std::vector<Entry> entries_;        // every object's entries, object after object
+    std::vector<Object> objects_;       // sorted by index
     std::size_t max_transfer_ = 0;
     std::vector<std::uint8_t> undo_;  // previous values during a complete-access download
 };

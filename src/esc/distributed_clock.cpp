@@ -15,6 +15,12 @@ constexpr std::uint64_t kNearFutureShort = 1'048'576ull;     // ~1 ms (2^20 ns)
 constexpr std::uint64_t kMaxLoopStepNs = 100'000'000;        // longer gaps between writes count as this
 constexpr std::uint64_t kMaxOverduePulses = 1024;            // beyond this, overdue pulses are skipped
 
+// Time d after t; kNever past the end of the 64-bit system time (a master may set the offset so that it
+// ends soon): no pulse comes after it, instead of a wrapped time that lies before every later time.
+constexpr std::uint64_t after(std::uint64_t t, std::uint64_t d) {
+    return t > DistributedClock::kNever - d ? DistributedClock::kNever : t + d;
+}
+
 std::uint16_t latch_ctrl(unsigned unit) {
     return static_cast<std::uint16_t>(addr(Reg::DcLatch0Control) + unit);
 }
@@ -260,8 +266,8 @@ void DistributedClock::activate(std::uint64_t host_ns) {
     } else {
         // The start time is compared in 32 bits: a start time in the past is reached after the lower half
         // of the system time overflowed (up to 4.3 s later), as on the ESC.
-        first = sys + static_cast<std::uint32_t>(static_cast<std::uint32_t>(start_written_) -
-                                                 static_cast<std::uint32_t>(sys));
+        first = after(sys, static_cast<std::uint32_t>(static_cast<std::uint32_t>(start_written_) -
+                                                      static_cast<std::uint32_t>(sys)));
     }
     std::uint8_t status = 0;
     if (act & dc_act::PlausibilityCheck) {
@@ -286,7 +292,9 @@ void DistributedClock::activate(std::uint64_t host_ns) {
 std::uint64_t DistributedClock::projected_next_sync0(std::uint64_t sys) const {
     const std::uint32_t cycle0 = ld_le32(&regs_[addr(Reg::DcSync0CycleTime)]);
     if (next_sync0_ == kNever || next_sync0_ > sys || cycle0 == 0) return next_sync0_;
-    return next_sync0_ + ((sys - next_sync0_) / cycle0 + 1) * cycle0;
+    const std::uint64_t periods = (sys - next_sync0_) / cycle0 + 1;
+    const std::uint64_t span = periods * cycle0;
+    return span / cycle0 == periods ? after(next_sync0_, span) : kNever;
 }
 
 void DistributedClock::deactivate() {
@@ -367,9 +375,9 @@ unsigned DistributedClock::advance(std::uint64_t host_ns, SyncPulse* out, unsign
         if (en1) {
             const std::uint64_t q = cycle0 ? cycle1 / cycle0 : 0;
             const std::uint64_t r = cycle0 ? cycle1 % cycle0 : cycle1;
-            if (cycle0 == 0 ? k == 0 : k % (q + 1) == 0) next_sync1_ = t + r;
+            if (cycle0 == 0 ? k == 0 : k % (q + 1) == 0) next_sync1_ = after(t, r);
         }
-        next_sync0_ = cycle0 ? t + cycle0 : kNever;  // cycle time 0: a single pulse
+        next_sync0_ = cycle0 ? after(t, cycle0) : kNever;  // cycle time 0: a single pulse
     }
     return n;
 }

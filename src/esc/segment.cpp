@@ -104,7 +104,8 @@ bool Segment::restart_slave(std::size_t i) {
     const Slave& old = *slaves_[i];
     EscConfig cfg = old.esc().config();
     cfg.dc_drift_ppm = old.esc().dc().drift_ppm();  // the same oscillator after the restart
-    auto fresh = std::make_unique<Slave>(old.description(), cfg, factory_(old.description()));
+    const DeviceModel model = old.model();
+    auto fresh = std::make_unique<Slave>(model, cfg, factory_(*model.description));
     slaves_[i] = std::move(fresh);
     update_links(i);
     return true;
@@ -243,6 +244,12 @@ std::uint64_t Segment::next_event_ns() const {
 
 std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n, const EscConfig& cfg,
                                       const ApplicationFactory& factory) {
+    return make_segment(DeviceModel::of(d), n, cfg, factory);
+}
+
+std::unique_ptr<Segment> make_segment(const DeviceModel& model, std::size_t n, const EscConfig& cfg,
+                                      const ApplicationFactory& factory) {
+    const device::DeviceDescription& d = *model.description;
     auto seg = std::make_unique<Segment>();
     for (std::size_t i = 0; i < n; ++i) {
         std::unique_ptr<Application> app;
@@ -250,7 +257,7 @@ std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::s
             app = factory(d);
         else
             app = std::make_unique<ProcessImageApplication>(d.output_bytes(), d.input_bytes());
-        seg->add(std::make_unique<Slave>(d, cfg, std::move(app)));
+        seg->add(std::make_unique<Slave>(model, cfg, std::move(app)));
     }
     if (factory)
         seg->set_application_factory(factory);

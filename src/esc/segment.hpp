@@ -132,5 +132,8 @@ class Segment {
 // default a ProcessImageApplication without mailbox protocols).
 std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n,
                                       const EscConfig& cfg = {}, const ApplicationFactory& factory = {});
+// The same from a model built once (DeviceModel::of): repeated segments of one device share it.
+std::unique_ptr<Segment> make_segment(const DeviceModel& model, std::size_t n, const EscConfig& cfg = {},
+                                      const ApplicationFactory& factory = {});
 
 }  // namespace vecat::esc

@@ -107,8 +107,17 @@ class SlaveReplySink final : public MailboxReplySink {
     std::vector<std::uint8_t> overflow_ = std::vector<std::uint8_t>(kMaxMailboxSize);
 };
 
+DeviceModel DeviceModel::of(const device::DeviceDescription& d) {
+    return {std::make_shared<const device::DeviceDescription>(d),
+            std::make_shared<const std::vector<std::uint8_t>>(build_sii_image(d)),
+            std::make_shared<const std::vector<device::ObjectDescription>>(device::dictionary_objects(d))};
+}
+
 Slave::Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::unique_ptr<Application> app)
-    : desc_(desc), esc_(esc_cfg, build_sii_image(desc)), app_(std::move(app)) {
+    : Slave(DeviceModel::of(desc), esc_cfg, std::move(app)) {}
+
+Slave::Slave(const DeviceModel& model, EscConfig esc_cfg, std::unique_ptr<Application> app)
+    : model_(model), desc_(*model_.description), esc_(esc_cfg, *model_.sii_image), app_(std::move(app)) {
     auto idx = [&](device::SmType t) {
         auto i = desc_.sm_index_of_type(t);
         return i ? static_cast<int>(*i) : -1;

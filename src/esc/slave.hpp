@@ -107,8 +107,20 @@ struct SlaveCounters {
     std::uint64_t watchdog_expiries = 0;
 };
 
+// What every slave of one device shares, built once: the description and what is generated from it, the
+// SII image and the objects of the CoE dictionary (a segment of 128 drives, or a fuzz target building a
+// segment per input, neither copies the description nor generates these per slave). Each slave's ESC gets
+// its own copy of the image (writable EEPROM), each CoE application its own values.
+struct DeviceModel {
+    std::shared_ptr<const device::DeviceDescription> description;
+    std::shared_ptr<const std::vector<std::uint8_t>> sii_image;
+    std::shared_ptr<const std::vector<device::ObjectDescription>> dictionary;  // device::dictionary_objects
+    static DeviceModel of(const device::DeviceDescription& d);
+};
+
 class Slave {
   public:
+    Slave(const DeviceModel& model, EscConfig esc_cfg, std::unique_ptr<Application> app);
     Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::unique_ptr<Application> app);
     ~Slave();
     Slave(const Slave&) = delete;
@@ -117,7 +129,8 @@ class Slave {
     Esc& esc() { return esc_; }
     const Esc& esc() const { return esc_; }
     Application& app() { return *app_; }
-    const device::DeviceDescription& description() const { return desc_; }
+    const device::DeviceDescription& description() const { return *model_.description; }
+    const DeviceModel& model() const { return model_; }
 
     // Firmware step after a frame went through the ESC, and on timer ticks.
     void run(std::uint64_t now_ns);
@@ -148,7 +161,8 @@ class Slave {
     void try_enter_op(std::uint64_t now_ns);
     void set_sm_group(bool mailbox, bool active);
 
-    device::DeviceDescription desc_;
+    DeviceModel model_;
+    const device::DeviceDescription& desc_;  // *model_.description
     Esc esc_;
     std::unique_ptr<Application> app_;
     AlState state_ = AlState::Init;

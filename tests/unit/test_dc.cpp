@@ -421,6 +421,24 @@ TEST(DcSync, PulsesAreCountedEvenWhenTheFirmwarePollsLate) {
     EXPECT_EQ(l.dc().counters().pulses_not_delivered, 81u - 16u);
 }
 
+TEST(DcSync, NoPulseAfterTheEndOfThe64BitSystemTime) {
+    // Given a system time offset that lets the 64-bit system time end 100 us from now, and SYNC0 every
+    // 1 ms from 10 us on (found by fuzz_frame: the pulse after the first wrapped to a time before every
+    // later time, and the firmware run looped over 2^64 / 1 ms pulses);
+    Line l;
+    const std::uint64_t offset = 0 - 100'000 - l.dc().local_time(l.t);
+    l.wr(0x0920, offset, 8);
+    const std::uint64_t sys = l.dc().system_time(l.t);
+    ASSERT_EQ(sys, 0 - std::uint64_t{100'000});
+    program_sync(l, sys + 10'000, 1'000'000);
+    // When the host time passes the first pulse; Then that pulse comes, and no other before the end.
+    l.at(l.t + 50'000);
+    EXPECT_EQ(l.dc().counters().sync_pulses[0], 1u);
+    EXPECT_EQ(l.b.seg->next_event_ns(), esc::DistributedClock::kNever);
+    l.at(l.t + 40'000);
+    EXPECT_EQ(l.dc().counters().sync_pulses[0], 1u);
+}
+
 TEST(DcLatch, SingleAndContinuousLatchEvents) {
     Line l;
     l.wr(0x09A8, 0x01, 1);  // latch 0: positive edge single event, negative continuous
