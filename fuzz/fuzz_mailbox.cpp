@@ -6,7 +6,8 @@
 //   2     the master reads SM1
 //   3     the master toggles the SM1 repeat request
 //   4     AL control write (one byte)
-//   5     time passes (up to 25.5 ms in steps of 100 us; the drive simulates every servo step)
+//   5     time passes (up to 3.75 ms in servo periods of 250 us; the drive simulates every servo step, which
+//         is most of an input's cost: the drive's own dynamics are not what this target explores)
 //   6     the application raises a fault (an emergency to queue)
 // Invariants: every reply fits SM1 with its header length; replies are mailbox errors or CoE messages the
 // server may send; the slave stays in a valid AL state.
@@ -89,7 +90,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                 break;
             }
             case 5:
-                now += 100'000ull * in.u8();
+                now += cia402::Drive::kServoPeriodNs * (in.u8() & 0x0Fu);
                 break;
             case 6:
                 if (app) app->raise_fault(in.u16(), in.u8());
