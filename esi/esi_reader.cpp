@@ -179,6 +179,13 @@ std::optional<ObjectDescription> read_object(const Dictionary& dict, pugi::xml_n
             }
             const int lb = arr.child("ArrayInfo").child("LBound").text().as_int(1);
             const int n = arr.child("ArrayInfo").child("Elements").text().as_int(0);
+            // The elements are subindexes lb .. lb+n-1, all of them in 1..255 (subindex 0 is the count).
+            if (lb < 1 || lb > 255 || n < 0 || n > 256 - lb) {
+                notes.push_back(fmt::format(
+                    "object 0x{:04X}: array bounds LBound {} Elements {} outside subindexes 1..255, left out",
+                    o.index, lb, n));
+                return std::nullopt;
+            }
             unsigned bits = device::fixed_bit_length(*base);
             if (bits == 0 && n > 0) bits = arr.child("BitSize").text().as_uint() / static_cast<unsigned>(n);
             for (int k = 0; k < n; ++k) {

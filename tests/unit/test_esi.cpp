@@ -256,6 +256,57 @@ TEST(EsiReader, HexDecValues) {
     EXPECT_FALSE(esi::parse_esi_type("NO_SUCH_TYPE").has_value());
 }
 
+// An ESI file with one array object 0x8000 whose ArrayInfo has the given LBound and Elements.
+std::string esi_with_array(const std::string& lbound, const std::string& elements) {
+    return R"(<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x1234</Id></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x1" RevisionNo="#x1">T</Type><Name>T</Name>
+<Profile><ProfileNo>5001</ProfileNo><Dictionary>
+<DataTypes>
+<DataType><Name>UDINT</Name><BitSize>32</BitSize></DataType>
+<DataType><Name>USINT</Name><BitSize>8</BitSize></DataType>
+<DataType><Name>DT8000ARR</Name><BaseType>UDINT</BaseType><BitSize>64</BitSize>
+<ArrayInfo><LBound>)" + lbound + "</LBound><Elements>" + elements + R"(</Elements></ArrayInfo></DataType>
+<DataType><Name>DT8000</Name><BitSize>80</BitSize>
+<SubItem><SubIdx>0</SubIdx><Name>Number of entries</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs></SubItem>
+<SubItem><Name>Elements</Name><Type>DT8000ARR</Type><BitSize>64</BitSize><BitOffs>16</BitOffs></SubItem>
+</DataType></DataTypes>
+<Objects><Object><Index>#x8000</Index><Name>Table</Name><Type>DT8000</Type><BitSize>80</BitSize></Object></Objects>
+</Dictionary></Profile>
+<Mailbox><CoE/></Mailbox>
+</Device></Devices></Descriptions></EtherCATInfo>)";
+}
+
+const device::ObjectDescription* find_object(const device::DeviceDescription& d, std::uint16_t index) {
+    for (const auto& o : d.objects)
+        if (o.index == index) return &o;
+    return nullptr;
+}
+
+// Found by fuzz_esi: LBound 2147483647 overflowed the subindex arithmetic (undefined behaviour), and a huge
+// Elements count would build that many entries. Bounds outside subindexes 1..255 leave the object out with
+// a note; good bounds still give the array.
+TEST(EsiReader, ArrayBoundsOutsideTheSubindexRangeLeaveTheObjectOut) {
+    const auto good = esi::import_esi_text(esi_with_array("1", "2"));
+    const auto* o = find_object(good.desc, 0x8000);
+    ASSERT_NE(o, nullptr);
+    EXPECT_EQ(o->code, device::ObjectCode::Array);
+    EXPECT_EQ(o->max_subindex(), 2);
+    for (const auto& [lb, n] : std::vector<std::pair<std::string, std::string>>{
+             {"2147483647", "2"}, {"1", "2000000000"}, {"0", "2"}, {"-5", "2"}, {"200", "100"}, {"1", "-1"}}) {
+        SCOPED_TRACE("LBound " + lb + " Elements " + n);
+        const auto r = esi::import_esi_text(esi_with_array(lb, n));
+        EXPECT_EQ(find_object(r.desc, 0x8000), nullptr);
+        EXPECT_TRUE(std::any_of(r.notes.begin(), r.notes.end(), [](const std::string& s) {
+            return s.find("0x8000") != std::string::npos && s.find("left out") != std::string::npos;
+        }));
+    }
+    // The last subindex may be 255.
+    const auto full = esi::import_esi_text(esi_with_array("1", "255"));
+    ASSERT_NE(find_object(full.desc, 0x8000), nullptr);
+    EXPECT_EQ(find_object(full.desc, 0x8000)->max_subindex(), 255);
+}
+
 struct VendorCase {
     const char* file;
     esi::DeviceSelector sel;
