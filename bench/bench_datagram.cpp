@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <memory>
 #include <vector>
@@ -146,5 +147,54 @@ void BM_CyclicLrwFrmw(benchmark::State& state) {
                    (advance ? ", 1 ms per cycle" : ", time frozen"));
 }
 BENCHMARK(BM_CyclicLrwFrmw)->ArgsProduct({{1, 10, 100}, {0, 1}});
+
+// The same cyclic frames (time frozen) as the serve loop handles them: the firmware of the slaves runs after
+// the reply is sent (Segment::set_deferred_firmware). The time reported is the reply path, what the
+// frame's round trip contains; the counter firmware_after_ns is the firmware's run after it, per cycle.
+// Both are timed per iteration on the steady clock, less the cost of reading it (measured at the start).
+void BM_CyclicReplyPath(benchmark::State& state) {
+    using Clock = std::chrono::steady_clock;
+    const auto n = static_cast<std::size_t>(state.range(0));
+    Line line(n);
+    line.seg->set_deferred_firmware(true);
+    std::vector<Frame> frames;
+    const std::size_t image = line.m->process_image_size();
+    for (std::size_t off = 0; off < image; off += master::Master::kMaxLrwBytes) {
+        const std::size_t k = std::min(image - off, master::Master::kMaxLrwBytes);
+        const std::uint32_t laddr = 0x00010000u + static_cast<std::uint32_t>(off);
+        if (off == 0)
+            frames.emplace_back(
+                Frame({{esc::Command::LRW, laddr, k}, {esc::Command::FRMW, kFrmwAddress, 8}}));
+        else
+            frames.emplace_back(Frame({{esc::Command::LRW, laddr, k}}));
+        std::memcpy(frames.back().data(0), line.m->outputs(0).data() + off, k);
+    }
+    // The cost of one clock reading: the smallest of many empty intervals.
+    double overhead = 1e9;
+    for (int i = 0; i < 10000; ++i) {
+        const auto a = Clock::now();
+        const auto b = Clock::now();
+        overhead = std::min(overhead, std::chrono::duration<double>(b - a).count());
+    }
+    double firmware = 0;
+    for (auto _ : state) {
+        double reply = 0;
+        for (auto& f : frames) {
+            const auto t0 = Clock::now();
+            benchmark::DoNotOptimize(f.run(*line.seg, line.now));
+            const auto t1 = Clock::now();
+            line.seg->run_deferred_firmware();
+            const auto t2 = Clock::now();
+            reply += std::max(0.0, std::chrono::duration<double>(t1 - t0).count() - overhead);
+            firmware += std::max(0.0, std::chrono::duration<double>(t2 - t1).count() - overhead);
+        }
+        state.SetIterationTime(reply);
+    }
+    per_slave(state, n);
+    state.counters["firmware_after_ns"] = firmware * 1e9 / static_cast<double>(state.iterations());
+    state.counters["clock_read_ns"] = overhead * 1e9;
+    state.SetLabel(std::to_string(frames.size()) + " frame(s), time frozen, firmware after the reply");
+}
+BENCHMARK(BM_CyclicReplyPath)->Arg(1)->Arg(10)->Arg(100)->UseManualTime();
 
 }  // namespace

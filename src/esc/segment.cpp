@@ -111,7 +111,20 @@ bool Segment::restart_slave(std::size_t i) {
     return true;
 }
 
+void Segment::run_due_firmware(std::uint64_t now_ns) {
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        if (last_run_ns_[k] == 0 || now_ns - last_run_ns_[k] >= kMaxRunGapNs || now_ns < last_run_ns_[k])
+            run(k, now_ns);
+}
+
+void Segment::run_deferred_firmware() {
+    if (!firmware_due_) return;
+    firmware_due_ = false;
+    run_due_firmware(firmware_due_ns_);
+}
+
 void Segment::run_firmware(std::uint64_t now_ns) {
+    run_deferred_firmware();
     for (std::size_t k = 0; k < slaves_.size(); ++k)
         run(k, now_ns);
 }
@@ -121,6 +134,7 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
 }
 
 bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage) {
+    run_deferred_firmware();  // the previous frame's, if the server has not run it yet
     onward_ = false;
     if (len > frame.size()) len = frame.size();
     ConstBytes in(frame.data(), len);
@@ -177,9 +191,12 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
             const DatagramView d = pf.datagram(frame, latch_pos);
             pending_latch_ = PendingLatch{true, d.index(), latch_pos, d.wkc(), now_ns};
         }
-        for (std::size_t k = 0; k < slaves_.size(); ++k)
-            if (last_run_ns_[k] == 0 || now_ns - last_run_ns_[k] >= kMaxRunGapNs || now_ns < last_run_ns_[k])
-                run(k, now_ns);
+        if (defer_firmware_) {
+            firmware_due_ = true;
+            firmware_due_ns_ = now_ns;
+        } else {
+            run_due_firmware(now_ns);
+        }
     }
     if (hit) {
         if (damage.kind == FrameDamage::Kind::Corrupted) count_corruption(damage, m);

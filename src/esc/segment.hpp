@@ -53,6 +53,16 @@ class Segment {
     bool process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage);
     // Runs the slaves' firmware and watchdogs without a frame.
     void tick(std::uint64_t now_ns);
+
+    // Firmware after the reply. By default process_frame() runs the firmware of the slaves the frame
+    // addressed before it returns. A server that sends the reply first sets this and calls
+    // run_deferred_firmware() after sending: the frame's round trip then holds the ESCs' work only, as on
+    // a real line, where the firmware runs beside the wire. A master cannot tell the difference: what the
+    // firmware does after a frame (process data exchange, mailbox replies, AL state changes) shows in the
+    // next frame either way. Firmware still due runs before the next frame or tick.
+    void set_deferred_firmware(bool on) { defer_firmware_ = on; }
+    bool deferred_firmware() const { return defer_firmware_; }
+    void run_deferred_firmware();
     // Host time of the next SYNC pulse of any slave (DistributedClock::kNever if none): the serve loop runs
     // tick() then, so SYNC events happen on time without frames.
     std::uint64_t next_event_ns() const;
@@ -125,6 +135,10 @@ class Segment {
     // slave once per frame).
     std::vector<std::uint64_t> last_run_ns_;
     static constexpr std::uint64_t kMaxRunGapNs = 100'000;
+    void run_due_firmware(std::uint64_t now_ns);
+    bool defer_firmware_ = false;
+    bool firmware_due_ = false;        // a frame's firmware runs are still to be done
+    std::uint64_t firmware_due_ns_ = 0;  // at the time of that frame
     SegmentCounters counters_;
 };
 

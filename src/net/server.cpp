@@ -74,6 +74,9 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     const std::uint64_t tick_ns = static_cast<std::uint64_t>(opt.tick_us) * 1000;
     std::uint64_t last_link_check = monotonic_ns();
     if (opt.downstream) seg.set_downstream_link(opt.downstream->carrier());
+    // The reply goes out before the firmware of the slaves runs (see Segment::set_deferred_firmware).
+    const bool was_deferred = seg.deferred_firmware();
+    seg.set_deferred_firmware(true);
     while (!stop.load(std::memory_order_relaxed)) {
         // Wake up for the next SYNC pulse of the DC units, or after one tick, whichever comes first.
         const std::uint64_t next_sync = seg.next_event_ns();
@@ -138,6 +141,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
                     ++st.send_errors;
                 if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), 2);
             }
+            seg.run_deferred_firmware();
             if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);
             last_tick = now;
         } else if (now - last_tick >= tick_ns || now >= next_sync) {
@@ -147,6 +151,8 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             last_time = std::max(last_time, now);
         }
     }
+    seg.run_deferred_firmware();
+    seg.set_deferred_firmware(was_deferred);
     if (opt.pcap) opt.pcap->flush();
     return st;
 }

@@ -104,3 +104,26 @@ TEST(Registers, DcReceiveTimesFollowThePositionOnTheLine) {
     auto t2 = raw_datagram(*b.seg, 1, phys(0, 0x0910), std::vector<std::uint8_t>(8, 0), 6'000'001'000);
     EXPECT_EQ(ld_le64(t2.data.data()) - ld_le64(t1.data.data()), 1000u);
 }
+
+// Firmware after the reply (what the serve loop does): the frame's ESC work happens in process_frame(), the
+// firmware's reaction (here: the AL control request) only in run_deferred_firmware(), or before the next
+// frame if the server has not run it. Without deferral the reaction is there when process_frame() returns.
+TEST(Registers, DeferredFirmwareRunsAfterTheFrameAndBeforeTheNext) {
+    for (const bool deferred : {false, true}) {
+        SCOPED_TRACE(deferred ? "deferred" : "at once");
+        Bench b(1);
+        b.seg->set_deferred_firmware(deferred);
+        EXPECT_EQ(b.escx().peek(0x0130) & 0x1F, 0x01);
+        EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0120), {0x02, 0}).wkc, 1);  // APWR AL control: PREOP
+        // The firmware has taken the request (PREOP, or the error bit for unconfigured mailboxes) only
+        // when it ran.
+        EXPECT_EQ((b.escx().peek(0x0130) & 0x1F) == 0x01, deferred);
+        if (deferred) {
+            // The next frame sees it: the firmware due runs before the frame.
+            const auto r = raw_datagram(*b.seg, 1, phys(0, 0x0130), {0, 0});  // APRD AL status
+            EXPECT_NE(r.data[0] & 0x1F, 0x01);
+            b.seg->run_deferred_firmware();  // nothing due any more: a no-op
+        }
+        EXPECT_NE(b.escx().peek(0x0130) & 0x1F, 0x01);
+    }
+}
