@@ -14,7 +14,9 @@ namespace vecat::net {
 
 struct ServeOptions {
     bool busy_poll = false;         // spin on the socket instead of sleeping in poll()
-    std::int64_t tick_us = 100;     // firmware/watchdog tick period when idle
+    // Firmware/watchdog tick period when idle: the drives' servo period (cia402::Drive::kServoPeriodNs), so
+    // a drive between frames steps on its own grid; finer ticks only cost CPU with many slaves.
+    std::int64_t tick_us = 250;
     PcapngWriter* pcap = nullptr;   // capture of every frame in and out
     FrameFilter* filter = nullptr;  // fault injection (src/faults): frames go through it to the segment
     // Called on the serving thread after each processed frame, once its reply is sent (telemetry); it must
