@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "esc/registers.hpp"
 #include "esc/sii_image.hpp"
 
 namespace vecat::esi {
@@ -447,6 +448,17 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
             attr_or(s, "DefaultSize", attr_or(s, "MaxSize", attr_or(s, "MinSize", 0))));
         c.type = sm_type(txt(s), c.control);
         d.sync_managers.push_back(c);
+    }
+    // An ESC has at most 16 SyncManagers and 16 FMMUs: the rest of a longer list does not exist.
+    if (d.sync_managers.size() > esc::kMaxSms) {
+        notes.push_back(fmt::format("{} Sm elements: an ESC has {} SyncManagers, the rest is left out",
+                                    d.sync_managers.size(), esc::kMaxSms));
+        d.sync_managers.resize(esc::kMaxSms);
+    }
+    if (d.fmmus.size() > esc::kMaxFmmus) {
+        notes.push_back(fmt::format("{} Fmmu elements: an ESC has {} FMMUs, the rest is left out", d.fmmus.size(),
+                                    esc::kMaxFmmus));
+        d.fmmus.resize(esc::kMaxFmmus);
     }
 
     for (auto p : dev.children("RxPdo"))

@@ -118,9 +118,10 @@ Slave::Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::uniq
 
 Slave::Slave(const DeviceModel& model, EscConfig esc_cfg, std::unique_ptr<Application> app)
     : model_(model), desc_(*model_.description), esc_(esc_cfg, *model_.sii_image), app_(std::move(app)) {
+    // A SyncManager past the ESC's 16 does not exist (a description made in code may list more).
     auto idx = [&](device::SmType t) {
         auto i = desc_.sm_index_of_type(t);
-        return i ? static_cast<int>(*i) : -1;
+        return i && *i < kMaxSms ? static_cast<int>(*i) : -1;
     };
     sm_mbx_out_ = idx(device::SmType::MailboxOut);
     sm_mbx_in_ = idx(device::SmType::MailboxIn);
@@ -214,6 +215,7 @@ AlStatusCode Slave::check_mailbox_config() const {
     const auto* out = desc_.sm_of_type(device::SmType::MailboxOut);
     const auto* in = desc_.sm_of_type(device::SmType::MailboxIn);
     if (!out || !in) return AlStatusCode::NoError;  // a device without mailbox
+    if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0) return AlStatusCode::InvalidMailboxConfigPreOp;  // past SM 15
     const auto c0 = esc_.sm_config(static_cast<unsigned>(sm_mbx_out_));
     const auto c1 = esc_.sm_config(static_cast<unsigned>(sm_mbx_in_));
     const bool ok0 = c0.ecat_enabled && c0.start == out->start && c0.length == out->length &&

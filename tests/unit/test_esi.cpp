@@ -307,6 +307,38 @@ TEST(EsiReader, ArrayBoundsOutsideTheSubindexRangeLeaveTheObjectOut) {
     EXPECT_EQ(find_object(full.desc, 0x8000)->max_subindex(), 255);
 }
 
+// Found by fuzz_esi: a file with more than 16 Sm elements put the mailbox on SyncManager 20, and the slave
+// indexed past the ESC's 16 SyncManagers. The import keeps 16 (with a note); a description made in code
+// with a mailbox SyncManager past 16 gives a slave without that mailbox, which refuses PREOP.
+TEST(EsiReader, MoreThanSixteenSyncManagersAreCutToWhatAnEscHas) {
+    std::string sms;
+    for (int i = 0; i < 18; ++i)
+        sms += R"(<Sm StartAddress="#x1800" ControlByte="#x20" DefaultSize="2" Enable="1">Inputs</Sm>)";
+    sms += R"(<Sm StartAddress="#x1000" ControlByte="#x26" DefaultSize="128" Enable="1">MBoxOut</Sm>)";
+    sms += R"(<Sm StartAddress="#x1080" ControlByte="#x22" DefaultSize="128" Enable="1">MBoxIn</Sm>)";
+    const std::string xml = R"(<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x1234</Id></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x1" RevisionNo="#x1">T</Type><Name>T</Name>)" + sms +
+                            R"(<Mailbox><CoE/></Mailbox></Device></Devices></Descriptions></EtherCATInfo>)";
+    const auto r = esi::import_esi_text(xml);
+    EXPECT_EQ(r.desc.sync_managers.size(), 16u);
+    EXPECT_TRUE(std::any_of(r.notes.begin(), r.notes.end(),
+                            [](const std::string& s) { return s.find("20 Sm elements") != std::string::npos; }));
+
+    auto d = device::default_drive();
+    const auto mbx_in = d.sync_managers.at(1);
+    d.sync_managers[1].type = device::SmType::Unused;
+    while (d.sync_managers.size() < 20)
+        d.sync_managers.push_back(device::SyncManagerConfig{});
+    d.sync_managers.push_back(mbx_in);  // SyncManager 20
+    auto seg = coe::make_coe_segment(d, 1);
+    net::InProcessLink link(*seg);
+    link.set_time(1'000'000'000);
+    master::Master m(link);
+    EXPECT_FALSE(m.startup(esc::AlState::PreOp));
+    EXPECT_NE(seg->slave(0).state(), esc::AlState::PreOp);
+}
+
 struct VendorCase {
     const char* file;
     esi::DeviceSelector sel;
