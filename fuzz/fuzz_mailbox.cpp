@@ -7,7 +7,8 @@
 //   3     the master toggles the SM1 repeat request
 //   4     AL control write (one byte)
 //   5     time passes (up to 3.75 ms in servo periods of 250 us; the drive simulates every servo step, which
-//         is most of an input's cost: the drive's own dynamics are not what this target explores)
+//         was most of an input's cost: the drive's own dynamics are not what this target explores)
+// Every step also advances the time by 10 us; the slave's firmware runs after each frame it receives.
 //   6     the application raises a fault (an emergency to queue)
 // Invariants: every reply fits SM1 with its header length; replies are mailbox errors or CoE messages the
 // server may send; the slave stays in a valid AL state.
@@ -91,13 +92,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             }
             case 5:
                 now += cia402::Drive::kServoPeriodNs * (in.u8() & 0x0Fu);
+                seg->tick(now);
                 break;
             case 6:
                 if (app) app->raise_fault(in.u16(), in.u8());
+                seg->tick(now);
                 break;
         }
-        now += 100'000;
-        seg->tick(now);
+        // The firmware of the slave runs after each of its frames (and ticks above): no tick per step.
+        now += 10'000;
         const auto s = static_cast<std::uint8_t>(slave.state());
         VECAT_FUZZ_CHECK(s == 1 || s == 2 || s == 3 || s == 4 || s == 8);
     }
