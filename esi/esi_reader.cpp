@@ -528,7 +528,13 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
     }
 
     if (auto ee = dev.child("Eeprom")) {
-        d.eeprom_size_bytes = static_cast<std::uint32_t>(hexdec_or(ee, "ByteSize", d.eeprom_size_bytes));
+        // ESC register 0x0502 bit 7: 1 or 2 address bytes, EEPROMs of 1 kbit up to 4 Mbit.
+        constexpr std::int64_t kMaxEepromBytes = 4 * 1024 * 1024 / 8;
+        const std::int64_t bytes = hexdec_or(ee, "ByteSize", d.eeprom_size_bytes);
+        if (bytes <= 0 || bytes > kMaxEepromBytes)
+            throw EsiError(fmt::format("Eeprom ByteSize {}: an ESC addresses EEPROMs of 1 to {} bytes (4 Mbit)",
+                                       bytes, kMaxEepromBytes));
+        d.eeprom_size_bytes = static_cast<std::uint32_t>(bytes);
         const auto cfg = parse_hex_bytes(txt(ee.child("ConfigData")));
         auto w = [&](unsigned i) -> std::uint16_t {
             return 2 * i + 1 < cfg.size() ? static_cast<std::uint16_t>(cfg[2 * i] | cfg[2 * i + 1] << 8) : 0;

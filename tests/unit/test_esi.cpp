@@ -339,6 +339,29 @@ TEST(EsiReader, MoreThanSixteenSyncManagersAreCutToWhatAnEscHas) {
     EXPECT_NE(seg->slave(0).state(), esc::AlState::PreOp);
 }
 
+// Found by fuzz_esi: Eeprom ByteSize 4294967265 made the SII builder allocate 4 GB. A size outside what an
+// ESC addresses (1 byte .. 4 Mbit) refuses the file with the reason; 4 Mbit itself is accepted.
+TEST(EsiReader, EepromByteSizeBeyondFourMbitRefusesTheFile) {
+    const auto with_size = [](const std::string& size) {
+        return R"(<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x1234</Id></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x1" RevisionNo="#x1">T</Type><Name>T</Name>
+<Eeprom><ByteSize>)" + size + R"(</ByteSize><ConfigData>050E03440A000000</ConfigData></Eeprom>
+</Device></Devices></Descriptions></EtherCATInfo>)";
+    };
+    for (const char* bad : {"4294967265", "524289", "0", "-2048"}) {
+        SCOPED_TRACE(bad);
+        try {
+            esi::import_esi_text(with_size(bad));
+            ADD_FAILURE() << "accepted";
+        } catch (const esi::EsiError& e) {
+            EXPECT_NE(std::string(e.what()).find("4 Mbit"), std::string::npos) << e.what();
+        }
+    }
+    EXPECT_EQ(esi::import_esi_text(with_size("524288")).desc.eeprom_size_bytes, 524288u);
+    EXPECT_EQ(esi::import_esi_text(with_size("2048")).desc.eeprom_size_bytes, 2048u);
+}
+
 struct VendorCase {
     const char* file;
     esi::DeviceSelector sel;
