@@ -73,9 +73,24 @@ class ProcessDataMap {
                        unsigned& bits) const;
     bool build(const Direction& d, std::vector<MappedField>& fields, unsigned& bytes);
 
+    // The copy plan of a direction whose fields are all whole objects of 1, 2, 4 or 8 bytes at byte
+    // offsets (nearly every mapping): value pointers and image offsets resolved once per mapping, so the
+    // cyclic copy is one fixed-size copy per field. Empty `ok` means the general bit copy is used.
+    struct FastField {
+        std::uint8_t* value;
+        std::uint32_t byte;
+        std::uint32_t size;
+    };
+    struct Plan {
+        bool ok = false;
+        std::vector<FastField> fields;
+    };
+    static Plan make_plan(const std::vector<MappedField>& fields);
+
     ObjectDictionary& od_;
     Direction rx_, tx_;
     std::vector<MappedField> out_, in_;
+    Plan out_plan_, in_plan_;
     unsigned out_bytes_ = 0, in_bytes_ = 0;
     unsigned max_out_ = 0, max_in_ = 0;
     bool out_valid_ = true, in_valid_ = true;
