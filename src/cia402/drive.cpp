@@ -265,12 +265,12 @@ Drive::Drive(const device::DeviceDescription& d,
     twin_ = std::make_unique<twinsync::Port>(dictionary(), kServoPeriodNs);
     // Fault injection is refused for codes the drive does not simulate.
     if (o_->simulated_fault)
-        o_->simulated_fault->on_download = [](const Entry&, ConstBytes v) {
+        o_->simulated_fault->hooks().on_download = [](const Entry&, ConstBytes v) {
             const std::uint16_t code = v.size() >= 2 ? ld_le16(v.data()) : 0;
             return (code == 0 || fault::injectable(code)) ? coe::SdoAbort::None : coe::SdoAbort::ValueRange;
         };
     if (o_->compensation_start)
-        o_->compensation_start->after_download = [this](Entry& e) {
+        o_->compensation_start->hooks().after_download = [this](Entry& e) {
             if (e.get<std::uint8_t>() == 0) return;
             e.set(std::uint8_t{0});
             // The move now ends at its target plus the achievable part of the compensation.

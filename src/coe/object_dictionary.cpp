@@ -254,7 +254,7 @@ SdoAbort ObjectDictionary::upload(std::uint16_t index, std::uint8_t sub, bool co
         if (!e) return SdoAbort::SubindexDoesNotExist;
         if (!e->readable(state))
             return (e->access() & acc::ReadAll) ? SdoAbort::WrongState : SdoAbort::WriteOnly;
-        if (e->before_upload) e->before_upload(*e);
+        e->run_before_upload();
         if (e->size() > out.size()) return SdoAbort::ObjectTooLongForMailbox;
         std::copy_n(e->value().begin(), e->size(), out.begin());
         len = e->size();
@@ -268,7 +268,7 @@ SdoAbort ObjectDictionary::upload(std::uint16_t index, std::uint8_t sub, bool co
             return (e.access() & acc::ReadAll) ? SdoAbort::WrongState : SdoAbort::WriteOnly;
     }
     for (auto& e : o->entries())
-        if (e.before_upload) e.before_upload(e);
+        e.run_before_upload();
     const std::uint8_t last = o->complete_access_last();
     const std::size_t n = complete_access_size(*o, sub, last);
     if (n > out.size()) return SdoAbort::ObjectTooLongForMailbox;
@@ -286,10 +286,9 @@ SdoAbort ObjectDictionary::download_entry(Entry& e, AlState state, ConstBytes da
     if (!e.writable(state)) return (e.access() & acc::WriteAll) ? SdoAbort::WrongState : SdoAbort::ReadOnly;
     if (auto a = check_length(e, data.size()); a != SdoAbort::None) return a;
     if (auto a = check_range(e, data); a != SdoAbort::None) return a;
-    if (e.on_download)
-        if (auto a = e.on_download(e, data); a != SdoAbort::None) return a;
+    if (auto a = e.check_download(data); a != SdoAbort::None) return a;
     e.assign(data);
-    if (run_after && e.after_download) e.after_download(e);
+    if (run_after) e.run_after_download();
     return SdoAbort::None;
 }
 
@@ -341,7 +340,7 @@ SdoAbort ObjectDictionary::download_complete(Object& o, std::uint8_t sub, AlStat
             off += e.capacity();
         }
         for (auto& e : o.entries())
-            if (e.after_download) e.after_download(e);
+            e.run_after_download();
     };
 
     SdoAbort result = SdoAbort::None;

@@ -27,6 +27,16 @@ using esc::AlState;
 // the same descriptions: a segment of many drives, or a fuzz target building a drive per input, does not
 // copy names, defaults and ranges per entry), and keeps its value in the dictionary's one value buffer
 // (a dictionary is a handful of allocations, not one per entry). Not copyable: a copy would share the value.
+class Entry;
+
+// Hooks the device installs on an entry. on_download validates a value about to be written by SDO (it may
+// refuse with an abort code); after_download runs once it is stored; before_upload refreshes the value.
+struct EntryHooks {
+    std::function<SdoAbort(const Entry&, ConstBytes)> on_download;
+    std::function<void(Entry&)> after_download;
+    std::function<void(Entry&)> before_upload;
+};
+
 class Entry {
   public:
     // storage: storage_size(d) bytes that outlive the entry.
@@ -100,16 +110,28 @@ class Entry {
     std::int64_t as_int64() const;
     std::uint64_t as_uint64() const { return static_cast<std::uint64_t>(as_int64()); }
 
-    // Hooks the device installs. on_download validates a value about to be written by SDO (it may
-    // refuse with an abort code); after_download runs once it is stored; before_upload refreshes the value.
-    std::function<SdoAbort(const Entry&, ConstBytes)> on_download;
-    std::function<void(Entry&)> after_download;
-    std::function<void(Entry&)> before_upload;
+    // The entry's hooks (see EntryHooks), made on first use: few entries have any, and an entry without
+    // stays small (the drive reads and writes dozens of entries per servo step, of many drives).
+    EntryHooks& hooks() {
+        if (!hooks_) hooks_ = std::make_unique<EntryHooks>();
+        return *hooks_;
+    }
+    // The hooks' calls; none installed: no refusal, nothing to do.
+    SdoAbort check_download(ConstBytes v) const {
+        return hooks_ && hooks_->on_download ? hooks_->on_download(*this, v) : SdoAbort::None;
+    }
+    void run_after_download() {
+        if (hooks_ && hooks_->after_download) hooks_->after_download(*this);
+    }
+    void run_before_upload() {
+        if (hooks_ && hooks_->before_upload) hooks_->before_upload(*this);
+    }
 
   private:
     const device::EntryDescription* desc_;
     Bytes storage_;
     std::size_t size_ = 0;
+    std::unique_ptr<EntryHooks> hooks_;
 };
 
 // Refers to its description like Entry; its entries lie in the dictionary.

@@ -294,7 +294,7 @@ SdoAbort ParameterStore::store(ParameterGroup g) {
         if (!in_group(o.index(), g)) continue;
         for (auto& e : o.entries()) {
             if (!is_stored_parameter(o.index(), e)) continue;
-            if (e.before_upload) e.before_upload(e);
+            e.run_before_upload();
             s.records.push_back({o.index(), e.subindex(), {e.value().begin(), e.value().end()}});
         }
     }
@@ -326,7 +326,7 @@ void install_parameter_objects(ObjectDictionary& od, ParameterStore* store) {
             if (e.subindex() == 0) continue;
             e.set(capability);
             const auto group = static_cast<ParameterGroup>(std::min<unsigned>(e.subindex(), 4));
-            e.on_download = [store, storing, group](const Entry&, ConstBytes v) {
+            e.hooks().on_download = [store, storing, group](const Entry&, ConstBytes v) {
                 const std::uint32_t sig = v.size() >= 4 ? ld_le32(v.data()) : 0;
                 // CiA 301 7.5.2.13/14: a wrong signature is refused with 0x0800002x.
                 if (sig != (storing ? kStoreSignature : kRestoreSignature)) return SdoAbort::CannotTransfer;
@@ -335,7 +335,7 @@ void install_parameter_objects(ObjectDictionary& od, ParameterStore* store) {
                 return storing ? store->store(group) : store->restore_defaults(group);
             };
             // A read gives the capability again, not the signature.
-            e.after_download = [capability](Entry& x) { x.set(capability); };
+            e.hooks().after_download = [capability](Entry& x) { x.set(capability); };
         }
     }
 }

@@ -94,9 +94,9 @@ void ProcessDataMap::install(const Direction& d) {
     if (!assign) return;
     auto on_change = [this](Entry&) { rebuild(); };
     for (auto& e : assign->entries()) {
-        e.after_download = on_change;
+        e.hooks().after_download = on_change;
         if (e.subindex() == 0) {
-            e.on_download = [this, d, assign](const Entry&, ConstBytes v) {
+            e.hooks().on_download = [this, d, assign](const Entry&, ConstBytes v) {
                 const int n = v.empty() ? 0 : v[0];
                 for (int i = 1; i <= n; ++i) {
                     const Entry* s = assign->entry(static_cast<std::uint8_t>(i));
@@ -114,7 +114,7 @@ void ProcessDataMap::install(const Direction& d) {
                 return SdoAbort::None;
             };
         } else {
-            e.on_download = [this, d, assign](const Entry&, ConstBytes v) {
+            e.hooks().on_download = [this, d, assign](const Entry&, ConstBytes v) {
                 if (assign->entry(0)->as_uint64() != 0) return SdoAbort::Subindex0NotZero;
                 const auto pdo = static_cast<std::uint16_t>(v.size() >= 2 ? v[0] | (v[1] << 8) : 0);
                 if (pdo == 0) return SdoAbort::None;  // clearing an unused slot
@@ -129,9 +129,9 @@ void ProcessDataMap::install(const Direction& d) {
         Object* po = &o;
         const std::uint16_t pdo = o.index();
         for (auto& e : o.entries()) {
-            e.after_download = on_change;
+            e.hooks().after_download = on_change;
             if (e.subindex() == 0) {
-                e.on_download = [this, d, po, pdo](const Entry&, ConstBytes v) {
+                e.hooks().on_download = [this, d, po, pdo](const Entry&, ConstBytes v) {
                     const int n = v.empty() ? 0 : v[0];
                     for (int i = 1; i <= n; ++i) {
                         const Entry* s = po->entry(static_cast<std::uint8_t>(i));
@@ -148,7 +148,7 @@ void ProcessDataMap::install(const Direction& d) {
                     return SdoAbort::None;
                 };
             } else {
-                e.on_download = [this, d, po](const Entry&, ConstBytes v) {
+                e.hooks().on_download = [this, d, po](const Entry&, ConstBytes v) {
                     if (po->entry(0)->as_uint64() != 0) return SdoAbort::Subindex0NotZero;
                     const std::uint32_t value = u32_of(v);
                     if (value == 0) return SdoAbort::None;  // clearing an unused entry

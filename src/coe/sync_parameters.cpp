@@ -64,7 +64,7 @@ SyncParameters::SyncParameters(ObjectDictionary& od, const device::DeviceDescrip
     mode_ = requested_;
     // 0x1C32:01 takes the modes this device has; anything else is refused when written.
     if (Entry* e = od_.find(kOutPar, sub::SyncMode)) {
-        e->on_download = [this](const Entry&, ConstBytes v) {
+        e->hooks().on_download = [this](const Entry&, ConstBytes v) {
             const std::uint16_t m = v.size() >= 2 ? ld_le16(v.data()) : (v.empty() ? 0xFFFF : v[0]);
             const bool dc = m == static_cast<std::uint16_t>(SyncMode::DcSync0) ||
                             m == static_cast<std::uint16_t>(SyncMode::DcSync1);
@@ -73,14 +73,14 @@ SyncParameters::SyncParameters(ObjectDictionary& od, const device::DeviceDescrip
                 return SdoAbort::None;
             return SdoAbort::ValueRange;
         };
-        e->after_download = [this](Entry& en) {
+        e->hooks().after_download = [this](Entry& en) {
             mode_written_ = true;
             requested_ = static_cast<SyncMode>(en.get<std::uint16_t>());
         };
     }
     // 0x1C32:08 "Get cycle time": 2 resets the error counters (ETG.1020 Table 78).
     if (Entry* e = od_.find(kOutPar, sub::GetCycleTime)) {
-        e->after_download = [this](Entry& en) {
+        e->hooks().after_download = [this](Entry& en) {
             if (en.get<std::uint16_t>() == 2) {
                 put<std::uint16_t>(kOutPar, sub::SmEventMissed, 0);
                 put<std::uint16_t>(kOutPar, sub::CycleTimeTooSmall, 0);

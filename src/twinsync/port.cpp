@@ -130,21 +130,21 @@ Port::Port(coe::ObjectDictionary& od, std::uint64_t period_ns)
         checked.push_back(e);
     for (Entry* e : checked) {
         if (!e) continue;
-        e->on_download = [this](const Entry& entry, ConstBytes v) {
+        e->hooks().on_download = [this](const Entry& entry, ConstBytes v) {
             return validate_write(const_cast<Entry&>(entry), v);
         };
-        e->after_download = [this](Entry&) { reconfigure(); };
+        e->hooks().after_download = [this](Entry&) { reconfigure(); };
     }
     for (Entry* e : {c_->control_selector, c_->setpoint_selector})
-        if (e) e->after_download = [this](Entry&) { reconfigure(); };
+        if (e) e->hooks().after_download = [this](Entry&) { reconfigure(); };
     // One-shot injections: the next n frames on the cable.
     if (c_->inject[2])
-        c_->inject[2]->after_download = [this](Entry& e) {
+        c_->inject[2]->hooks().after_download = [this](Entry& e) {
             if (channel_) channel_->faults().corrupt_next += e.get<std::uint32_t>();
             e.set(std::uint32_t{0});
         };
     if (c_->inject[3])
-        c_->inject[3]->after_download = [this](Entry& e) {
+        c_->inject[3]->hooks().after_download = [this](Entry& e) {
             if (channel_) channel_->faults().drop_next += e.get<std::uint32_t>();
             e.set(std::uint32_t{0});
         };

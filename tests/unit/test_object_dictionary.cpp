@@ -458,10 +458,10 @@ TEST_F(DefaultDictionary, DownloadChecksInOrder) {
 TEST_F(DefaultDictionary, DownloadHooksValidateStoreAndRefresh) {
     Entry& e = *od.find(0x6066, 0);
     int after = 0;
-    e.on_download = [](const Entry&, ConstBytes v) {
+    e.hooks().on_download = [](const Entry&, ConstBytes v) {
         return v[0] == 0x77 ? SdoAbort::CannotTransfer : SdoAbort::None;
     };
-    e.after_download = [&](Entry& x) {
+    e.hooks().after_download = [&](Entry& x) {
         ++after;
         EXPECT_EQ(x.get<std::uint16_t>(), 0x0102);  // already stored
     };
@@ -471,7 +471,7 @@ TEST_F(DefaultDictionary, DownloadHooksValidateStoreAndRefresh) {
     EXPECT_EQ(od.download(0x6066, 0, false, AlState::PreOp, cb(Buf{0x02, 0x01})), SdoAbort::None);
     EXPECT_EQ(after, 1);
 
-    od.find(0x6041, 0)->before_upload = [](Entry& x) { x.set(std::uint16_t{0x1234}); };
+    od.find(0x6041, 0)->hooks().before_upload = [](Entry& x) { x.set(std::uint16_t{0x1234}); };
     Buf out(4);
     std::size_t len = 0;
     ASSERT_EQ(od.upload(0x6041, 0, false, AlState::Op, Bytes(out.data(), out.size()), len), SdoAbort::None);
@@ -529,7 +529,7 @@ TEST_F(DefaultDictionary, CompleteAccessDownloadWritesEntriesThenCount) {
 TEST_F(DefaultDictionary, CompleteAccessDownloadIsUndoneWhenAnEntryIsRefused) {
     // Given a hook refusing one value of subindex 2, when a complete write changes subindexes 1 and 2,
     // then subindex 1 is back to its old value as well.
-    od.find(0x10F1, 2)->on_download = [](const Entry&, ConstBytes v) {
+    od.find(0x10F1, 2)->hooks().on_download = [](const Entry&, ConstBytes v) {
         return v[0] == 0x66 ? SdoAbort::ValueRange : SdoAbort::None;
     };
     EXPECT_EQ(od.download(0x10F1, 0, true, AlState::PreOp, cb(Buf{2, 0, 0x05, 0, 0, 0, 0x66, 0})),
@@ -547,7 +547,7 @@ TEST(ObjectDictionaryCompleteAccess, UndoOfARecordOfBooleansStaysInItsBuffer) {
         subs.push_back(device::make_entry(i, device::subindex_name(i), DataType::Boolean, acc::RW, 0));
     ObjectDictionary od({device::make_record(0x3000, "Flags", std::move(subs))});
     EXPECT_EQ(complete_access_size(*od.find(0x3000), 0, 16), 4u);
-    od.find(0x3000, 16)->on_download = [](const Entry&, ConstBytes v) {
+    od.find(0x3000, 16)->hooks().on_download = [](const Entry&, ConstBytes v) {
         return v[0] ? SdoAbort::CannotTransfer : SdoAbort::None;
     };
     EXPECT_EQ(od.download(0x3000, 0, true, AlState::PreOp, cb(Buf{16, 0, 0xFF, 0xFF})),
