@@ -1,6 +1,7 @@
 #include "coe/object_dictionary.hpp"
 
 #include <algorithm>
+#include <mutex>
 
 #include "common/asan.hpp"
 #include "common/bits.hpp"
@@ -177,54 +178,104 @@ std::size_t complete_access_size(const Object& o, std::uint8_t from, std::uint8_
 ObjectDictionary::ObjectDictionary(std::vector<device::ObjectDescription> objects)
     : ObjectDictionary(std::make_shared<const std::vector<device::ObjectDescription>>(std::move(objects))) {}
 
-ObjectDictionary::ObjectDictionary(std::shared_ptr<const std::vector<device::ObjectDescription>> objects)
-    : descriptions_(std::move(objects)) {
-    std::vector<const device::ObjectDescription*> order;
-    order.reserve(descriptions_->size());
-    // Under AddressSanitizer every value starts on an 8-byte boundary with at least 8 poisoned bytes after
-    // it: an access past an entry's value is reported as with separate allocations.
-    const auto slot = [](const device::EntryDescription& e) {
-        const std::size_t n = Entry::storage_size(e);
-        return kAsan ? (n + 15) / 8 * 8 : n;
-    };
+namespace {
+
+// Under AddressSanitizer every value starts on an 8-byte boundary with at least 8 poisoned bytes after it:
+// an access past an entry's value is reported as with separate allocations.
+std::size_t value_slot(const device::EntryDescription& e) {
+    const std::size_t n = Entry::storage_size(e);
+    return kAsan ? (n + 15) / 8 * 8 : n;
+}
+
+}  // namespace
+
+struct ObjectDictionary::Layout {
+    std::vector<const device::ObjectDescription*> order;  // by index
+    std::vector<std::uint8_t> values;                     // every entry's default value, at its place
+    std::vector<std::size_t> sizes;                       // every entry's current size at the defaults
+    std::size_t max_transfer = 0;
+    std::size_t undo = 0;
+};
+
+ObjectDictionary::Layout ObjectDictionary::make_layout(const std::vector<device::ObjectDescription>& d) {
+    Layout l;
+    l.order.reserve(d.size());
     std::size_t n_entries = 0, n_bytes = 0;
-    for (const auto& o : *descriptions_) {
-        order.push_back(&o);
+    for (const auto& o : d) {
+        l.order.push_back(&o);
         n_entries += o.entries.size();
         for (const auto& e : o.entries)
-            n_bytes += slot(e);
+            n_bytes += value_slot(e);
     }
-    std::stable_sort(order.begin(), order.end(),
+    std::stable_sort(l.order.begin(), l.order.end(),
                      [](const auto* a, const auto* b) { return a->index < b->index; });
-    // Sized once: the entries' storage and the objects' entry spans must not move.
-    values_.assign(n_bytes, 0);
-    entries_.reserve(n_entries);
-    objects_.reserve(order.size());
+    // Entries and objects at the defaults, as a dictionary has them: their sizes and transfer sizes.
+    l.values.assign(n_bytes, 0);
+    std::vector<Entry> entries;
+    std::vector<Object> objects;
+    entries.reserve(n_entries);
+    objects.reserve(l.order.size());
     std::size_t at = 0;
-    for (const auto* o : order) {
+    for (const auto* o : l.order) {
+        const std::size_t first = entries.size();
+        for (const auto& e : o->entries) {
+            entries.emplace_back(e, Bytes(l.values.data() + at, Entry::storage_size(e)));
+            at += value_slot(e);
+        }
+        objects.emplace_back(*o, std::span<Entry>(entries.data() + first, o->entries.size()));
+    }
+    l.sizes.reserve(n_entries);
+    for (const auto& e : entries)
+        l.sizes.push_back(e.size());
+    for (const auto& o : objects) {
+        l.max_transfer = std::max(l.max_transfer, complete_access_size(o, 0, o.max_subindex()));
+        std::size_t n = 0;  // the undo of a complete-access download keeps each value at its capacity
+        for (const auto& e : o.entries()) {
+            l.max_transfer = std::max(l.max_transfer, e.capacity());
+            n += e.capacity();
+        }
+        l.undo = std::max(l.undo, n);
+    }
+    return l;
+}
+
+std::shared_ptr<const ObjectDictionary::Layout> ObjectDictionary::layout_of(
+    const std::shared_ptr<const std::vector<device::ObjectDescription>>& descriptions) {
+    // One layout per description vector (the same control block: a freed vector's address may come back),
+    // dropped with the vector. Dictionaries are built at start-up and on slave restarts, never cyclically.
+    static std::mutex mutex;
+    static std::vector<std::pair<std::weak_ptr<const std::vector<device::ObjectDescription>>,
+                                 std::shared_ptr<const Layout>>>
+        cache;
+    const std::lock_guard lock(mutex);
+    std::erase_if(cache, [](const auto& c) { return c.first.expired(); });
+    for (const auto& [owner, layout] : cache)
+        if (!owner.owner_before(descriptions) && !descriptions.owner_before(owner)) return layout;
+    auto layout = std::make_shared<const Layout>(make_layout(*descriptions));
+    cache.emplace_back(descriptions, layout);
+    return layout;
+}
+
+ObjectDictionary::ObjectDictionary(std::shared_ptr<const std::vector<device::ObjectDescription>> objects)
+    : descriptions_(std::move(objects)) {
+    const auto layout = layout_of(descriptions_);
+    // Sized once: the entries' storage and the objects' entry spans must not move.
+    values_ = layout->values;
+    entries_.reserve(layout->sizes.size());
+    objects_.reserve(layout->order.size());
+    std::size_t at = 0;
+    for (const auto* o : layout->order) {
         const std::size_t first = entries_.size();
         for (const auto& e : o->entries) {
             const std::size_t n = Entry::storage_size(e);
-            asan_poison(values_.data() + at + n, slot(e) - n);
-            entries_.emplace_back(e, Bytes(values_.data() + at, n));
-            at += slot(e);
+            asan_poison(values_.data() + at + n, value_slot(e) - n);
+            entries_.emplace_back(e, Bytes(values_.data() + at, n), layout->sizes[entries_.size()]);
+            at += value_slot(e);
         }
         objects_.emplace_back(*o, std::span<Entry>(entries_.data() + first, o->entries.size()));
     }
-    for (const auto& o : objects_) {
-        max_transfer_ = std::max(max_transfer_, complete_access_size(o, 0, o.max_subindex()));
-        for (const auto& e : o.entries())
-            max_transfer_ = std::max(max_transfer_, e.capacity());
-    }
-    // The undo of a complete-access download keeps every entry's value at its own capacity.
-    std::size_t undo = 0;
-    for (const auto& o : objects_) {
-        std::size_t n = 0;
-        for (const auto& e : o.entries())
-            n += e.capacity();
-        undo = std::max(undo, n);
-    }
-    undo_.resize(undo);
+    max_transfer_ = layout->max_transfer;
+    undo_.resize(layout->undo);
 }
 
 ObjectDictionary::~ObjectDictionary() {

@@ -39,8 +39,11 @@ struct EntryHooks {
 
 class Entry {
   public:
-    // storage: storage_size(d) bytes that outlive the entry.
+    // storage: storage_size(d) bytes that outlive the entry; the value starts at the default.
     Entry(const device::EntryDescription& d, Bytes storage);
+    // The same with storage that already holds the value, `size` bytes of it current.
+    Entry(const device::EntryDescription& d, Bytes storage, std::size_t size)
+        : desc_(&d), storage_(storage), size_(size) {}
     Entry(const Entry&) = delete;
     Entry& operator=(const Entry&) = delete;
     Entry(Entry&&) = default;
@@ -192,6 +195,11 @@ class ObjectDictionary {
     std::function<SdoAbort(const Entry&, AlState)> download_guard;
 
   private:
+    // What every dictionary of the same descriptions starts from, computed once (see layout_of()).
+    struct Layout;
+    static std::shared_ptr<const Layout> layout_of(
+        const std::shared_ptr<const std::vector<device::ObjectDescription>>& descriptions);
+    static Layout make_layout(const std::vector<device::ObjectDescription>& descriptions);
     SdoAbort download_entry(Entry& e, AlState state, ConstBytes data, bool run_after);
     SdoAbort download_complete(Object& o, std::uint8_t sub, AlState state, ConstBytes data);
     std::shared_ptr<const std::vector<device::ObjectDescription>> descriptions_;
