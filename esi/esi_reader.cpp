@@ -456,8 +456,8 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
         d.sync_managers.resize(esc::kMaxSms);
     }
     if (d.fmmus.size() > esc::kMaxFmmus) {
-        notes.push_back(fmt::format("{} Fmmu elements: an ESC has {} FMMUs, the rest is left out", d.fmmus.size(),
-                                    esc::kMaxFmmus));
+        notes.push_back(fmt::format("{} Fmmu elements: an ESC has {} FMMUs, the rest is left out",
+                                    d.fmmus.size(), esc::kMaxFmmus));
         d.fmmus.resize(esc::kMaxFmmus);
     }
 
@@ -532,8 +532,9 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
         constexpr std::int64_t kMaxEepromBytes = 4 * 1024 * 1024 / 8;
         const std::int64_t bytes = hexdec_or(ee, "ByteSize", d.eeprom_size_bytes);
         if (bytes <= 0 || bytes > kMaxEepromBytes)
-            throw EsiError(fmt::format("Eeprom ByteSize {}: an ESC addresses EEPROMs of 1 to {} bytes (4 Mbit)",
-                                       bytes, kMaxEepromBytes));
+            throw EsiError(
+                fmt::format("Eeprom ByteSize {}: an ESC addresses EEPROMs of 1 to {} bytes (4 Mbit)", bytes,
+                            kMaxEepromBytes));
         d.eeprom_size_bytes = static_cast<std::uint32_t>(bytes);
         const auto cfg = parse_hex_bytes(txt(ee.child("ConfigData")));
         auto w = [&](unsigned i) -> std::uint16_t {

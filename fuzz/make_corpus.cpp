@@ -98,9 +98,9 @@ void sii_seeds(const fs::path& dir, unsigned& n) {
     write_seed(dir, n, Seed{0, 2, 2, 0x00, 0x01, 1, 0, 16, 4});
 }
 
-// The default drive cut down to one RxPDO and one TxPDO of two entries each, the objects they map and one object of each other
-// kind (a string, an ARRAY, a RECORD): every construct of the ESI file in a few kB. Mutating the whole
-// drive's file (180 kB) costs the fuzzer ten times as much per input for the same code.
+// The default drive cut down to one RxPDO and one TxPDO of two entries each, the objects they map and one
+// object of each other kind (a string, an ARRAY, a RECORD): every construct of the ESI file in a few kB.
+// Mutating the whole drive's file (180 kB) costs the fuzzer ten times as much per input for the same code.
 device::DeviceDescription compact_drive(device::DeviceDescription d) {
     d.rx_pdos.resize(std::min<std::size_t>(d.rx_pdos.size(), 1));
     d.tx_pdos.resize(std::min<std::size_t>(d.tx_pdos.size(), 1));

@@ -244,8 +244,8 @@ std::shared_ptr<const ObjectDictionary::Layout> ObjectDictionary::layout_of(
     // One layout per description vector (the same control block: a freed vector's address may come back),
     // dropped with the vector. Dictionaries are built at start-up and on slave restarts, never cyclically.
     static std::mutex mutex;
-    static std::vector<std::pair<std::weak_ptr<const std::vector<device::ObjectDescription>>,
-                                 std::shared_ptr<const Layout>>>
+    static std::vector<
+        std::pair<std::weak_ptr<const std::vector<device::ObjectDescription>>, std::shared_ptr<const Layout>>>
         cache;
     const std::lock_guard lock(mutex);
     std::erase_if(cache, [](const auto& c) { return c.first.expired(); });

@@ -137,7 +137,7 @@ class Segment {
     static constexpr std::uint64_t kMaxRunGapNs = 100'000;
     void run_due_firmware(std::uint64_t now_ns);
     bool defer_firmware_ = false;
-    bool firmware_due_ = false;        // a frame's firmware runs are still to be done
+    bool firmware_due_ = false;          // a frame's firmware runs are still to be done
     std::uint64_t firmware_due_ns_ = 0;  // at the time of that frame
     SegmentCounters counters_;
 };

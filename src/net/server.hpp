@@ -13,7 +13,7 @@
 namespace vecat::net {
 
 struct ServeOptions {
-    bool busy_poll = false;         // spin on the socket instead of sleeping in poll()
+    bool busy_poll = false;  // spin on the socket instead of sleeping in poll()
     // Firmware/watchdog tick period when idle: the drives' servo period (cia402::Drive::kServoPeriodNs), so
     // a drive between frames steps on its own grid; finer ticks only cost CPU with many slaves.
     std::int64_t tick_us = 250;

@@ -266,7 +266,8 @@ std::string esi_with_array(const std::string& lbound, const std::string& element
 <DataType><Name>UDINT</Name><BitSize>32</BitSize></DataType>
 <DataType><Name>USINT</Name><BitSize>8</BitSize></DataType>
 <DataType><Name>DT8000ARR</Name><BaseType>UDINT</BaseType><BitSize>64</BitSize>
-<ArrayInfo><LBound>)" + lbound + "</LBound><Elements>" + elements + R"(</Elements></ArrayInfo></DataType>
+<ArrayInfo><LBound>)" +
+           lbound + "</LBound><Elements>" + elements + R"(</Elements></ArrayInfo></DataType>
 <DataType><Name>DT8000</Name><BitSize>80</BitSize>
 <SubItem><SubIdx>0</SubIdx><Name>Number of entries</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs></SubItem>
 <SubItem><Name>Elements</Name><Type>DT8000ARR</Type><BitSize>64</BitSize><BitOffs>16</BitOffs></SubItem>
@@ -292,8 +293,12 @@ TEST(EsiReader, ArrayBoundsOutsideTheSubindexRangeLeaveTheObjectOut) {
     ASSERT_NE(o, nullptr);
     EXPECT_EQ(o->code, device::ObjectCode::Array);
     EXPECT_EQ(o->max_subindex(), 2);
-    for (const auto& [lb, n] : std::vector<std::pair<std::string, std::string>>{
-             {"2147483647", "2"}, {"1", "2000000000"}, {"0", "2"}, {"-5", "2"}, {"200", "100"}, {"1", "-1"}}) {
+    for (const auto& [lb, n] : std::vector<std::pair<std::string, std::string>>{{"2147483647", "2"},
+                                                                                {"1", "2000000000"},
+                                                                                {"0", "2"},
+                                                                                {"-5", "2"},
+                                                                                {"200", "100"},
+                                                                                {"1", "-1"}}) {
         SCOPED_TRACE("LBound " + lb + " Elements " + n);
         const auto r = esi::import_esi_text(esi_with_array(lb, n));
         EXPECT_EQ(find_object(r.desc, 0x8000), nullptr);
@@ -318,12 +323,14 @@ TEST(EsiReader, MoreThanSixteenSyncManagersAreCutToWhatAnEscHas) {
     sms += R"(<Sm StartAddress="#x1080" ControlByte="#x22" DefaultSize="128" Enable="1">MBoxIn</Sm>)";
     const std::string xml = R"(<?xml version="1.0"?>
 <EtherCATInfo><Vendor><Id>#x1234</Id></Vendor><Descriptions><Devices><Device>
-<Type ProductCode="#x1" RevisionNo="#x1">T</Type><Name>T</Name>)" + sms +
+<Type ProductCode="#x1" RevisionNo="#x1">T</Type><Name>T</Name>)" +
+                            sms +
                             R"(<Mailbox><CoE/></Mailbox></Device></Devices></Descriptions></EtherCATInfo>)";
     const auto r = esi::import_esi_text(xml);
     EXPECT_EQ(r.desc.sync_managers.size(), 16u);
-    EXPECT_TRUE(std::any_of(r.notes.begin(), r.notes.end(),
-                            [](const std::string& s) { return s.find("20 Sm elements") != std::string::npos; }));
+    EXPECT_TRUE(std::any_of(r.notes.begin(), r.notes.end(), [](const std::string& s) {
+        return s.find("20 Sm elements") != std::string::npos;
+    }));
 
     auto d = device::default_drive();
     const auto mbx_in = d.sync_managers.at(1);
@@ -346,7 +353,8 @@ TEST(EsiReader, EepromByteSizeBeyondFourMbitRefusesTheFile) {
         return R"(<?xml version="1.0"?>
 <EtherCATInfo><Vendor><Id>#x1234</Id></Vendor><Descriptions><Devices><Device>
 <Type ProductCode="#x1" RevisionNo="#x1">T</Type><Name>T</Name>
-<Eeprom><ByteSize>)" + size + R"(</ByteSize><ConfigData>050E03440A000000</ConfigData></Eeprom>
+<Eeprom><ByteSize>)" +
+               size + R"(</ByteSize><ConfigData>050E03440A000000</ConfigData></Eeprom>
 </Device></Devices></Descriptions></EtherCATInfo>)";
     };
     for (const char* bad : {"4294967265", "524289", "0", "-2048"}) {
