@@ -118,13 +118,9 @@ void BM_Lrw32(benchmark::State& state) {
 }
 BENCHMARK(BM_Lrw32)->Arg(1)->Arg(10)->Arg(100);
 
-// The cyclic exchange: LRW over the whole image plus the FRMW of the reference clock, in as many frames as
-// the image needs (100 drives: 4 frames). range(1) = 0: time stands still (the ESC engine and the firmware's
-// process data exchange only); 1: 1 ms passes per cycle (also 4 servo periods of every drive).
-void BM_CyclicLrwFrmw(benchmark::State& state) {
-    const auto n = static_cast<std::size_t>(state.range(0));
-    const bool advance = state.range(1) != 0;
-    Line line(n);
+// The cyclic frames of a line: LRW over the whole image plus the FRMW of the reference clock in the first,
+// in as many frames as the image needs, carrying the master's outputs.
+std::vector<Frame> cyclic_frames(Line& line) {
     std::vector<Frame> frames;
     const std::size_t image = line.m->process_image_size();
     for (std::size_t off = 0; off < image; off += master::Master::kMaxLrwBytes) {
@@ -137,6 +133,17 @@ void BM_CyclicLrwFrmw(benchmark::State& state) {
             frames.emplace_back(Frame({{esc::Command::LRW, laddr, k}}));
         std::memcpy(frames.back().data(0), line.m->outputs(0).data() + off, k);
     }
+    return frames;
+}
+
+// The cyclic exchange: LRW over the whole image plus the FRMW of the reference clock, in as many frames as
+// the image needs (100 drives: 4 frames). range(1) = 0: time stands still (the ESC engine and the firmware's
+// process data exchange only); 1: 1 ms passes per cycle (also 4 servo periods of every drive).
+void BM_CyclicLrwFrmw(benchmark::State& state) {
+    const auto n = static_cast<std::size_t>(state.range(0));
+    const bool advance = state.range(1) != 0;
+    Line line(n);
+    std::vector<Frame> frames = cyclic_frames(line);
     for (auto _ : state) {
         if (advance) line.now += 1'000'000;
         for (auto& f : frames)
@@ -157,18 +164,7 @@ void BM_CyclicReplyPath(benchmark::State& state) {
     const auto n = static_cast<std::size_t>(state.range(0));
     Line line(n);
     line.seg->set_deferred_firmware(true);
-    std::vector<Frame> frames;
-    const std::size_t image = line.m->process_image_size();
-    for (std::size_t off = 0; off < image; off += master::Master::kMaxLrwBytes) {
-        const std::size_t k = std::min(image - off, master::Master::kMaxLrwBytes);
-        const std::uint32_t laddr = 0x00010000u + static_cast<std::uint32_t>(off);
-        if (off == 0)
-            frames.emplace_back(
-                Frame({{esc::Command::LRW, laddr, k}, {esc::Command::FRMW, kFrmwAddress, 8}}));
-        else
-            frames.emplace_back(Frame({{esc::Command::LRW, laddr, k}}));
-        std::memcpy(frames.back().data(0), line.m->outputs(0).data() + off, k);
-    }
+    std::vector<Frame> frames = cyclic_frames(line);
     // The cost of one clock reading: the smallest of many empty intervals.
     double overhead = 1e9;
     for (int i = 0; i < 10000; ++i) {

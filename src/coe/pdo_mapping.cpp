@@ -220,28 +220,6 @@ ProcessDataMap::Plan ProcessDataMap::make_plan(const std::vector<MappedField>& f
     return p;
 }
 
-namespace {
-
-// A copy of 1, 2, 4 or 8 bytes the compiler inlines.
-inline void copy_small(std::uint8_t* d, const std::uint8_t* s, std::uint32_t n) {
-    switch (n) {
-        case 1:
-            *d = *s;
-            return;
-        case 2:
-            std::memcpy(d, s, 2);
-            return;
-        case 4:
-            std::memcpy(d, s, 4);
-            return;
-        default:
-            std::memcpy(d, s, 8);
-            return;
-    }
-}
-
-}  // namespace
-
 esc::AlStatusCode ProcessDataMap::validate() const {
     if (!out_valid_) return esc::AlStatusCode::InvalidOutputMapping;
     if (!in_valid_) return esc::AlStatusCode::InvalidInputMapping;
@@ -251,7 +229,7 @@ esc::AlStatusCode ProcessDataMap::validate() const {
 void ProcessDataMap::copy_outputs(ConstBytes image) {
     if (out_plan_.ok && image.size() >= out_bytes_) {
         for (const auto& f : out_plan_.fields)
-            copy_small(f.value, image.data() + f.byte, f.size);
+            copy_bits(f.value, 0, image.data(), f.byte * 8u, f.size * 8u);
         return;
     }
     for (const auto& f : out_) {
@@ -263,7 +241,7 @@ void ProcessDataMap::copy_outputs(ConstBytes image) {
 void ProcessDataMap::copy_inputs(Bytes image) const {
     if (in_plan_.ok && image.size() >= in_bytes_) {
         for (const auto& f : in_plan_.fields)
-            copy_small(image.data() + f.byte, f.value, f.size);
+            copy_bits(image.data(), f.byte * 8u, f.value, 0, f.size * 8u);
         return;
     }
     for (const auto& f : in_) {
