@@ -114,6 +114,7 @@ struct Options {
     unsigned timeout_us = 0;  // 0: the period (at least 1000 us)
     unsigned late_us = 0;     // 0: half the period
     bool dc = true;
+    bool with_reflector = false;  // soak: every cycle also sends the frames to the reflector
     std::int64_t tick_us = net::ServeOptions{}.tick_us;
 };
 
@@ -158,6 +159,28 @@ struct ReflectorFrames {
         }
         return true;
     }
+};
+
+// Time the hypervisor gave this machine's CPUs to others ("steal" of /proc/stat), in ms: a stall of the
+// whole machine shows up here and not in anything the program does.
+std::uint64_t host_steal_ms() {
+    std::FILE* f = std::fopen("/proc/stat", "r");
+    if (!f) return 0;
+    unsigned long long v[8] = {};
+    const int n = std::fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3],
+                              &v[4], &v[5], &v[6], &v[7]);
+    std::fclose(f);
+    if (n != 8) return 0;
+    const long hz = sysconf(_SC_CLK_TCK);
+    return hz > 0 ? v[7] * 1000ull / static_cast<unsigned long long>(hz) : 0;
+}
+
+// One cycle that missed: when, how long the exchange took, how late the master itself woke up.
+struct Miss {
+    std::uint64_t cycle = 0;
+    std::uint64_t exchange_ns = 0;
+    std::uint32_t wake_ns = 0;
+    bool reflector = false;
 };
 
 struct CpuSplit {
@@ -258,9 +281,12 @@ int run(const Options& o) {
         std::vector<std::int32_t> hold(m.slaves().size(), 0);
         std::vector<std::uint32_t> rt_vecat, rt_refl, wake;
         rt_vecat.reserve(cycles);
-        rt_refl.reserve(latency ? cycles : 0);
+        rt_refl.reserve(latency || o.with_reflector ? cycles : 0);
         wake.reserve(cycles);
-        std::uint64_t misses = 0, no_reply = 0, late = 0, refl_lost = 0, c_vecat = 0;
+        std::uint64_t misses = 0, no_reply = 0, late = 0, refl_lost = 0, refl_late = 0, c_vecat = 0;
+        std::vector<Miss> miss_log;
+        miss_log.reserve(64);
+        const bool soak_refl = !latency && o.with_reflector;
         std::uint16_t worst_wkc = 0xFFFF;
         // Warm-up: drives enabled, caches and branch predictors warm.
         for (std::uint64_t c = 0; c < 200; ++c) {
@@ -274,6 +300,7 @@ int run(const Options& o) {
         const std::uint64_t cpu0 = thread_cpu_ns(srv_handle), wall0 = now_ns();
         rusage ru0{};
         getrusage(RUSAGE_SELF, &ru0);
+        const std::uint64_t steal0 = host_steal_ms();
         std::uint64_t next = now_ns() + period_ns;
         std::uint64_t done = 0;
         bool refl_turn = latency;
@@ -313,9 +340,25 @@ int run(const Options& o) {
                         ++misses;
                         no_reply += !w;
                         if (w) worst_wkc = std::min(worst_wkc, *w);
+                        if (miss_log.size() < miss_log.capacity())
+                            miss_log.push_back({done, t1 - t0, wake.empty() ? 0 : wake.back(), false});
                     } else {
                         if (t1 - t0 > late_ns) ++late;
                         if (measured || !latency) rt_vecat.push_back(static_cast<std::uint32_t>(t1 - t0));
+                    }
+                    if (soak_refl) {
+                        // The floor under the same conditions: the same frames, right after, to the reflector.
+                        const std::uint64_t r0 = now_ns();
+                        const bool ok = rf.exchange(r);
+                        const std::uint64_t r1 = now_ns();
+                        if (!ok) {
+                            ++refl_lost;
+                            if (miss_log.size() < miss_log.capacity())
+                                miss_log.push_back({done, r1 - r0, wake.empty() ? 0 : wake.back(), true});
+                        } else {
+                            if (r1 - r0 > late_ns) ++refl_late;
+                            rt_refl.push_back(static_cast<std::uint32_t>(r1 - r0));
+                        }
                     }
                 }
                 ++done;
@@ -330,6 +373,7 @@ int run(const Options& o) {
         const std::uint64_t wall = now_ns() - wall0, cpu_srv = thread_cpu_ns(srv_handle) - cpu0;
         rusage ru1{};
         getrusage(RUSAGE_SELF, &ru1);
+        const std::uint64_t steal = host_steal_ms() - steal0;
         park_refl = true;
         park_vecat = true;
 
@@ -346,6 +390,10 @@ int run(const Options& o) {
             if (refl_lost) fmt::print("  reflector: {} frames lost\n", refl_lost);
         } else {
             print_summary("vecat", sv);
+            if (soak_refl) {
+                Summary sr = summarize(rt_refl);
+                print_summary("reflector", sr);
+            }
         }
         if (period_ns) {
             Summary sw = summarize(wake);
@@ -360,6 +408,15 @@ int run(const Options& o) {
                 "  of the misses {} without reply in time, {} with a wrong working counter{}\n", no_reply,
                 misses - no_reply,
                 misses > no_reply ? fmt::format(" (lowest {} of {})", worst_wkc, m.expected_wkc()) : "");
+        if (soak_refl)
+            fmt::print("reflector: {} cycles, {} frames without reply in time, {} late replies\n", c_vecat,
+                       refl_lost, refl_late);
+        for (const Miss& x : miss_log)
+            fmt::print("  miss at cycle {} ({}): exchange {:.2f} us, master woke {:.2f} us late\n", x.cycle,
+                       x.reflector ? "reflector" : "vecat", static_cast<double>(x.exchange_ns) / 1e3,
+                       static_cast<double>(x.wake_ns) / 1e3);
+        fmt::print("host: {} ms of CPU time stolen by the hypervisor during the run (/proc/stat steal)\n",
+                   steal);
         auto secs = [](const timeval& a, const timeval& b) {
             return static_cast<double>(b.tv_sec - a.tv_sec) +
                    static_cast<double>(b.tv_usec - a.tv_usec) * 1e-6;
@@ -400,6 +457,9 @@ int main(int argc, char** argv) {
                    "Reply deadline; later counts as a miss (default: the period)");
     app.add_option("--late-us", o.late_us, "A reply later than this is late (default: half the period)");
     app.add_flag("!--no-dc", o.dc, "No DC: LRW only, no FRMW");
+    app.add_flag("--with-reflector", o.with_reflector,
+                 "Soak: every cycle also sends the same frames to the raw reflector, whose losses are "
+                 "counted apart (the floor under the same conditions)");
     app.add_option("--tick-us", o.tick_us,
                    "Firmware tick of the serve loop between frames (as vecat run --tick-us)")
         ->check(CLI::Range(10, 100000));
