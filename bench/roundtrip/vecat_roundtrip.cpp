@@ -304,6 +304,20 @@ int run(const Options& o) {
         std::uint64_t next = now_ns() + period_ns;
         std::uint64_t done = 0;
         bool refl_turn = latency;
+        // Soak with the reflector: one exchange with it, its losses and late replies counted apart.
+        const auto exchange_reflector = [&] {
+            const std::uint64_t r0 = now_ns();
+            const bool ok = rf.exchange(r);
+            const std::uint64_t r1 = now_ns();
+            if (!ok) {
+                ++refl_lost;
+                if (miss_log.size() < miss_log.capacity())
+                    miss_log.push_back({done, r1 - r0, wake.empty() ? 0 : wake.back(), true});
+            } else {
+                if (r1 - r0 > late_ns) ++refl_late;
+                rt_refl.push_back(static_cast<std::uint32_t>(r1 - r0));
+            }
+        };
         const std::uint64_t report_every = std::max<std::uint64_t>(cycles / 10, 1);
         while (done < cycles && !g_interrupted) {
             const std::uint64_t n = std::min(block, cycles - done);
@@ -331,6 +345,10 @@ int run(const Options& o) {
                     else if (measured)
                         rt_refl.push_back(static_cast<std::uint32_t>(t1 - t0));
                 } else {
+                    // The floor under the same conditions: the same frames to the reflector in the same cycle.
+                    // Whichever goes second finds both CPUs awake, so the order alternates from cycle to cycle.
+                    const bool refl_first = soak_refl && (done & 1) != 0;
+                    if (refl_first) exchange_reflector();
                     set_drive_outputs(m, 200 + c_vecat, hold);
                     const std::uint64_t t0 = now_ns();
                     const auto w = m.exchange_process_data();
@@ -346,20 +364,7 @@ int run(const Options& o) {
                         if (t1 - t0 > late_ns) ++late;
                         if (measured || !latency) rt_vecat.push_back(static_cast<std::uint32_t>(t1 - t0));
                     }
-                    if (soak_refl) {
-                        // The floor under the same conditions: the same frames, right after, to the reflector.
-                        const std::uint64_t r0 = now_ns();
-                        const bool ok = rf.exchange(r);
-                        const std::uint64_t r1 = now_ns();
-                        if (!ok) {
-                            ++refl_lost;
-                            if (miss_log.size() < miss_log.capacity())
-                                miss_log.push_back({done, r1 - r0, wake.empty() ? 0 : wake.back(), true});
-                        } else {
-                            if (r1 - r0 > late_ns) ++refl_late;
-                            rt_refl.push_back(static_cast<std::uint32_t>(r1 - r0));
-                        }
-                    }
+                    if (soak_refl && !refl_first) exchange_reflector();
                 }
                 ++done;
                 if (!latency && done % report_every == 0) {
