@@ -208,16 +208,37 @@ void ProcessDataMap::rebuild() {
 ProcessDataMap::Plan ProcessDataMap::make_plan(const std::vector<MappedField>& fields) {
     Plan p;
     p.fields.reserve(fields.size());
-    for (const auto& f : fields) {
-        if (!f.entry) continue;  // a gap: nothing to copy
-        const unsigned n = f.bits / 8u;
-        if (f.bit_offset % 8 != 0 || f.bits % 8 != 0 || (n != 1 && n != 2 && n != 4 && n != 8) ||
-            f.entry->storage().size() < n)
-            return Plan{};
-        p.fields.push_back({f.entry->storage().data(), f.bit_offset / 8u, n});
+    for (unsigned k = 0; k < 4; ++k) {
+        const unsigned n = 1u << k;
+        for (const auto& f : fields) {
+            if (!f.entry) continue;  // a gap: nothing to copy
+            const unsigned size = f.bits / 8u;
+            if (f.bit_offset % 8 != 0 || f.bits % 8 != 0 || (size != 1 && size != 2 && size != 4 && size != 8) ||
+                f.entry->storage().size() < size)
+                return Plan{};
+            if (size == n) p.fields.push_back({f.entry->storage().data(), f.bit_offset / 8u});
+        }
+        p.end[k + 1] = static_cast<std::uint32_t>(p.fields.size());
     }
     p.ok = true;
     return p;
+}
+
+template <bool ToImage>
+void ProcessDataMap::run_plan(const Plan& p, ImagePtr<ToImage> image) {
+    const auto group = [&]<std::size_t N>(unsigned k) {
+        for (std::uint32_t i = p.end[k]; i < p.end[k + 1]; ++i) {
+            const FastField& f = p.fields[i];
+            if constexpr (ToImage)
+                std::memcpy(image + f.byte, f.value, N);  // fixed size: one load and one store
+            else
+                std::memcpy(f.value, image + f.byte, N);
+        }
+    };
+    group.template operator()<1>(0);
+    group.template operator()<2>(1);
+    group.template operator()<4>(2);
+    group.template operator()<8>(3);
 }
 
 esc::AlStatusCode ProcessDataMap::validate() const {
@@ -228,8 +249,7 @@ esc::AlStatusCode ProcessDataMap::validate() const {
 
 void ProcessDataMap::copy_outputs(ConstBytes image) {
     if (out_plan_.ok && image.size() >= out_bytes_) {
-        for (const auto& f : out_plan_.fields)
-            copy_bits(f.value, 0, image.data(), f.byte * 8u, f.size * 8u);
+        run_plan<false>(out_plan_, image.data());
         return;
     }
     for (const auto& f : out_) {
@@ -240,8 +260,7 @@ void ProcessDataMap::copy_outputs(ConstBytes image) {
 
 void ProcessDataMap::copy_inputs(Bytes image) const {
     if (in_plan_.ok && image.size() >= in_bytes_) {
-        for (const auto& f : in_plan_.fields)
-            copy_bits(image.data(), f.byte * 8u, f.value, 0, f.size * 8u);
+        run_plan<true>(in_plan_, image.data());
         return;
     }
     for (const auto& f : in_) {

@@ -2,7 +2,9 @@
 // 0x1C12/0x1C13 with the rules for changing them in PREOP, and the process image they define.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "coe/object_dictionary.hpp"
@@ -75,16 +77,22 @@ class ProcessDataMap {
 
     // The copy plan of a direction whose fields are all whole objects of 1, 2, 4 or 8 bytes at byte
     // offsets (nearly every mapping): value pointers and image offsets resolved once per mapping, so the
-    // cyclic copy is one fixed-size copy per field. Empty `ok` means the general bit copy is used.
+    // cyclic copy is one fixed-size copy per field. The fields are grouped by size (they never overlap, so
+    // their order does not matter): one loop per size, no branch on the size per field. Empty `ok` means
+    // the general bit copy is used.
     struct FastField {
         std::uint8_t* value;
         std::uint32_t byte;
-        std::uint32_t size;
     };
     struct Plan {
         bool ok = false;
-        std::vector<FastField> fields;
+        std::vector<FastField> fields;        // 1-byte fields first, then 2, 4 and 8
+        std::array<std::uint32_t, 5> end{};  // end[k + 1]: end of the fields of 1 << k bytes; end[0] = 0
     };
+    template <bool ToImage>
+    using ImagePtr = std::conditional_t<ToImage, std::uint8_t*, const std::uint8_t*>;
+    template <bool ToImage>
+    static void run_plan(const Plan& p, ImagePtr<ToImage> image);
     static Plan make_plan(const std::vector<MappedField>& fields);
 
     ObjectDictionary& od_;

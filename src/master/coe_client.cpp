@@ -36,13 +36,15 @@ bool CoeClient::send(esc::MailboxType type, ConstBytes payload, std::uint8_t cou
     h.counter = counter;
     esc::write_mailbox_header(Bytes(buf.data(), esc::kMailboxHeaderSize), h);
     std::copy(payload.begin(), payload.end(), buf.begin() + esc::kMailboxHeaderSize);
+    // At least one try, however late this thread runs: a deadline that passed while the thread was not
+    // scheduled (a loaded machine) must not fail a write that was never attempted.
     const auto deadline = Clock::now() + std::chrono::milliseconds(100);
-    while (Clock::now() < deadline) {
+    while (true) {
         auto w = m_.fpwr(station_, sm0_, Bytes(buf.data(), buf.size()));
         if (w && *w == 1) return true;  // WKC 0: SM0 still full, try again
+        if (Clock::now() >= deadline) return false;
         std::this_thread::sleep_for(std::chrono::microseconds(200));
     }
-    return false;
 }
 
 std::optional<MailboxMessage> CoeClient::receive(std::chrono::milliseconds timeout) {
@@ -75,8 +77,10 @@ std::optional<MailboxMessage> CoeClient::request(esc::MailboxType type, ConstByt
                                                  std::chrono::milliseconds timeout) {
     if (!send(type, payload, next_counter())) return std::nullopt;
     const auto deadline = Clock::now() + timeout;
-    while (Clock::now() < deadline) {
-        auto msg = receive(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()));
+    while (true) {
+        // receive() looks at least once, even with the deadline passed.
+        const auto left = std::max(Clock::duration::zero(), deadline - Clock::now());
+        auto msg = receive(std::chrono::duration_cast<std::chrono::milliseconds>(left));
         if (!msg) return std::nullopt;
         const bool coe = msg->header.type == static_cast<std::uint8_t>(esc::MailboxType::CoE);
         if (coe && msg->payload.size() >= 10 &&
@@ -86,11 +90,11 @@ std::optional<MailboxMessage> CoeClient::request(esc::MailboxType type, ConstByt
             e.error_register = msg->payload[4];
             std::copy_n(msg->payload.begin() + 5, 5, e.data.begin());
             emergencies_.push_back(e);
+            if (Clock::now() >= deadline) return std::nullopt;
             continue;
         }
         return msg;
     }
-    return std::nullopt;
 }
 
 namespace {
