@@ -29,6 +29,7 @@
 #include "net/netns.hpp"
 #include "net/pcapng_writer.hpp"
 #include "net/raw_socket.hpp"
+#include "net/realtime.hpp"
 #include "net/server.hpp"
 
 namespace vecat::cli {
@@ -148,6 +149,9 @@ class Demo {
           tty_(isatty(STDOUT_FILENO) == 1) {
         serve_opt_.pcap = &pcap_;
         serve_opt_.filter = &injector_;
+        // The master's cycle sleeps and the server's ticks end on time instead of up to 50 us late; the
+        // server thread inherits the slack from this one.
+        net::set_current_thread_timer_slack(net::RealtimeOptions::kTightTimerSlackNs);
         server_ = std::thread([this] { net::serve(*seg_, slave_sock_, serve_opt_, serve_stop_); });
     }
     ~Demo() { stop_server(); }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace vecat::esc {
 namespace {
@@ -14,6 +15,17 @@ constexpr std::uint64_t kNearFutureLong = 2'147'483'648ull;  // ~2.1 s (2^31 ns)
 constexpr std::uint64_t kNearFutureShort = 1'048'576ull;     // ~1 ms (2^20 ns)
 constexpr std::uint64_t kMaxLoopStepNs = 100'000'000;        // longer gaps between writes count as this
 constexpr std::uint64_t kMaxOverduePulses = 1024;            // beyond this, overdue pulses are skipped
+
+// A time difference in ns, computed in double, back to an integer. At the ends of the 64-bit range (a
+// master may write any start time and offset, e.g. a SYNC0 start 2^63 ns away) the product of the clock's
+// rate no longer fits: it saturates instead of being converted with undefined behaviour (found by
+// fuzz_frame). Such a time is centuries away either way.
+std::int64_t to_ns_saturated(double v) {
+    constexpr double kLimit = 9223372036854775808.0;  // 2^63
+    if (v >= kLimit) return INT64_MAX;
+    if (!(v > -kLimit)) return INT64_MIN;  // also NaN
+    return static_cast<std::int64_t>(v);
+}
 
 // Time d after t; kNever past the end of the 64-bit system time (a master may set the offset so that it
 // ends soon): no pulse comes after it, instead of a wrapped time that lies before every later time.
@@ -70,7 +82,7 @@ void DistributedClock::reset_registers() {
 std::uint64_t DistributedClock::local_time(std::uint64_t host_ns) const {
     const double dt = static_cast<double>(static_cast<std::int64_t>(host_ns - anchor_host_));
     const double v = std::floor(anchor_frac_ + dt * rate_);
-    return anchor_local_ + static_cast<std::uint64_t>(static_cast<std::int64_t>(v));
+    return anchor_local_ + static_cast<std::uint64_t>(to_ns_saturated(v));
 }
 
 std::uint64_t DistributedClock::system_time(std::uint64_t host_ns) const {
@@ -81,14 +93,14 @@ std::uint64_t DistributedClock::host_time_of(std::uint64_t sys) const {
     const std::uint64_t local = sys - ld_le64(&regs_[addr(Reg::DcSystemTimeOffset)]);
     const double dl = static_cast<double>(static_cast<std::int64_t>(local - anchor_local_)) - anchor_frac_;
     const double dh = std::ceil(dl / rate_) + 1.0;  // the first host ns at which the time has been reached
-    return anchor_host_ + static_cast<std::uint64_t>(static_cast<std::int64_t>(dh));
+    return anchor_host_ + static_cast<std::uint64_t>(to_ns_saturated(dh));
 }
 
 void DistributedClock::reanchor(std::uint64_t host_ns) {
     const double dt = static_cast<double>(static_cast<std::int64_t>(host_ns - anchor_host_));
     const double v = anchor_frac_ + dt * rate_;
     const double whole = std::floor(v);
-    anchor_local_ += static_cast<std::uint64_t>(static_cast<std::int64_t>(whole));
+    anchor_local_ += static_cast<std::uint64_t>(to_ns_saturated(whole));
     anchor_frac_ = v - whole;
     anchor_host_ = host_ns;
 }

@@ -2,6 +2,7 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/prctl.h>
 #include <sys/mman.h>
 
 #include <cerrno>
@@ -44,8 +45,22 @@ bool lock_all_memory(std::string* why) {
     return true;
 }
 
+bool set_current_thread_timer_slack(unsigned long ns, std::string* why) {
+    if (::prctl(PR_SET_TIMERSLACK, ns, 0, 0, 0) != 0) {
+        if (why) *why = "timer slack " + std::to_string(ns) + " ns: " + std::strerror(errno);
+        return false;
+    }
+    return true;
+}
+
+unsigned long current_thread_timer_slack() {
+    const int v = ::prctl(PR_GET_TIMERSLACK, 0, 0, 0, 0);
+    return v < 0 ? 0 : static_cast<unsigned long>(v);
+}
+
 bool apply_realtime(const RealtimeOptions& opt, std::string* why) {
     if (opt.lock_memory && !lock_all_memory(why)) return false;
+    if (opt.timer_slack_ns > 0 && !set_current_thread_timer_slack(opt.timer_slack_ns, why)) return false;
     if (opt.cpu >= 0 && !pin_current_thread(opt.cpu, why)) return false;
     if (opt.fifo_priority > 0 && !set_current_thread_fifo(opt.fifo_priority, why)) return false;
     return true;

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "coe/coe_application.hpp"
 #include "master/coe_client.hpp"
@@ -145,6 +146,27 @@ TEST(DcRegisters, SystemTimeIsLocalTimePlusOffsetAndRunsWithTheDrift) {
     EXPECT_EQ(b, l.dc().local_time(l.t) + 1'000'000'000'000ull);
     // A 4-byte read gives the lower half.
     EXPECT_EQ(l.rdv(0x0910, 4), b & 0xFFFFFFFFu);
+}
+
+TEST(DcRegisters, TimesAtTheEndsOfTheSixtyFourBitRangeSaturate) {
+    // Found by fuzz_frame: a SYNC0 start time 2^63 ns away from the local time, with a clock a little slow,
+    // gave a host time outside the range of int64 (undefined behaviour, reported by UBSan in CI's sanitizer
+    // run of this test). Such times now saturate.
+    std::vector<std::uint8_t> regs(esc::kRegisterSpaceSize);
+    esc::DistributedClock slow(regs.data(), -50.0, 0);
+    slow.reset_registers();
+    constexpr auto kMax = static_cast<std::uint64_t>(INT64_MAX);
+    // Far ahead: 2^63-1 ns of local time take longer than 2^63-1 host ns.
+    EXPECT_EQ(slow.host_time_of(kMax), kMax);
+    // Far behind: saturates at -2^63 (wrapped into the unsigned host time).
+    EXPECT_EQ(slow.host_time_of(kMax + 2), kMax + 1);
+    esc::DistributedClock fast(regs.data(), 50.0, 0);
+    EXPECT_EQ(fast.local_time(kMax), kMax);
+    // Ordinary times are untouched: 1 s of host time is 1 s - 50 us of the slow clock.
+    EXPECT_EQ(slow.local_time(1'000'000'000), 999'950'000u);
+    const std::uint64_t h = slow.host_time_of(999'950'000);
+    EXPECT_NEAR(static_cast<double>(h), 1e9, 2.0);
+    EXPECT_GE(slow.local_time(h), 999'950'000u);
 }
 
 TEST(DcRegisters, SystemTimeWriteShowsTheDifferenceInSignMagnitude) {

@@ -34,3 +34,28 @@ TEST(Realtime, FifoPriorityOutOfRangeIsRefused) {
     EXPECT_FALSE(ok);
     EXPECT_NE(why.find("SCHED_FIFO"), std::string::npos);
 }
+
+TEST(Realtime, CyclicThreadsGetATightTimerSlackUnlessAskedToLeaveIt) {
+    unsigned long before = 0, applied = 0, left = 0;
+    std::string why;
+    bool ok = false, ok_left = false;
+    std::thread t([&] {
+        before = net::current_thread_timer_slack();
+        ok = net::apply_realtime(net::RealtimeOptions{}, &why);
+        applied = net::current_thread_timer_slack();
+    });
+    t.join();
+    ASSERT_TRUE(ok) << why;
+    EXPECT_GT(before, net::RealtimeOptions::kTightTimerSlackNs);  // Linux's default is 50 us
+    EXPECT_EQ(applied, net::RealtimeOptions::kTightTimerSlackNs);
+    std::thread u([&] {
+        net::RealtimeOptions opt;
+        opt.timer_slack_ns = 0;
+        const auto b = net::current_thread_timer_slack();
+        ok_left = net::apply_realtime(opt, &why);
+        left = net::current_thread_timer_slack() == b ? 1 : 0;
+    });
+    u.join();
+    ASSERT_TRUE(ok_left) << why;
+    EXPECT_EQ(left, 1u);
+}
