@@ -348,8 +348,9 @@ int run(const Options& o) {
                     else if (measured)
                         rt_refl.push_back(static_cast<std::uint32_t>(t1 - t0));
                 } else {
-                    // The floor under the same conditions: the same frames to the reflector in the same cycle.
-                    // Whichever goes second finds both CPUs awake, so the order alternates from cycle to cycle.
+                    // The floor under the same conditions: the same frames to the reflector in the same
+                    // cycle. Whichever goes second finds both CPUs awake, so the order alternates from cycle
+                    // to cycle.
                     const bool refl_first = soak_refl && (done & 1) != 0;
                     if (refl_first) exchange_reflector();
                     set_drive_outputs(m, 200 + c_vecat, hold);
