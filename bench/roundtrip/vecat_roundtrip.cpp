@@ -252,6 +252,8 @@ int run(const Options& o) {
     sopt.busy_poll = o.busy;
     sopt.park = &park_vecat;
     sopt.tick_us = o.tick_us;
+    net::ServeCounters serve_count;
+    sopt.counters = &serve_count;
     std::thread server([&] {
         realtime_or_warn("server", cpu.server, o.fifo);
         net::serve(*seg, vecat_sock, sopt, stop);
@@ -301,6 +303,8 @@ int run(const Options& o) {
             latency ? std::max<std::uint64_t>(20, period_ns ? 20'000'000 / period_ns : 200) : cycles;
         const pthread_t srv_handle = server.native_handle();
         const std::uint64_t cpu0 = thread_cpu_ns(srv_handle), wall0 = now_ns();
+        const std::uint64_t wakeups0 = serve_count.wakeups.load(), frames0 = serve_count.frames.load(),
+                            ticks0 = serve_count.ticks.load();
         rusage ru0{};
         getrusage(RUSAGE_SELF, &ru0);
         const std::uint64_t steal0 = host_steal_ms();
@@ -380,6 +384,9 @@ int run(const Options& o) {
             if (latency) refl_turn = !refl_turn;
         }
         const std::uint64_t wall = now_ns() - wall0, cpu_srv = thread_cpu_ns(srv_handle) - cpu0;
+        const std::uint64_t wakeups = serve_count.wakeups.load() - wakeups0,
+                            frames = serve_count.frames.load() - frames0,
+                            ticks = serve_count.ticks.load() - ticks0;
         rusage ru1{};
         getrusage(RUSAGE_SELF, &ru1);
         const std::uint64_t steal = host_steal_ms() - steal0;
@@ -437,6 +444,12 @@ int run(const Options& o) {
             100.0 * static_cast<double>(cpu_srv) / static_cast<double>(wall),
             latency ? " (includes the reflector phases, parked)" : "",
             100.0 * tv / (static_cast<double>(wall) / 1e9));
+        if (c_vecat > 0)
+            fmt::print("  serve loop per vecat cycle: {:.2f} wake-ups, {:.2f} frames, {:.2f} firmware runs without "
+                       "a frame (ticks, SYNC pulses)\n",
+                       static_cast<double>(wakeups) / static_cast<double>(c_vecat),
+                       static_cast<double>(frames) / static_cast<double>(c_vecat),
+                       static_cast<double>(ticks) / static_cast<double>(c_vecat));
         if (misses) rc = 1;
     }
     stop = true;

@@ -77,7 +77,12 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     // The reply goes out before the firmware of the slaves runs (see Segment::set_deferred_firmware).
     const bool was_deferred = seg.deferred_firmware();
     seg.set_deferred_firmware(true);
+    // Only this thread writes the counters: a relaxed load and store each, no locked instruction.
+    const auto bump = [](std::atomic<std::uint64_t>& c) {
+        c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    };
     while (!stop.load(std::memory_order_relaxed)) {
+        if (opt.counters) bump(opt.counters->wakeups);
         // Wake up for the next SYNC pulse of the DC units, or after one tick, whichever comes first.
         const std::uint64_t next_sync = seg.next_event_ns();
         std::int64_t wait_us = opt.tick_us;
@@ -115,6 +120,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             }
         } else if (n > 0) {
             ++st.received;
+            if (opt.counters) bump(opt.counters->frames);
             std::size_t len = static_cast<std::size_t>(n);
             // The frame counts as of its kernel receive time (on the monotonic clock), never before what
             // the segment has already seen: a SYNC pulse that fell due while the frame waited in the
@@ -146,6 +152,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             last_tick = now;
         } else if (now - last_tick >= tick_ns || now >= next_sync) {
             seg.tick(now);
+            if (opt.counters) bump(opt.counters->ticks);
             if (opt.filter) opt.filter->tick(now);
             last_tick = now;
             last_time = std::max(last_time, now);

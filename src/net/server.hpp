@@ -12,6 +12,14 @@
 
 namespace vecat::net {
 
+// What the serve loop did so far, readable from another thread while it runs (relaxed counters: figures for
+// a benchmark, not a synchronisation).
+struct ServeCounters {
+    std::atomic<std::uint64_t> wakeups{0};  // loop passes: one per frame, SYNC pulse, tick or empty wait
+    std::atomic<std::uint64_t> frames{0};   // frames from the master side processed
+    std::atomic<std::uint64_t> ticks{0};    // firmware runs without a frame (ticks and SYNC pulses)
+};
+
 struct ServeOptions {
     bool busy_poll = false;  // spin on the socket instead of sleeping in poll()
     // Firmware/watchdog tick period when idle: the drives' servo period (cia402::Drive::kServoPeriodNs), so
@@ -30,6 +38,7 @@ struct ServeOptions {
     // process). While it has a link, processed frames go out of it instead of back to the master, and the
     // frames coming back on it are forwarded to the master side; without a link the line closes here.
     RawSocket* downstream = nullptr;
+    ServeCounters* counters = nullptr;  // live counters, if given
 };
 
 struct ServeStats {

@@ -130,6 +130,8 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
     std::atomic<bool> stop{false};
     net::ServeOptions opt;
     opt.busy_poll = busy;
+    net::ServeCounters count;
+    opt.counters = &count;
     std::thread srv([&] { net::serve(*seg, ss, opt, stop); });
     struct Join {
         std::atomic<bool>& stop;
@@ -157,11 +159,16 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
         m.exchange_process_data();
     const auto before = test::allocations();
     const auto locks_before = test::lock_calls();
+    const std::uint64_t frames_before = count.frames.load(), wakeups_before = count.wakeups.load();
     int ok = 0;
     for (int i = 0; i < 1000; ++i)
         ok += m.exchange_process_data().value_or(0) == m.expected_wkc();
     const auto allocs = test::allocations() - before;
     const auto locks = test::lock_calls() - locks_before;
+    // The live counters saw every frame of the cycles (each reply came back, so each was processed before
+    // the next was sent) and a loop pass for each.
+    EXPECT_EQ(count.frames.load() - frames_before, 2000u);
+    EXPECT_GE(count.wakeups.load() - wakeups_before, 2000u);
     EXPECT_EQ(ok, 1000);
     EXPECT_EQ(allocs, 0u);
     // Both threads count: the master's and the serve loop's.
