@@ -445,11 +445,12 @@ int run(const Options& o) {
             latency ? " (includes the reflector phases, parked)" : "",
             100.0 * tv / (static_cast<double>(wall) / 1e9));
         if (c_vecat > 0)
-            fmt::print("  serve loop per vecat cycle: {:.2f} wake-ups, {:.2f} frames, {:.2f} firmware runs without "
-                       "a frame (ticks, SYNC pulses)\n",
-                       static_cast<double>(wakeups) / static_cast<double>(c_vecat),
-                       static_cast<double>(frames) / static_cast<double>(c_vecat),
-                       static_cast<double>(ticks) / static_cast<double>(c_vecat));
+            fmt::print(
+                "  serve loop per vecat cycle: {:.2f} wake-ups, {:.2f} frames, {:.2f} firmware runs without "
+                "a frame (ticks, SYNC pulses)\n",
+                static_cast<double>(wakeups) / static_cast<double>(c_vecat),
+                static_cast<double>(frames) / static_cast<double>(c_vecat),
+                static_cast<double>(ticks) / static_cast<double>(c_vecat));
         if (misses) rc = 1;
     }
     stop = true;
