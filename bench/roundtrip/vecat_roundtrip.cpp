@@ -444,7 +444,8 @@ int run(const Options& o) {
             100.0 * static_cast<double>(cpu_srv) / static_cast<double>(wall),
             latency ? " (includes the reflector phases, parked)" : "",
             100.0 * tv / (static_cast<double>(wall) / 1e9));
-        if (c_vecat > 0)
+        // Busy-polling, a loop pass is a poll, not a wake-up: the figure means something only when blocking.
+        if (c_vecat > 0 && !o.busy)
             fmt::print(
                 "  serve loop per vecat cycle: {:.2f} wake-ups, {:.2f} frames, {:.2f} firmware runs without "
                 "a frame (ticks, SYNC pulses)\n",

@@ -15,9 +15,11 @@ namespace vecat::net {
 // What the serve loop did so far, readable from another thread while it runs (relaxed counters: figures for
 // a benchmark, not a synchronisation).
 struct ServeCounters {
-    std::atomic<std::uint64_t> wakeups{0};  // loop passes: one per frame, SYNC pulse, tick or empty wait
-    std::atomic<std::uint64_t> frames{0};   // frames from the master side processed
-    std::atomic<std::uint64_t> ticks{0};    // firmware runs without a frame (ticks and SYNC pulses)
+    // Loop passes: blocking, one wake-up each (a frame, SYNC pulse, tick or empty wait); busy-polling, one
+    // per poll of the socket.
+    std::atomic<std::uint64_t> wakeups{0};
+    std::atomic<std::uint64_t> frames{0};  // frames from the master side processed
+    std::atomic<std::uint64_t> ticks{0};   // firmware runs without a frame (ticks and SYNC pulses)
 };
 
 struct ServeOptions {
