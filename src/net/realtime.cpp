@@ -59,11 +59,24 @@ unsigned long current_thread_timer_slack() {
 }
 
 bool apply_realtime(const RealtimeOptions& opt, std::string* why) {
-    if (opt.lock_memory && !lock_all_memory(why)) return false;
-    if (opt.timer_slack_ns > 0 && !set_current_thread_timer_slack(opt.timer_slack_ns, why)) return false;
-    if (opt.cpu >= 0 && !pin_current_thread(opt.cpu, why)) return false;
-    if (opt.fifo_priority > 0 && !set_current_thread_fifo(opt.fifo_priority, why)) return false;
-    return true;
+    // Every setting is tried, so that one that fails (e.g. SCHED_FIFO without the right) leaves the others
+    // in effect for a caller that carries on; the reasons of all failures are joined.
+    bool ok = true;
+    std::string reasons;
+    const auto apply = [&](bool wanted, auto&& set) {
+        std::string r;
+        if (!wanted || set(&r)) return;
+        ok = false;
+        reasons += (reasons.empty() ? "" : "; ") + r;
+    };
+    apply(opt.lock_memory, [](std::string* r) { return lock_all_memory(r); });
+    apply(opt.timer_slack_ns > 0,
+          [&](std::string* r) { return set_current_thread_timer_slack(opt.timer_slack_ns, r); });
+    apply(opt.cpu >= 0, [&](std::string* r) { return pin_current_thread(opt.cpu, r); });
+    apply(opt.fifo_priority > 0,
+          [&](std::string* r) { return set_current_thread_fifo(opt.fifo_priority, r); });
+    if (!ok && why) *why = reasons;
+    return ok;
 }
 
 }  // namespace vecat::net

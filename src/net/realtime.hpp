@@ -23,7 +23,8 @@ bool lock_all_memory(std::string* why = nullptr);
 // prctl(PR_SET_TIMERSLACK): how late the calling thread's timed sleeps (poll, clock_nanosleep) may end.
 bool set_current_thread_timer_slack(unsigned long ns, std::string* why = nullptr);
 unsigned long current_thread_timer_slack();
-// All of the above that opt asks for, on the calling thread.
+// All of the above that opt asks for, on the calling thread. Each is tried even if another failed; false
+// with the reasons of all that failed.
 bool apply_realtime(const RealtimeOptions& opt, std::string* why = nullptr);
 
 }  // namespace vecat::net

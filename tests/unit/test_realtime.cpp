@@ -35,6 +35,29 @@ TEST(Realtime, FifoPriorityOutOfRangeIsRefused) {
     EXPECT_NE(why.find("SCHED_FIFO"), std::string::npos);
 }
 
+// A setting that fails does not keep the ones after it from taking effect (vecat-roundtrip carries on
+// without it): a CPU that does not exist, then SCHED_FIFO.
+TEST(Realtime, ASettingThatFailsLeavesTheOthersInEffectAndIsReported) {
+    bool may_fifo = false;
+    std::thread probe([&] { may_fifo = net::set_current_thread_fifo(1); });
+    probe.join();
+    if (!may_fifo) GTEST_SKIP() << "SCHED_FIFO needs CAP_SYS_NICE";
+    std::string why;
+    bool ok = true;
+    int policy = -1;
+    std::thread t([&] {
+        net::RealtimeOptions opt;
+        opt.cpu = 1 << 20;
+        opt.fifo_priority = 1;
+        ok = net::apply_realtime(opt, &why);
+        policy = sched_getscheduler(0);
+    });
+    t.join();
+    EXPECT_FALSE(ok);
+    EXPECT_NE(why.find("CPU"), std::string::npos) << why;
+    EXPECT_EQ(policy, SCHED_FIFO);
+}
+
 TEST(Realtime, CyclicThreadsGetATightTimerSlackUnlessAskedToLeaveIt) {
     unsigned long before = 0, applied = 0, left = 0;
     std::string why;
