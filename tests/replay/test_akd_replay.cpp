@@ -13,6 +13,7 @@
 #include "master/coe_client.hpp"
 #include "net/pcapng_writer.hpp"
 #include "pcapng_reader.hpp"
+#include "shared_data.hpp"
 #include "test_support.hpp"
 
 using namespace vecat;
@@ -64,9 +65,8 @@ std::vector<Mailbox> mailboxes(const std::vector<std::vector<std::uint8_t>>& fra
 }  // namespace
 
 TEST(Replay, SoemRequestsToARealAkdGetRepliesOfTheSameLayout) {
-    const std::string src =
-        std::string(VECAT_SHARED_DIR) + "/data/pcap/soem-slaveinfo-sdo-kollmorgen-akd.pcapng";
-    if (!std::filesystem::exists(src)) GTEST_SKIP() << "test data missing: " << src;
+    VECAT_REQUIRE_SHARED_DATA("pcap/soem-slaveinfo-sdo-kollmorgen-akd.pcapng");
+    const std::string src = test::shared_data("pcap/soem-slaveinfo-sdo-kollmorgen-akd.pcapng");
     const auto frames = test::read_pcapng_frames(src);
     // Given: the requests SOEM wrote into the AKD's SM0 (0x1800) and the replies read from its SM1 (0x1C00).
     const auto requests = mailboxes(frames, 0x01, 0x05 /*FPWR*/, 0x1800);

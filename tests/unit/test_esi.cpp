@@ -12,6 +12,7 @@
 
 #include "cia402/drive.hpp"
 #include "esc/sii_image.hpp"
+#include "shared_data.hpp"
 #include "esi/esi_check.hpp"
 #include "esi/esi_reader.hpp"
 #include "esi/esi_writer.hpp"
@@ -22,8 +23,7 @@ namespace {
 
 using tinyxml2::XMLElement;
 
-const std::string kShared = VECAT_SHARED_DIR;
-const std::string kXsd = kShared + "/data/schema/EtherCATInfo.xsd";
+const std::string kXsd = test::shared_data("schema/EtherCATInfo.xsd");
 
 std::string temp_file(const std::string& name, const std::string& content) {
     const auto p =
@@ -46,6 +46,7 @@ std::string child_text(const XMLElement* e, const char* name) {
 // ---- priority 1: writer -------------------------------------------------------------------------------
 
 TEST(EsiWriter, DefaultDriveValidatesAgainstTheEtgSchema) {
+    VECAT_REQUIRE_SHARED_DATA("schema/EtherCATInfo.xsd");
     const auto xml = esi::write_esi(device::default_drive());
     const auto path = temp_file("default.xml", xml);
     std::string msg;
@@ -54,6 +55,7 @@ TEST(EsiWriter, DefaultDriveValidatesAgainstTheEtgSchema) {
 }
 
 TEST(EsiWriter, XmllintRejectsABrokenFile) {
+    VECAT_REQUIRE_SHARED_DATA("schema/EtherCATInfo.xsd");
     // The validation test can fail: a Device without its mandatory Type is refused.
     auto xml = esi::write_esi(device::default_drive());
     const auto b = xml.find("<Type ProductCode");
@@ -407,9 +409,10 @@ std::vector<VendorCase> vendor_cases() {
 }
 
 TEST(EsiReader, VendorFilesImport) {
+    VECAT_REQUIRE_SHARED_DATA("esi");
     for (const auto& c : vendor_cases()) {
         SCOPED_TRACE(c.file);
-        const auto r = esi::import_esi_file(kShared + "/data/" + c.file, c.sel);
+        const auto r = esi::import_esi_file(test::shared_data(c.file), c.sel);
         const auto& d = r.desc;
         EXPECT_EQ(d.identity.vendor_id, c.vendor);
         EXPECT_EQ(d.identity.product_code, c.product);
@@ -434,7 +437,8 @@ TEST(EsiReader, VendorFilesImport) {
 }
 
 TEST(EsiReader, ElmoFileHasFourDevicesAndTheSelectorPicksOne) {
-    std::ifstream f(kShared + "/data/esi/elmo-gold.xml");
+    VECAT_REQUIRE_SHARED_DATA("esi/elmo-gold.xml");
+    std::ifstream f(test::shared_data("esi/elmo-gold.xml"));
     std::stringstream ss;
     ss << f.rdbuf();
     const auto devs = esi::list_devices_text(ss.str());
@@ -449,9 +453,11 @@ TEST(EsiReader, ElmoFileHasFourDevicesAndTheSelectorPicksOne) {
 }
 
 TEST(EsiReader, VendorFilesRegenerateValidAndStable) {
+    VECAT_REQUIRE_SHARED_DATA("esi");
+    VECAT_REQUIRE_SHARED_DATA("schema/EtherCATInfo.xsd");
     for (const auto& c : vendor_cases()) {
         SCOPED_TRACE(c.file);
-        const auto r = esi::import_esi_file(kShared + "/data/" + c.file, c.sel);
+        const auto r = esi::import_esi_file(test::shared_data(c.file), c.sel);
         const auto xml = esi::write_esi(r.desc);
         const auto path = temp_file("vendor.xml", xml);
         std::string msg;
@@ -462,8 +468,9 @@ TEST(EsiReader, VendorFilesRegenerateValidAndStable) {
 }
 
 TEST(EsiCheck, FindsWhatVendorFilesLeaveOut) {
+    VECAT_REQUIRE_SHARED_DATA("esi/synapticon-somanet-cia402.xml");
     // Synapticon maps 0x607A:4 (an object its dictionary does not have) and leaves 0x6040 unflagged.
-    const auto r = esi::import_esi_file(kShared + "/data/esi/synapticon-somanet-cia402.xml");
+    const auto r = esi::import_esi_file(test::shared_data("esi/synapticon-somanet-cia402.xml"));
     const auto msgs = esi::check_consistency(r.desc, esc::build_sii_image(r.desc));
     auto has = [&](const std::string& s) {
         return std::any_of(msgs.begin(), msgs.end(),
@@ -480,9 +487,10 @@ TEST(EsiCheck, FindsWhatVendorFilesLeaveOut) {
 }
 
 TEST(EsiCheck, CompletedVendorDescriptionsAreConsistent) {
+    VECAT_REQUIRE_SHARED_DATA("esi");
     for (const auto& c : vendor_cases()) {
         SCOPED_TRACE(c.file);
-        auto r = esi::import_esi_file(kShared + "/data/" + c.file, c.sel);
+        auto r = esi::import_esi_file(test::shared_data(c.file), c.sel);
         esi::complete_for_emulation(r.desc);
         const auto msgs = esi::check_consistency(r.desc, esc::build_sii_image(r.desc));
         for (const auto& m : msgs)
@@ -498,11 +506,12 @@ std::vector<std::uint8_t> read_bin(const std::string& path) {
 }
 
 TEST(EsiSoes, SiiFromTheirEsiAgainstTheirImageListsEachDifferingByte) {
+    VECAT_REQUIRE_SHARED_DATA("sii");
     for (const char* name : {"soes-lan9252", "soes-dynpdo"}) {
         SCOPED_TRACE(name);
-        const auto ref = read_bin(kShared + "/data/sii/" + name + ".bin");
+        const auto ref = read_bin(test::shared_data("sii/") + name + ".bin");
         ASSERT_EQ(ref.size(), 256u);
-        const auto r = esi::import_esi_file(kShared + "/data/sii/" + std::string(name) + ".xml");
+        const auto r = esi::import_esi_file(test::shared_data("sii/") + std::string(name) + ".xml");
         const auto gen = esc::build_sii_image(r.desc);
         const auto diffs = esi::diff_sii(gen, ref);
         std::printf("%s: %zu differing bytes between the generated SII and the SOES image\n", name,
@@ -547,9 +556,10 @@ TEST(EsiSoes, SiiFromTheirEsiAgainstTheirImageListsEachDifferingByte) {
 // ---- priority 3: vendor devices emulated, the project master reaches OP -----------------------------
 
 TEST(EsiRun, EachVendorDeviceReachesOpWithItsDefaultPdos) {
+    VECAT_REQUIRE_SHARED_DATA("esi");
     for (const auto& c : vendor_cases()) {
         SCOPED_TRACE(c.file);
-        auto r = esi::import_esi_file(kShared + "/data/" + c.file, c.sel);
+        auto r = esi::import_esi_file(test::shared_data(c.file), c.sel);
         esi::complete_for_emulation(r.desc);
         EXPECT_TRUE(esi::check_consistency(r.desc, esc::build_sii_image(r.desc)).empty());
         test::Bench b{1, {}, r.desc, &cia402::make_drive_segment};

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "esc/sii_image.hpp"
+#include "shared_data.hpp"
 #include "test_support.hpp"
 
 using namespace vecat;
@@ -13,7 +14,7 @@ using namespace vecat::esc;
 
 namespace {
 std::vector<std::uint8_t> load(const std::string& rel) {
-    std::ifstream f(std::string(VECAT_SHARED_DIR) + "/data/" + rel, std::ios::binary);
+    std::ifstream f(shared_data(rel), std::ios::binary);
     return {std::istreambuf_iterator<char>(f), {}};
 }
 std::uint16_t sii_status(Bench& b) {
@@ -66,6 +67,7 @@ TEST(SiiImage, DefaultDriveImageIsCompleteAndConsistent) {
 }
 
 TEST(SiiImage, ChecksumMatchesRealEeproms) {
+    VECAT_REQUIRE_SHARED_DATA("sii");
     for (const char* f : {"sii/kollmorgen-akd.bin", "sii/beckhoff-el2004.bin", "sii/soes-dynpdo.bin",
                           "sii/soes-lan9252.bin"}) {
         const auto img = load(f);
