@@ -20,10 +20,10 @@ inline std::string shared_data(std::string_view relative) {
 }  // namespace vecat::test
 
 // Skips the current test when shared_data(relative) does not exist. In a TEST body (GTEST_SKIP returns).
-#define VECAT_REQUIRE_SHARED_DATA(relative)                                                                \
-    do {                                                                                                   \
-        const auto vecat_required_ = ::vecat::test::shared_data(relative);                                 \
-        if (!std::filesystem::exists(vecat_required_))                                                     \
-            GTEST_SKIP() << "test data missing: " << vecat_required_                                       \
-                         << " (the ../shared folder is not beside this clone; see README, Tests)";         \
+#define VECAT_REQUIRE_SHARED_DATA(relative)                                                        \
+    do {                                                                                           \
+        const auto vecat_required_ = ::vecat::test::shared_data(relative);                         \
+        if (!std::filesystem::exists(vecat_required_))                                             \
+            GTEST_SKIP() << "test data missing: " << vecat_required_                               \
+                         << " (the ../shared folder is not beside this clone; see README, Tests)"; \
     } while (0)
