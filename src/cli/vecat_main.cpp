@@ -14,6 +14,7 @@
 #include "cia402/drive.hpp"
 #include "cia402/profile_generator.hpp"
 #include "cli/demo.hpp"
+#include "cli/exec.hpp"
 #include "cli/fault_cli.hpp"
 #include "cli/telemetry_commands.hpp"
 #include "coe/coe_application.hpp"
@@ -67,7 +68,7 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
 
 // Parameter persistence: one file per slave position in dir; a stored set is applied before the first
 // frame. Returns false when the directory cannot be used.
-bool attach_parameter_stores(vecat::esc::Segment& seg, const std::string& dir) {
+bool attach_parameter_stores(vecat::esc::Segment& seg, const std::string& dir, std::FILE* log) {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) {
@@ -80,7 +81,7 @@ bool attach_parameter_stores(vecat::esc::Segment& seg, const std::string& dir) {
         const auto rep = app->attach_parameter_store(fmt::format("{}/slave-{}.param", dir, i));
         using vecat::coe::LoadStatus;
         if (rep.load.status == LoadStatus::Loaded)
-            fmt::print("vecat: slave {}: {} stored parameters applied{}\n", i, rep.applied,
+            fmt::print(log, "vecat: slave {}: {} stored parameters applied{}\n", i, rep.applied,
                        rep.refused ? fmt::format(", {} refused (kept their defaults)", rep.refused) : "");
         else if (rep.load.status != LoadStatus::Missing)
             fmt::print(stderr, "vecat: slave {}: stored parameters {} ({}); using the defaults\n", i,
@@ -110,7 +111,10 @@ struct RunOptions {
     std::string downstream;
 };
 
-int cmd_run(const RunOptions& o) {
+// Serves until stop. ready (when given) is set once the serve loop runs; messages go to log. vecat run
+// gives g_stop and stdout; vecat exec its own flag and stderr (COMMAND's output stays its own).
+int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* ready = nullptr,
+            std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
                  sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream] = o;
     std::string why;
@@ -131,7 +135,7 @@ int cmd_run(const RunOptions& o) {
     if (!loaded) return 1;
     const auto& dev = *loaded;
     auto seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
-    if (!param_dir.empty() && !attach_parameter_stores(*seg, param_dir)) return 1;
+    if (!param_dir.empty() && !attach_parameter_stores(*seg, param_dir, log)) return 1;
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
         seg->slave(i).esc().dc().set_drift_ppm(i % 2 ? -drift_ppm : drift_ppm, vecat::net::monotonic_ns());
@@ -155,8 +159,8 @@ int cmd_run(const RunOptions& o) {
     bool faults_ok = true;
     auto faults = vecat::cli::start_fault_session(*seg, fault_opts, faults_ok);
     if (!faults_ok) return 1;
-    install_signals();
-    fmt::print("vecat: {} x \"{}\" on {} (vendor 0x{:08X}, product 0x{:08X}); Ctrl-C stops\n", slaves,
+    if (!ready) install_signals();
+    fmt::print(log, "vecat: {} x \"{}\" on {} (vendor 0x{:08X}, product 0x{:08X}); Ctrl-C stops\n", slaves,
                dev.name, iface, dev.identity.vendor_id, dev.identity.product_code);
     vecat::net::ServeOptions opt;
     opt.busy_poll = busy;
@@ -165,7 +169,7 @@ int cmd_run(const RunOptions& o) {
     opt.tick_us = tick_us;
     opt.downstream = down.get();
     if (down)
-        fmt::print("vecat: port 1 of the last slave cabled to {} ({})\n", downstream,
+        fmt::print(log, "vecat: port 1 of the last slave cabled to {} ({})\n", downstream,
                    down->carrier() ? "link up: the line goes on" : "no link yet: the line closes here");
     auto tel = vecat::cli::RunTelemetry::start(*seg, telemetry, opt);
     if (!tel) return 2;
@@ -179,17 +183,18 @@ int cmd_run(const RunOptions& o) {
     std::string cap_why;
     if (!vecat::net::drop_all_capabilities(&cap_why))
         fmt::print(stderr, "vecat: cannot drop capabilities: {}\n", cap_why);
-    const auto st = vecat::net::serve(*seg, *sock, opt, g_stop);
+    if (ready) *ready = true;
+    const auto st = vecat::net::serve(*seg, *sock, opt, stop);
     tel.reset();
     if (faults) vecat::cli::print_fault_summary(*faults);
-    fmt::print("vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
+    fmt::print(log, "vecat: {} frames received, {} answered, {} dropped as malformed\n", st.received, st.sent,
                seg->counters().dropped);
     if (down)
-        fmt::print("vecat: {} frames passed on to {}, {} came back\n", st.sent_downstream, downstream,
+        fmt::print(log, "vecat: {} frames passed on to {}, {} came back\n", st.sent_downstream, downstream,
                    st.returned);
     if (pcap)
         fmt::print(
-            "vecat: capture written to {} ({} frames{})\n", pcap_path, pcap->frames(),
+            log, "vecat: capture written to {} ({} frames{})\n", pcap_path, pcap->frames(),
             pcap->dropped() ? fmt::format(", {} not written: --pcap-limit-mb reached", pcap->dropped()) : "");
     for (std::size_t i = 0; i < seg->size(); ++i) {
         const auto& dc = seg->slave(i).esc().dc();
@@ -198,10 +203,10 @@ int cmd_run(const RunOptions& o) {
         const double span =
             sync.cycle0_ns ? static_cast<double>(sync.last_sync0 - sync.first_sync0) / sync.cycle0_ns + 1.0
                            : 0.0;
-        fmt::print(
-            "vecat: slave {}: {} SYNC0 pulses ({} not taken by the firmware), {:.0f} cycles of {} ns "
-            "between the first and the last\n",
-            i, dc.counters().sync_pulses[0], dc.counters().pulses_not_delivered, span, sync.cycle0_ns);
+        fmt::print(log,
+                   "vecat: slave {}: {} SYNC0 pulses ({} not taken by the firmware), {:.0f} cycles of {} ns "
+                   "between the first and the last\n",
+                   i, dc.counters().sync_pulses[0], dc.counters().pulses_not_delivered, span, sync.cycle0_ns);
     }
     return 0;
 }
@@ -281,53 +286,35 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
 
     auto* run = app.add_subcommand("run", "Serve virtual slaves on a network interface");
+    auto* exec = app.add_subcommand("exec",
+                                    "Run a command in a private network namespace (no root needed: a user "
+                                    "namespace) in which vecat serves "
+                                    "the slaves on one end of a veth pair; the command gets the other end");
     RunOptions ro;
+    vecat::cli::ExecOptions eo;
     run->add_option("-i,--iface", ro.iface,
                     "Interface to serve on (one end of a veth pair, or a dedicated NIC)")
         ->required();
-    run->add_option("-n,--slaves", ro.slaves,
-                    "Number of slaves on the line (drives 1 and 2 are connected by a TWINsync cable)")
-        ->check(CLI::Range(1u, 512u));
-    const std::map<std::string, vecat::cia402::TwinsyncPreset> presets = {
-        {"off", vecat::cia402::TwinsyncPreset::None},
-        {"gantry", vecat::cia402::TwinsyncPreset::Gantry},
-        {"position", vecat::cia402::TwinsyncPreset::Position},
-        {"speed", vecat::cia402::TwinsyncPreset::Speed}};
-    run->add_option(
-           "--twinsync", ro.twinsync,
-           "TWINsync between drives 1 and 2 preset: off (configure it by CoE), gantry (P2580 29/30), "
-           "position (PCON 7/8) or speed (SCON 5/6); drive 2 is then controlled through TWINsync")
-        ->transform(CLI::CheckedTransformer(presets, CLI::ignore_case));
     run->add_option("--downstream", ro.downstream,
                     "Chained segments: cable port 1 of the last slave to this interface (a veth pair to the "
                     "next vecat run); frames go on along the line while it has a link");
-    run->add_option("--pcap", ro.pcap_path, "Write every frame in and out to this pcapng file");
-    run->add_flag("--busy-poll,!--blocking", ro.busy,
-                  "Spin on the socket instead of sleeping in poll() (lowest latency, one core busy); "
-                  "--blocking (the default) suits laptops");
-    run->add_option("--cpu", ro.rt.cpu, "Pin the serve loop to this CPU");
-    run->add_option("--fifo", ro.rt.fifo_priority,
-                    "Run the serve loop under SCHED_FIFO with this priority (1..99; with --busy-poll the "
-                    "kernel's RT throttling stalls it for 50 ms a second unless that is turned off)")
-        ->check(CLI::Range(1, 99));
-    run->add_flag("--mlock", ro.rt.lock_memory, "Lock all memory (mlockall): no page faults while serving");
-    run->add_option("--tick-us", ro.tick_us,
-                    "Run the slaves' firmware this often between frames (watchdogs, drive model); longer "
-                    "saves CPU with many slaves")
-        ->check(CLI::Range(10, 100000));
-    run->add_flag("--rx-ring", ro.rx_ring,
-                  "Receive through a PACKET_MMAP ring shared with the kernel instead of one recvmsg() per "
-                  "frame");
-    run->add_option("--pcap-limit-mb", ro.pcap_limit_mb, "Largest capture file in MiB (0: no limit)")
-        ->capture_default_str();
-    run->add_option("--dc-drift-ppm", ro.drift_ppm,
-                    "DC clock drift of the slaves in ppm (alternating sign along the line)")
-        ->check(CLI::Range(-1000.0, 1000.0));
     run->add_flag(
         "--allow-used-interface", ro.allow_busy_if,
         "Serve even on an interface that has an IP address, the default route or a bridge/bond master");
-    run->add_option("--param-dir", ro.param_dir,
-                    "Keep each slave's parameters (0x1010 store / 0x1011 restore) in DIR/slave-N.param");
+    bool no_network = false;
+    exec->add_flag("--no-network", no_network,
+                   "Serve no slaves: only the private namespaces, for a test runner that starts its own "
+                   "networks in them (vecat run on veth pairs it makes)");
+    exec->add_option("command", eo.command,
+                     "The command and its arguments (after --); {iface} is replaced "
+                     "by the master's interface, also given as VECAT_IFACE")
+        ->required();
+    exec->footer(
+        "Example: vecat exec -n 2 -- slaveinfo {iface}\n"
+        "Exit code: the command's (128 + N after signal N); 125 when vecat could not set up the namespace or "
+        "serve, 126 when the command cannot be executed, 127 when it is not found. The namespaces, the veth "
+        "pair and every process the command started are gone when vecat exec returns, and when it is "
+        "killed.");
     std::string esi_path, device_type;
     std::uint32_t product = 0;
     auto add_esi_options = [&](CLI::App* c, bool esi_option) {
@@ -335,11 +322,51 @@ int main(int argc, char** argv) {
         c->add_option("--device", device_type, "Device of the ESI file by its Type name");
         c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
     };
-    add_esi_options(run, true);
-    vecat::cli::add_run_fault_options(run, ro.fault_opts);
+    const std::map<std::string, vecat::cia402::TwinsyncPreset> presets = {
+        {"off", vecat::cia402::TwinsyncPreset::None},
+        {"gantry", vecat::cia402::TwinsyncPreset::Gantry},
+        {"position", vecat::cia402::TwinsyncPreset::Position},
+        {"speed", vecat::cia402::TwinsyncPreset::Speed}};
+    // The options of what is served, the same for vecat run and vecat exec.
+    for (auto* c : {run, exec}) {
+        c->add_option("-n,--slaves", ro.slaves,
+                      "Number of slaves on the line (drives 1 and 2 are connected by a TWINsync cable)")
+            ->check(CLI::Range(1u, 512u));
+        c->add_option(
+             "--twinsync", ro.twinsync,
+             "TWINsync between drives 1 and 2 preset: off (configure it by CoE), gantry (P2580 29/30), "
+             "position (PCON 7/8) or speed (SCON 5/6); drive 2 is then controlled through TWINsync")
+            ->transform(CLI::CheckedTransformer(presets, CLI::ignore_case));
+        c->add_option("--pcap", ro.pcap_path, "Write every frame in and out to this pcapng file");
+        c->add_flag("--busy-poll,!--blocking", ro.busy,
+                    "Spin on the socket instead of sleeping in poll() (lowest latency, one core busy); "
+                    "--blocking (the default) suits laptops");
+        c->add_option("--cpu", ro.rt.cpu, "Pin the serve loop to this CPU");
+        c->add_option("--fifo", ro.rt.fifo_priority,
+                      "Run the serve loop under SCHED_FIFO with this priority (1..99; with --busy-poll the "
+                      "kernel's RT throttling stalls it for 50 ms a second unless that is turned off)")
+            ->check(CLI::Range(1, 99));
+        c->add_flag("--mlock", ro.rt.lock_memory, "Lock all memory (mlockall): no page faults while serving");
+        c->add_option("--tick-us", ro.tick_us,
+                      "Run the slaves' firmware this often between frames (watchdogs, drive model); longer "
+                      "saves CPU with many slaves")
+            ->check(CLI::Range(10, 100000));
+        c->add_flag("--rx-ring", ro.rx_ring,
+                    "Receive through a PACKET_MMAP ring shared with the kernel instead of one recvmsg() per "
+                    "frame");
+        c->add_option("--pcap-limit-mb", ro.pcap_limit_mb, "Largest capture file in MiB (0: no limit)")
+            ->capture_default_str();
+        c->add_option("--dc-drift-ppm", ro.drift_ppm,
+                      "DC clock drift of the slaves in ppm (alternating sign along the line)")
+            ->check(CLI::Range(-1000.0, 1000.0));
+        c->add_option("--param-dir", ro.param_dir,
+                      "Keep each slave's parameters (0x1010 store / 0x1011 restore) in DIR/slave-N.param");
+        add_esi_options(c, true);
+        vecat::cli::add_run_fault_options(c, ro.fault_opts);
+        vecat::cli::add_telemetry_options(c, ro.telemetry);
+    }
     vecat::cli::FaultCommand fault_cmd;
     vecat::cli::add_fault_command(app, fault_cmd);
-    vecat::cli::add_telemetry_options(run, ro.telemetry);
 
     auto* demo =
         app.add_subcommand("demo", "Run virtual slaves and the bundled master on a private veth pair");
@@ -390,10 +417,16 @@ int main(int argc, char** argv) {
     vecat::esi::DeviceSelector sel;
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
-    if (*run) {
-        ro.esi_path = esi_path;
-        ro.sel = sel;
-        return cmd_run(ro);
+    ro.esi_path = esi_path;
+    ro.sel = sel;
+    if (*run) return cmd_run(ro, g_stop);
+    if (*exec) {
+        ro.iface = eo.slave_interface;
+        eo.serve = !no_network;
+        if (!ro.fault_opts.control.empty())
+            eo.environment.emplace_back("VECAT_CONTROL", ro.fault_opts.control);
+        return vecat::cli::run_exec(eo, [&ro](std::atomic<bool>& stop, std::atomic<bool>& ready,
+                                              std::FILE* log) { return cmd_run(ro, stop, &ready, log); });
     }
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();

@@ -82,12 +82,75 @@ unsigned link_master(const std::string& ifname) {
 
 }  // namespace
 
+namespace {
+
+bool g_user_namespace = false;
+
+std::string read_first_line(const char* path) {
+    std::ifstream f(path);
+    std::string line;
+    std::getline(f, line);
+    return line;
+}
+
+bool write_file(const std::string& path, const std::string& text, std::string* why) {
+    std::ofstream f(path);
+    f << text;
+    f.flush();
+    if (f) return true;
+    if (why) *why = "cannot write " + path + ": " + std::strerror(errno);
+    return false;
+}
+
+}  // namespace
+
+std::string user_namespace_hint() {
+    // Debian and Ubuntu kernels: kernel.unprivileged_userns_clone; every kernel: user.max_user_namespaces;
+    // Ubuntu 23.10 and later: AppArmor restricts unprivileged user namespaces.
+    if (read_first_line("/proc/sys/kernel/unprivileged_userns_clone") == "0")
+        return "unprivileged user namespaces are turned off: sudo sysctl -w "
+               "kernel.unprivileged_userns_clone=1";
+    if (read_first_line("/proc/sys/user/max_user_namespaces") == "0")
+        return "user namespaces are turned off: sudo sysctl -w user.max_user_namespaces=15000";
+    if (read_first_line("/proc/sys/kernel/apparmor_restrict_unprivileged_userns") == "1")
+        return "AppArmor restricts unprivileged user namespaces: sudo sysctl -w "
+               "kernel.apparmor_restrict_unprivileged_userns=0 (or an AppArmor profile for vecat)";
+    return "";
+}
+
 bool enter_private_netns(std::string* why) {
-    if (::unshare(CLONE_NEWNET) != 0) {
-        if (why) *why = std::string("unshare(CLONE_NEWNET): ") + std::strerror(errno) + " (needs root)";
+    if (::geteuid() == 0) {
+        if (::unshare(CLONE_NEWNET) == 0) return true;
+        if (why) *why = std::string("unshare(CLONE_NEWNET): ") + std::strerror(errno);
         return false;
     }
+    // An ordinary user: a user namespace in which this process is root (uid and gid 0 mapped to its own),
+    // then the network namespace, owned by that user namespace. The kernel needs a single-threaded caller.
+    const uid_t uid = ::geteuid();
+    const gid_t gid = ::getegid();
+    if (::unshare(CLONE_NEWUSER | CLONE_NEWNET) != 0) {
+        if (why) {
+            *why = std::string("unshare(CLONE_NEWUSER | CLONE_NEWNET): ") + std::strerror(errno) +
+                   " (an ordinary user needs unprivileged user namespaces; or run as root)";
+            if (const auto hint = user_namespace_hint(); !hint.empty()) *why += "; " + hint;
+        }
+        return false;
+    }
+    // setgroups must be denied before an unprivileged process may write its gid_map (user_namespaces(7)).
+    if (!write_file("/proc/self/setgroups", "deny", why) ||
+        !write_file("/proc/self/uid_map", "0 " + std::to_string(uid) + " 1", why) ||
+        !write_file("/proc/self/gid_map", "0 " + std::to_string(gid) + " 1", why))
+        return false;
+    g_user_namespace = true;
     return true;
+}
+
+bool in_private_user_namespace() {
+    return g_user_namespace;
+}
+
+bool loopback_up(std::string* why) {
+    return run({"ip", "link", "set", "dev", "lo", "up"}, why);
 }
 
 bool create_veth_pair(const std::string& a, const std::string& b, std::string* why) {

@@ -6,9 +6,20 @@
 
 namespace vecat::net {
 
-// Moves the calling process (call it before starting threads) into a new network namespace.
-// Returns false with a reason when that is not permitted (not root).
+// Moves the calling process (call it before starting threads) into a new network namespace. As root that is
+// all; as an ordinary user the process first enters a new user namespace (unprivileged user namespaces, no
+// setuid helper) in which it is root with the capabilities that a veth pair and raw sockets need, for its
+// own namespaces only. Returns false with a reason, and how to allow it, when that is not permitted.
 bool enter_private_netns(std::string* why = nullptr);
+
+// True when the process runs inside a user namespace that enter_private_netns made.
+bool in_private_user_namespace();
+
+// What stops unprivileged user namespaces on this machine, and how to allow them ("" when nothing known).
+std::string user_namespace_hint();
+
+// Brings the loopback interface of the current namespace up.
+bool loopback_up(std::string* why = nullptr);
 
 // Creates a veth pair inside the current namespace and brings both ends up. Returns false with a reason.
 bool create_veth_pair(const std::string& a, const std::string& b, std::string* why = nullptr);

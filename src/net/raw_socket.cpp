@@ -29,7 +29,7 @@ constexpr std::uint16_t kEtherCat = 0x88A4;
 }  // namespace
 
 RawSocket::RawSocket(const std::string& ifname, bool promiscuous) : ifname_(ifname) {
-    fd_ = ::socket(AF_PACKET, SOCK_RAW, htons(kEtherCat));
+    fd_ = ::socket(AF_PACKET, SOCK_RAW | SOCK_CLOEXEC, htons(kEtherCat));
     if (fd_ < 0) fail("socket(AF_PACKET) (needs CAP_NET_RAW)");
     ifindex_ = static_cast<int>(if_nametoindex(ifname.c_str()));
     if (ifindex_ == 0) {
