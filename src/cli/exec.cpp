@@ -92,7 +92,7 @@ std::string find_program(const std::string& name, int& error) {
         const int err = errno;
         const char msg[] = "vecat exec: cannot execute the command: ";
         [[maybe_unused]] auto w = ::write(2, msg, sizeof msg - 1);
-        const char* why = ::strerror(err);  // glibc's table: no allocation
+        const char* why = ::strerrordesc_np(err);  // a constant string: safe after fork
         w = ::write(2, why, ::strlen(why));
         w = ::write(2, "\n", 1);
         ::_exit(err == ENOENT ? kExecNotFound : kExecNotExecutable);
@@ -101,9 +101,9 @@ std::string find_program(const std::string& name, int& error) {
     handle(forward_to_child);
     while (true) {
         int st = 0;
-        const pid_t p = ::waitpid(-1, &st, 0);
-        if (p == cmd) ::_exit(status_of(st));
-        if (p < 0 && errno == ECHILD) ::_exit(kExecFailed);
+        const pid_t reaped = ::waitpid(-1, &st, 0);
+        if (reaped == cmd) ::_exit(status_of(st));
+        if (reaped < 0 && errno == ECHILD) ::_exit(kExecFailed);
     }
 }
 
