@@ -169,8 +169,15 @@ int run_exec(const ExecOptions& o, const ServeFunction& serve) {
     for (const auto& a : o.command)
         args.push_back(substitute(a, o.master_interface));
     for (char** e = environ; *e; ++e)
-        if (std::strncmp(*e, "VECAT_IFACE=", 12) != 0) env.emplace_back(*e);
+        if (std::strncmp(*e, "VECAT_IFACE=", 12) != 0 && std::strncmp(*e, "VECAT_EXEC=", 11) != 0 &&
+            std::strncmp(*e, "VECAT_BIN=", 10) != 0)
+            env.emplace_back(*e);
     if (o.serve) env.push_back("VECAT_IFACE=" + o.master_interface);
+    // For test kits (python/vecat): they run inside a namespace of their own and may start more networks.
+    env.emplace_back("VECAT_EXEC=1");
+    char self[4096];
+    if (const ssize_t n = ::readlink("/proc/self/exe", self, sizeof self); n > 0 && n < ssize_t{sizeof self})
+        env.push_back("VECAT_BIN=" + std::string(self, static_cast<std::size_t>(n)));
     for (const auto& [k, v] : o.environment)
         env.push_back(k + "=" + v);
     std::vector<char*> argv, envp;

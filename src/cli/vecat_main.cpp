@@ -162,6 +162,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     if (!ready) install_signals();
     fmt::print(log, "vecat: {} x \"{}\" on {} (vendor 0x{:08X}, product 0x{:08X}); Ctrl-C stops\n", slaves,
                dev.name, iface, dev.identity.vendor_id, dev.identity.product_code);
+    std::fflush(log);  // a program that starts vecat run reads this line to know it serves
     vecat::net::ServeOptions opt;
     opt.busy_poll = busy;
     opt.pcap = pcap.get();

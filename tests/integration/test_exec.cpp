@@ -179,6 +179,18 @@ TEST(Exec, AnOrdinaryUserNeedsNoRoot) {
     EXPECT_NE(who.output, "0\n");
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("2 slaves, 100 of 100 cycles"), std::string::npos) << r.output;
+    // The Python kit's own tests (python/tests: the pytest fixture), as the same user.
+    if (run({"/usr/bin/python3", "-c", "import pytest"}).status == 0) {
+        fs::copy(fs::path(VECAT_SOURCE_DIR) / "python", dir / "python", fs::copy_options::recursive);
+        fs::permissions(dir / "python", fs::perms::all, fs::perm_options::add);
+        for (const auto& e : fs::recursive_directory_iterator(dir / "python"))
+            fs::permissions(e.path(), fs::perms::others_read | fs::perms::others_exec, fs::perm_options::add);
+        const auto py = run({"/usr/sbin/runuser", "-u", user, "--", (dir / "vecat").string(), "exec",
+                             "--no-network", "--", "/usr/bin/python3", "-m", "pytest", "-q", "-p",
+                             "no:cacheprovider", (dir / "python" / "tests").string()});
+        EXPECT_EQ(py.status, 0) << py.output;
+        EXPECT_NE(py.output.find("6 passed"), std::string::npos) << py.output;
+    }
     fs::remove_all(dir);
     if (created) run({"/usr/sbin/userdel", user});
 }

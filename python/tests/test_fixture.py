@@ -1,0 +1,67 @@
+"""The kit's own tests: the fixture serves a line, the control socket injects faults, teardown cleans up.
+Run under `vecat exec --no-network -- python3 -m pytest python/tests` (CI does, as root and as a user)."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from ethercat_probe import broadcast_read_wkc
+
+
+def links():
+    out = subprocess.run(["ip", "-o", "link"], check=True, capture_output=True, text=True).stdout
+    return {line.split(":")[1].strip().split("@")[0] for line in out.splitlines()}
+
+
+def test_the_line_answers_with_one_count_per_slave(vecat_network):
+    assert broadcast_read_wkc(vecat_network.iface) == 2
+
+
+@pytest.mark.vecat(slaves=5)
+def test_the_marker_sets_the_number_of_slaves(vecat_network):
+    assert broadcast_read_wkc(vecat_network.iface) == 5
+
+
+def test_a_fault_from_the_control_socket_reaches_the_wire(vecat_network):
+    # Frames lost on the cable in front of slave 1 (position 0): the master gets no reply.
+    reply = vecat_network.inject("drop", cable=0, count=2)
+    assert reply.startswith("ok"), reply
+    assert broadcast_read_wkc(vecat_network.iface) is None
+    assert broadcast_read_wkc(vecat_network.iface) is None
+    assert broadcast_read_wkc(vecat_network.iface) == 2  # the count is used up
+
+
+def test_an_unknown_fault_is_refused(vecat_network):
+    from vecat import FaultError
+
+    with pytest.raises(FaultError):
+        vecat_network.inject("no_such_fault")
+
+
+def test_the_capture_and_summary_are_written_when_the_network_stops(vecat_network):
+    broadcast_read_wkc(vecat_network.iface)
+    vecat_network.stop()
+    assert os.path.getsize(vecat_network.pcap) > 0
+    assert "frames received" in vecat_network.output()
+
+
+def test_a_failing_test_leaves_no_interface_and_no_vecat_behind(tmp_path):
+    before = links()
+    failing = tmp_path / "test_fails.py"
+    failing.write_text(textwrap.dedent("""
+        def test_fails(vecat_network):
+            assert False, "on purpose"
+    """))
+    (tmp_path / "conftest.py").write_text(open(os.path.join(os.path.dirname(__file__), "conftest.py")).read()
+                                          .replace("os.path.dirname(__file__), \"..\"",
+                                                   repr(os.path.join(os.path.dirname(__file__), ".."))))
+    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(failing)],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 1, r.stdout + r.stderr  # the test failed, as written
+    assert "1 failed" in r.stdout
+    assert links() == before
+    ps = subprocess.run(["ps", "-eo", "args"], capture_output=True, text=True).stdout
+    assert str(tmp_path) not in ps  # no vecat run with the test's directory is left

@@ -1,0 +1,131 @@
+"""One served line of virtual slaves: `vecat run` on one end of a veth pair, the other end for the master."""
+
+import itertools
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import tempfile
+import time
+
+_counter = itertools.count(1)
+
+
+class NotInPrivateNamespace(RuntimeError):
+    """Raised when interfaces would be made outside a network namespace that this test run owns."""
+
+
+class FaultError(RuntimeError):
+    """vecat refused a control command (its reply starts with "error")."""
+
+
+def _vecat_binary(explicit=None):
+    for candidate in (explicit, os.environ.get("VECAT_BIN"), shutil.which("vecat")):
+        if candidate and os.access(candidate, os.X_OK):
+            return candidate
+    raise FileNotFoundError("vecat not found: set VECAT_BIN or put vecat on PATH")
+
+
+def _ip(*args):
+    subprocess.run(["ip", *args], check=True, capture_output=True)
+
+
+class Network:
+    """A line of virtual slaves served by `vecat run`.
+
+    iface: the master's end of the veth pair (open it with your master); control: the fault-injection socket;
+    pcap: the capture of every frame in and out (written when the network stops); log: vecat's output.
+    """
+
+    def __init__(self, slaves=2, args=(), vecat=None, workdir=None, startup_timeout=20.0):
+        if os.environ.get("VECAT_EXEC") != "1":
+            raise NotInPrivateNamespace(
+                "vecat networks are made in a private network namespace: run the tests under "
+                "`vecat exec --no-network -- pytest ...`")
+        n = next(_counter)
+        self.iface = f"vm{os.getpid() % 100000}x{n}"[:15]
+        self.slave_iface = f"vs{os.getpid() % 100000}x{n}"[:15]
+        self.workdir = workdir or tempfile.mkdtemp(prefix="vecat-")
+        self.control = os.path.join(self.workdir, "control.sock")
+        self.pcap = os.path.join(self.workdir, "capture.pcapng")
+        self.log = os.path.join(self.workdir, "vecat.log")
+        self._proc = None
+        _ip("link", "add", "name", self.iface, "type", "veth", "peer", "name", self.slave_iface)
+        try:
+            _ip("link", "set", "dev", self.iface, "up")
+            _ip("link", "set", "dev", self.slave_iface, "up")
+            cmd = [_vecat_binary(vecat), "run", "--iface", self.slave_iface, "--slaves", str(slaves),
+                   "--control", self.control, "--pcap", self.pcap, *args]
+            with open(self.log, "w") as log:
+                self._proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
+            self._wait_ready(startup_timeout)
+        except BaseException:
+            self.stop()
+            raise
+
+    def _wait_ready(self, timeout):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self._proc.poll() is not None:
+                raise RuntimeError(f"vecat run ended with {self._proc.returncode}: {self.output()}")
+            # vecat run opens its socket, then the control socket, then prints this line and serves.
+            if "Ctrl-C stops" in self.output() and os.path.exists(self.control):
+                return
+            time.sleep(0.01)
+        raise TimeoutError(f"vecat run did not start within {timeout} s: {self.output()}")
+
+    def output(self):
+        """What vecat printed so far."""
+        try:
+            with open(self.log) as f:
+                return f.read()
+        except OSError:
+            return ""
+
+    def command(self, line):
+        """Sends one control command ("inject KIND key=value...", "clear ID|KIND|all", "list")."""
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+            s.settimeout(10)
+            s.connect(self.control)
+            s.sendall(line.encode() + b"\n")
+            s.shutdown(socket.SHUT_WR)
+            reply = b""
+            while chunk := s.recv(4096):
+                reply += chunk
+        text = reply.decode().strip()
+        if text.startswith("error"):
+            raise FaultError(text)
+        return text
+
+    def inject(self, kind, **params):
+        """Injects a fault (see `vecat fault kinds`): inject("drop", cable=1, count=5). Returns vecat's reply."""
+        return self.command(" ".join(["inject", kind, *(f"{k}={v}" for k, v in params.items())]))
+
+    def clear(self, what="all"):
+        return self.command(f"clear {what}")
+
+    def stop(self):
+        """Stops vecat (its summary and the capture are written) and removes the veth pair."""
+        if self._proc and self._proc.poll() is None:
+            self._proc.send_signal(signal.SIGINT)
+            try:
+                self._proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self._proc.kill()
+                self._proc.wait()
+        try:
+            _ip("link", "del", "dev", self.iface)  # deletes both ends
+        except (subprocess.CalledProcessError, FileNotFoundError):
+            pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.stop()
+
+
+def start_network(slaves=2, args=(), vecat=None, workdir=None):
+    """Serves `slaves` virtual drives (plus any `vecat run` options in args); use it as a context manager."""
+    return Network(slaves=slaves, args=args, vecat=vecat, workdir=workdir)
