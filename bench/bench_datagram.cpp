@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "cia402/drive.hpp"
-#include "esc/registers.hpp"
 #include "master/master.hpp"
-#include "net/in_process_link.hpp"
+#include "protocol/registers.hpp"
+#include "serve/in_process_link.hpp"
 
 namespace {
 
@@ -28,7 +28,7 @@ struct Line {
         link = std::make_unique<net::InProcessLink>(*seg);
         link->set_time(now);
         m = std::make_unique<master::Master>(*link);
-        if (!m->startup(esc::AlState::Op)) throw std::runtime_error("start-up failed");
+        if (!m->startup(protocol::AlState::Op)) throw std::runtime_error("start-up failed");
         for (const std::uint16_t cw :
              {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}, std::uint16_t{0x0F}}) {
             for (std::size_t i = 0; i < n; ++i) {
@@ -49,12 +49,12 @@ struct Frame {
     std::vector<std::uint8_t> work;   // processed in place
     std::size_t len = 0;
     struct Dg {
-        esc::Command cmd;
+        protocol::Command cmd;
         std::uint32_t address;
         std::size_t size;
     };
     explicit Frame(std::initializer_list<Dg> dgs) {
-        std::size_t off = esc::kEthHeaderSize + esc::kEcatHeaderSize;
+        std::size_t off = protocol::kEthHeaderSize + protocol::kEcatHeaderSize;
         bytes.assign(1600, 0);
         std::fill_n(bytes.begin(), 6, 0xFF);
         std::fill_n(bytes.begin() + 6, 6, 0x10);
@@ -67,16 +67,17 @@ struct Frame {
             p[1] = static_cast<std::uint8_t>(i);
             st_le32(p + 2, d.address);
             st_le16(p + 6, static_cast<std::uint16_t>(d.size | (++i < dgs.size() ? 0x8000 : 0)));
-            off += esc::kDatagramHeaderSize + d.size + esc::kWkcSize;
+            off += protocol::kDatagramHeaderSize + d.size + protocol::kWkcSize;
         }
-        st_le16(bytes.data() + esc::kEthHeaderSize,
-                static_cast<std::uint16_t>((off - esc::kEthHeaderSize - esc::kEcatHeaderSize) | 0x1000));
-        len = std::max(off, esc::kMinEthFrame);
+        st_le16(bytes.data() + protocol::kEthHeaderSize,
+                static_cast<std::uint16_t>((off - protocol::kEthHeaderSize - protocol::kEcatHeaderSize) |
+                                           0x1000));
+        len = std::max(off, protocol::kMinEthFrame);
         work = bytes;
     }
     std::uint8_t* data(std::size_t dg_offset) {
-        return bytes.data() + esc::kEthHeaderSize + esc::kEcatHeaderSize + esc::kDatagramHeaderSize +
-               dg_offset;
+        return bytes.data() + protocol::kEthHeaderSize + protocol::kEcatHeaderSize +
+               protocol::kDatagramHeaderSize + dg_offset;
     }
     bool run(esc::Segment& seg, std::uint64_t now) {
         std::memcpy(work.data(), bytes.data(), len);
@@ -86,7 +87,7 @@ struct Frame {
 };
 
 const std::uint32_t kFrmwAddress =
-    0x1001u | (static_cast<std::uint32_t>(esc::addr(esc::Reg::DcSystemTime)) << 16);
+    0x1001u | (static_cast<std::uint32_t>(protocol::addr(protocol::Reg::DcSystemTime)) << 16);
 
 void per_slave(benchmark::State& state, std::size_t n) {
     state.counters["per_slave"] =
@@ -98,7 +99,7 @@ void per_slave(benchmark::State& state, std::size_t n) {
 void BM_Fprd(benchmark::State& state) {
     const auto n = static_cast<std::size_t>(state.range(0));
     Line line(n);
-    Frame f({{esc::Command::FPRD, 0x1001u | (0x0130u << 16), 2}});
+    Frame f({{protocol::Command::FPRD, 0x1001u | (0x0130u << 16), 2}});
     for (auto _ : state)
         benchmark::DoNotOptimize(f.run(*line.seg, line.now));
     per_slave(state, n);
@@ -109,7 +110,7 @@ BENCHMARK(BM_Fprd)->Arg(1)->Arg(10)->Arg(100);
 void BM_Lrw32(benchmark::State& state) {
     const auto n = static_cast<std::size_t>(state.range(0));
     Line line(n);
-    Frame f({{esc::Command::LRW, 0x00010000, 32}});
+    Frame f({{protocol::Command::LRW, 0x00010000, 32}});
     std::memcpy(f.data(0), line.m->outputs(0).data(),
                 std::min<std::size_t>(32, line.m->process_image_size()));
     for (auto _ : state)
@@ -128,9 +129,9 @@ std::vector<Frame> cyclic_frames(Line& line) {
         const std::uint32_t laddr = 0x00010000u + static_cast<std::uint32_t>(off);
         if (off == 0)
             frames.emplace_back(
-                Frame({{esc::Command::LRW, laddr, k}, {esc::Command::FRMW, kFrmwAddress, 8}}));
+                Frame({{protocol::Command::LRW, laddr, k}, {protocol::Command::FRMW, kFrmwAddress, 8}}));
         else
-            frames.emplace_back(Frame({{esc::Command::LRW, laddr, k}}));
+            frames.emplace_back(Frame({{protocol::Command::LRW, laddr, k}}));
         std::memcpy(frames.back().data(0), line.m->outputs(0).data() + off, k);
     }
     return frames;

@@ -7,7 +7,7 @@
 #include "cia402/drive.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
-#include "net/in_process_link.hpp"
+#include "serve/in_process_link.hpp"
 
 namespace {
 
@@ -19,7 +19,7 @@ struct PreOpDrive {
     master::Master m{link};
     PreOpDrive() {
         link.set_time(1'000'000'000);
-        if (!m.startup(esc::AlState::PreOp)) throw std::runtime_error("start-up failed");
+        if (!m.startup(protocol::AlState::PreOp)) throw std::runtime_error("start-up failed");
     }
 };
 

@@ -5,7 +5,7 @@
 include(CMakePackageConfigHelpers)
 
 set(VECAT_INSTALL_LIBS vecat_common vecat_protocol vecat_device vecat_esc vecat_coe vecat_twinsync vecat_motion vecat_cia402
-                       vecat_net vecat_faults vecat_master vecat_telemetry vecat_testing vecat_esi)
+                       vecat_net vecat_serve vecat_faults vecat_master vecat_telemetry vecat_testing vecat_esi)
 if(VECAT_TELEMETRY)
   list(APPEND VECAT_INSTALL_LIBS vecat_telemetry_idl)
 endif()
@@ -44,8 +44,8 @@ if(VECAT_TELEMETRY)
 else()
   set(VECAT_PC_REQUIRES "fmt yaml-cpp pugixml libcap")
 endif()
-string(APPEND VECAT_PC_LIBS " -lvecat_cia402 -lvecat_motion -lvecat_twinsync -lvecat_coe -lvecat_net -lvecat_esc"
-                            " -lvecat_device -pthread")
+string(APPEND VECAT_PC_LIBS " -lvecat_cia402 -lvecat_motion -lvecat_twinsync -lvecat_coe -lvecat_serve -lvecat_net -lvecat_esc"
+                            " -lvecat_device -lvecat_protocol -pthread")
 # The prefix relative to the .pc file, so that the file is right wherever the tree is installed (--prefix).
 file(RELATIVE_PATH VECAT_PC_TO_PREFIX /root/${CMAKE_INSTALL_LIBDIR}/pkgconfig /root)
 configure_file(${PROJECT_SOURCE_DIR}/cmake/vecat.pc.in ${PROJECT_BINARY_DIR}/vecat.pc @ONLY)

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <iterator>
 
-#include "esc/sii_image.hpp"
+#include "protocol/sii.hpp"
 
 namespace vecat::esi {
 namespace {
@@ -18,8 +18,8 @@ std::string quote(const std::string& s) {
     return q + "'";
 }
 
-void check_pdos(const char* what, const std::vector<device::Pdo>& esi, const std::vector<esc::SiiPdo>& sii,
-                std::vector<std::string>& out) {
+void check_pdos(const char* what, const std::vector<device::Pdo>& esi,
+                const std::vector<protocol::SiiPdo>& sii, std::vector<std::string>& out) {
     if (esi.size() != sii.size())
         out.push_back(fmt::format("{}: ESI has {} PDOs, SII {}", what, esi.size(), sii.size()));
     for (std::size_t i = 0; i < std::min(esi.size(), sii.size()); ++i) {
@@ -53,7 +53,7 @@ struct Region {
 // The categories of an image and where their data lie.
 std::vector<Region> regions(const std::vector<std::uint8_t>& img) {
     std::vector<Region> out;
-    std::size_t pos = 2 * esc::sii::FirstCategory;
+    std::size_t pos = 2 * protocol::sii::FirstCategory;
     while (pos + 4 <= img.size()) {
         const std::uint16_t type = ld_le16(img.data() + pos);
         const std::size_t words = ld_le16(img.data() + pos + 2);
@@ -199,12 +199,12 @@ std::vector<SiiByteDiff> diff_sii(const std::vector<std::uint8_t>& gen,
     for (std::size_t i = 0; i < common; ++i) {
         if (gen[i] == ref[i]) continue;
         SiiByteDiff d{i, gen[i], ref[i], {}, {}};
-        if (i < 2 * esc::sii::FirstCategory) {
+        if (i < 2 * protocol::sii::FirstCategory) {
             const std::size_t w = i / 2;
             d.where = fmt::format("word 0x{:02X} {}", w, header_word_name(w));
-            if (w == esc::sii::Checksum)
+            if (w == protocol::sii::Checksum)
                 d.why = "checksum over words 0..6, which differ";
-            else if (w == esc::sii::Size)
+            else if (w == protocol::sii::Size)
                 d.why = fmt::format("EEPROM size: generated image {} bytes, reference {} bytes", gen.size(),
                                     ref.size());
             else
@@ -261,7 +261,7 @@ bool validate_with_xmllint(const std::string& file, const std::string& xsd, std:
 std::vector<std::string> check_consistency(const device::DeviceDescription& d,
                                            const std::vector<std::uint8_t>& image) {
     std::vector<std::string> out;
-    const auto sii = esc::parse_sii(ConstBytes(image.data(), image.size()));
+    const auto sii = protocol::parse_sii(ConstBytes(image.data(), image.size()));
     for (const auto& e : sii.errors)
         out.push_back("SII: " + e);
     auto cmp = [&](const char* what, std::uint32_t esi, std::uint32_t s) {

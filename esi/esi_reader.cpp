@@ -10,8 +10,8 @@
 #include <set>
 #include <sstream>
 
-#include "esc/registers.hpp"
 #include "esc/sii_image.hpp"
+#include "protocol/registers.hpp"
 
 namespace vecat::esi {
 namespace {
@@ -450,15 +450,15 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
         d.sync_managers.push_back(c);
     }
     // An ESC has at most 16 SyncManagers and 16 FMMUs: the rest of a longer list does not exist.
-    if (d.sync_managers.size() > esc::kMaxSms) {
+    if (d.sync_managers.size() > protocol::kMaxSms) {
         notes.push_back(fmt::format("{} Sm elements: an ESC has {} SyncManagers, the rest is left out",
-                                    d.sync_managers.size(), esc::kMaxSms));
-        d.sync_managers.resize(esc::kMaxSms);
+                                    d.sync_managers.size(), protocol::kMaxSms));
+        d.sync_managers.resize(protocol::kMaxSms);
     }
-    if (d.fmmus.size() > esc::kMaxFmmus) {
+    if (d.fmmus.size() > protocol::kMaxFmmus) {
         notes.push_back(fmt::format("{} Fmmu elements: an ESC has {} FMMUs, the rest is left out",
-                                    d.fmmus.size(), esc::kMaxFmmus));
-        d.fmmus.resize(esc::kMaxFmmus);
+                                    d.fmmus.size(), protocol::kMaxFmmus));
+        d.fmmus.resize(protocol::kMaxFmmus);
     }
 
     for (auto p : dev.children("RxPdo"))

@@ -339,10 +339,10 @@ std::string write_esi(const device::DeviceDescription& d) {
     auto ee = dev.append_child("Eeprom");
     text(ee, "ByteSize", d.eeprom_size_bytes);
     std::vector<std::uint8_t> cfg(14, 0);
-    st_le16(cfg.data() + 2 * esc::sii::PdiControl, d.pdi_control);
-    st_le16(cfg.data() + 2 * esc::sii::PdiConfig, d.pdi_config);
-    st_le16(cfg.data() + 2 * esc::sii::SyncImpulseLen, d.sync_impulse_len);
-    st_le16(cfg.data() + 2 * esc::sii::StationAlias, d.station_alias);
+    st_le16(cfg.data() + 2 * protocol::sii::PdiControl, d.pdi_control);
+    st_le16(cfg.data() + 2 * protocol::sii::PdiConfig, d.pdi_config);
+    st_le16(cfg.data() + 2 * protocol::sii::SyncImpulseLen, d.sync_impulse_len);
+    st_le16(cfg.data() + 2 * protocol::sii::StationAlias, d.station_alias);
     text(ee, "ConfigData", hex_bytes(cfg));
     const auto* mo = d.sm_of_type(device::SmType::MailboxOut);
     const auto* mi = d.sm_of_type(device::SmType::MailboxIn);

@@ -8,7 +8,7 @@
 
 #include "cia402/drive.hpp"
 #include "master/master.hpp"
-#include "net/in_process_link.hpp"
+#include "serve/in_process_link.hpp"
 
 using namespace vecat;
 
@@ -26,7 +26,7 @@ int main() {
 
     // The whole start-up sequence: station addresses, SII, mailboxes, PDO sizes over CoE, INIT -> OP.
     std::string why;
-    if (!master.startup(esc::AlState::Op, &why)) {
+    if (!master.startup(protocol::AlState::Op, &why)) {
         std::printf("start-up failed: %s\n", why.c_str());
         return 1;
     }

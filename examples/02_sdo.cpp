@@ -9,7 +9,7 @@ using namespace vecat;
 
 int main() {
     // One drive, stopped in PREOP (mailbox running, no process data yet).
-    testing::VirtualSegment vs({.drives = 1, .target = esc::AlState::PreOp});
+    testing::VirtualSegment vs({.drives = 1, .target = protocol::AlState::PreOp});
     master::CoeClient coe(vs.master(), vs.station(0));
 
     // Upload: the device name 0x1008 (a string, longer than 4 bytes: a normal transfer).

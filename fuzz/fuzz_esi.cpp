@@ -26,7 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     auto& d = r.desc;
     auto img = esc::build_sii_image(d);
     VECAT_FUZZ_CHECK(img.size() == d.eeprom_size_bytes);
-    const auto info = esc::parse_sii(ConstBytes(img.data(), img.size()));
+    const auto info = protocol::parse_sii(ConstBytes(img.data(), img.size()));
     VECAT_FUZZ_CHECK(info.checksum_ok);
     VECAT_FUZZ_CHECK(info.identity.vendor_id == d.identity.vendor_id);
     VECAT_FUZZ_CHECK(info.identity.product_code == d.identity.product_code);

@@ -18,15 +18,15 @@ namespace {
 
 constexpr std::size_t kSlaves = 2;
 
-bool auto_increment(esc::Command c) {
+bool auto_increment(protocol::Command c) {
     switch (c) {
-        case esc::Command::APRD:
-        case esc::Command::APWR:
-        case esc::Command::APRW:
-        case esc::Command::ARMW:
-        case esc::Command::BRD:
-        case esc::Command::BWR:
-        case esc::Command::BRW:
+        case protocol::Command::APRD:
+        case protocol::Command::APWR:
+        case protocol::Command::APRW:
+        case protocol::Command::ARMW:
+        case protocol::Command::BRD:
+        case protocol::Command::BWR:
+        case protocol::Command::BRW:
             return true;
         default:
             return false;
@@ -34,17 +34,18 @@ bool auto_increment(esc::Command c) {
 }
 
 void check_reply(ConstBytes in, ConstBytes out, std::size_t in_len, std::size_t out_len) {
-    VECAT_FUZZ_CHECK(out_len == std::max(in_len, esc::kMinEthFrame));
+    VECAT_FUZZ_CHECK(out_len == std::max(in_len, protocol::kMinEthFrame));
     // Ethernet header: only the "processed" bit of the source address is set.
-    for (std::size_t i = 0; i < esc::kEthHeaderSize; ++i)
+    for (std::size_t i = 0; i < protocol::kEthHeaderSize; ++i)
         VECAT_FUZZ_CHECK(out[i] == (i == 6 ? (in[i] | 0x02) : in[i]));
     for (std::size_t i = in_len; i < out_len; ++i)
         VECAT_FUZZ_CHECK(out[i] == 0);  // padding
-    const esc::ParsedFrame pf = esc::parse_frame(in.first(in_len));
-    if (pf.error != esc::FrameError::None) {
+    const protocol::ParsedFrame pf = protocol::parse_frame(in.first(in_len));
+    if (pf.error != protocol::FrameError::None) {
         // Passed unprocessed (other EtherCAT types).
-        VECAT_FUZZ_CHECK(std::equal(in.begin() + esc::kEthHeaderSize, in.begin() + static_cast<long>(in_len),
-                                    out.begin() + esc::kEthHeaderSize));
+        VECAT_FUZZ_CHECK(std::equal(in.begin() + protocol::kEthHeaderSize,
+                                    in.begin() + static_cast<long>(in_len),
+                                    out.begin() + protocol::kEthHeaderSize));
         return;
     }
     VECAT_FUZZ_CHECK(ld_le16(&in[pf.ecat_offset]) == ld_le16(&out[pf.ecat_offset]));
@@ -54,7 +55,7 @@ void check_reply(ConstBytes in, ConstBytes out, std::size_t in_len, std::size_t 
         const std::uint8_t* b = &out[o];
         VECAT_FUZZ_CHECK(a[0] == b[0] && a[1] == b[1]);      // command, index
         VECAT_FUZZ_CHECK(ld_le16(a + 6) == ld_le16(b + 6));  // length, circulating, more
-        const auto cmd = static_cast<esc::Command>(a[0]);
+        const auto cmd = static_cast<protocol::Command>(a[0]);
         const std::uint16_t adp_in = ld_le16(a + 2), adp_out = ld_le16(b + 2);
         if (auto_increment(cmd))
             VECAT_FUZZ_CHECK(adp_out == static_cast<std::uint16_t>(adp_in + kSlaves));
@@ -62,14 +63,15 @@ void check_reply(ConstBytes in, ConstBytes out, std::size_t in_len, std::size_t 
             VECAT_FUZZ_CHECK(adp_out == adp_in);
         VECAT_FUZZ_CHECK(ld_le16(a + 4) == ld_le16(b + 4));
         const std::size_t len = ld_le16(a + 6) & 0x07FF;
-        const std::uint16_t wkc_in = ld_le16(a + esc::kDatagramHeaderSize + len);
-        const std::uint16_t wkc_out = ld_le16(b + esc::kDatagramHeaderSize + len);
+        const std::uint16_t wkc_in = ld_le16(a + protocol::kDatagramHeaderSize + len);
+        const std::uint16_t wkc_out = ld_le16(b + protocol::kDatagramHeaderSize + len);
         const auto grown = static_cast<std::uint16_t>(wkc_out - wkc_in);
         VECAT_FUZZ_CHECK(grown <= 3 * kSlaves);
-        if (cmd == esc::Command::NOP || a[0] > static_cast<std::uint8_t>(esc::Command::FRMW)) {
+        if (cmd == protocol::Command::NOP || a[0] > static_cast<std::uint8_t>(protocol::Command::FRMW)) {
             VECAT_FUZZ_CHECK(grown == 0);
-            VECAT_FUZZ_CHECK(std::equal(a + esc::kDatagramHeaderSize, a + esc::kDatagramHeaderSize + len,
-                                        b + esc::kDatagramHeaderSize));
+            VECAT_FUZZ_CHECK(std::equal(a + protocol::kDatagramHeaderSize,
+                                        a + protocol::kDatagramHeaderSize + len,
+                                        b + protocol::kDatagramHeaderSize));
         }
     }
 }
@@ -83,15 +85,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     fuzz::Input in(data, size);
     std::vector<std::uint8_t> req, buf;
     while (!in.empty()) {
-        const ConstBytes f = in.chunk(esc::kMaxEthFrame);
+        const ConstBytes f = in.chunk(protocol::kMaxEthFrame);
         req.assign(f.begin(), f.end());
-        buf.assign(std::max(f.size(), esc::kMinEthFrame), 0);
+        buf.assign(std::max(f.size(), protocol::kMinEthFrame), 0);
         std::copy(f.begin(), f.end(), buf.begin());
         req.resize(buf.size(), 0);
         std::size_t len = f.size();
         const bool answered = seg->process_frame(Bytes(buf.data(), buf.size()), len, now);
-        const esc::ParsedFrame pf = esc::parse_frame(f);
-        const bool parsable = pf.error == esc::FrameError::None || pf.error == esc::FrameError::NotCommands;
+        const protocol::ParsedFrame pf = protocol::parse_frame(f);
+        const bool parsable =
+            pf.error == protocol::FrameError::None || pf.error == protocol::FrameError::NotCommands;
         VECAT_FUZZ_CHECK(answered == parsable);
         if (answered) check_reply(req, buf, f.size(), len);
         now += 100'000;

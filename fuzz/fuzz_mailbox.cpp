@@ -16,28 +16,29 @@
 #include <vector>
 
 #include "cia402/drive.hpp"
-#include "coe/coe_protocol.hpp"
 #include "esc/mailbox.hpp"
 #include "fuzz_support.hpp"
+#include "protocol/coe.hpp"
 
 using namespace vecat;
 
 namespace {
 
 void check_reply(ConstBytes r) {
-    const auto h = esc::parse_mailbox_header(r);
+    const auto h = protocol::parse_mailbox_header(r);
     VECAT_FUZZ_CHECK(h.has_value());
-    VECAT_FUZZ_CHECK(h->length <= r.size() - esc::kMailboxHeaderSize);
-    const auto type = static_cast<esc::MailboxType>(h->type);
-    VECAT_FUZZ_CHECK(type == esc::MailboxType::Error || type == esc::MailboxType::CoE);
-    if (type == esc::MailboxType::Error) {
+    VECAT_FUZZ_CHECK(h->length <= r.size() - protocol::kMailboxHeaderSize);
+    const auto type = static_cast<protocol::MailboxType>(h->type);
+    VECAT_FUZZ_CHECK(type == protocol::MailboxType::Error || type == protocol::MailboxType::CoE);
+    if (type == protocol::MailboxType::Error) {
         VECAT_FUZZ_CHECK(h->length >= 4 && ld_le16(&r[6]) == 0x0001);
         return;
     }
-    VECAT_FUZZ_CHECK(h->length >= coe::kCoeHeaderSize);
-    const auto service = coe::coe_service(ld_le16(&r[6]));
-    VECAT_FUZZ_CHECK(service == coe::CoeService::Emergency || service == coe::CoeService::SdoRequest ||
-                     service == coe::CoeService::SdoResponse || service == coe::CoeService::SdoInformation);
+    VECAT_FUZZ_CHECK(h->length >= protocol::kCoeHeaderSize);
+    const auto service = protocol::coe_service(ld_le16(&r[6]));
+    VECAT_FUZZ_CHECK(
+        service == protocol::CoeService::Emergency || service == protocol::CoeService::SdoRequest ||
+        service == protocol::CoeService::SdoResponse || service == protocol::CoeService::SdoInformation);
 }
 
 }  // namespace
@@ -70,24 +71,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             case 2: {
                 // The reply is checked when SM1 said "full" (otherwise the read sees plain memory).
                 std::uint8_t status = 0;
-                fuzz::transact(*seg, esc::Command::FPRD, st, esc::sm_addr(1) + esc::sm::Status,
+                fuzz::transact(*seg, protocol::Command::FPRD, st, protocol::sm_addr(1) + protocol::sm::Status,
                                Bytes(&status, 1), now);
                 buf.assign(sm1.length, 0);
-                const auto wkc = fuzz::transact(*seg, esc::Command::FPRD, st, sm1.start, buf, now);
-                if (wkc == 1 && (status & esc::sm::StatusMailboxFull)) check_reply(buf);
+                const auto wkc = fuzz::transact(*seg, protocol::Command::FPRD, st, sm1.start, buf, now);
+                if (wkc == 1 && (status & protocol::sm::StatusMailboxFull)) check_reply(buf);
                 break;
             }
             case 3: {
-                const std::uint16_t act = esc::sm_addr(1) + esc::sm::Activate;
+                const std::uint16_t act = protocol::sm_addr(1) + protocol::sm::Activate;
                 std::uint8_t v = 0;
-                fuzz::transact(*seg, esc::Command::FPRD, st, act, Bytes(&v, 1), now);
-                v ^= esc::sm::ActRepeatRequest;
+                fuzz::transact(*seg, protocol::Command::FPRD, st, act, Bytes(&v, 1), now);
+                v ^= protocol::sm::ActRepeatRequest;
                 fuzz::fpwr(*seg, st, act, ConstBytes(&v, 1), now);
                 break;
             }
             case 4: {
                 const std::uint8_t ctl[2] = {in.u8(), 0};
-                fuzz::fpwr(*seg, st, esc::addr(esc::Reg::AlControl), ConstBytes(ctl, 2), now);
+                fuzz::fpwr(*seg, st, protocol::addr(protocol::Reg::AlControl), ConstBytes(ctl, 2), now);
                 break;
             }
             case 5:

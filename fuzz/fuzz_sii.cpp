@@ -6,7 +6,8 @@
 //   2  read command at a 32-bit word address, then the data registers are checked against the EEPROM
 //   3  write command of one word (with or without write enable), checked against the EEPROM
 //   4  reload command
-//   5  parse the EEPROM image like a master (esc::parse_sii). parse_sii is a pure function of the image, so
+//   5  parse the EEPROM image like a master (protocol::parse_sii). parse_sii is a pure function of the image,
+//   so
 //      the image is parsed once, after the last step of an input that has a step 5, unless it is the
 //      pristine image (parsed once for all): an image seen earlier in an input is the last image of a
 //      shorter input (its prefix), which the fuzzer tries as well.
@@ -24,6 +25,7 @@
 
 using namespace vecat;
 using namespace vecat::esc;
+using namespace vecat::protocol;
 
 namespace {
 

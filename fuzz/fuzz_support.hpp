@@ -10,9 +10,9 @@
 
 #include "common/bytes.hpp"
 #include "device/device_description.hpp"
-#include "esc/datagram.hpp"
-#include "esc/registers.hpp"
 #include "esc/segment.hpp"
+#include "protocol/frame.hpp"
+#include "protocol/registers.hpp"
 
 namespace vecat::fuzz {
 
@@ -59,36 +59,38 @@ inline void put_chunk(std::vector<std::uint8_t>& out, ConstBytes c) {
 
 // One Ethernet frame with one datagram (as a master builds it), processed by the segment. Returns the
 // working counter; data receives what came back.
-inline std::uint16_t transact(esc::Segment& seg, esc::Command cmd, std::uint16_t adp, std::uint16_t ado,
+inline std::uint16_t transact(esc::Segment& seg, protocol::Command cmd, std::uint16_t adp, std::uint16_t ado,
                               Bytes data, std::uint64_t now_ns) {
     std::vector<std::uint8_t> f(
-        std::max<std::size_t>(esc::kMinEthFrame, esc::kEthHeaderSize + esc::kEcatHeaderSize +
-                                                     esc::kDatagramHeaderSize + data.size() + esc::kWkcSize),
+        std::max<std::size_t>(protocol::kMinEthFrame, protocol::kEthHeaderSize + protocol::kEcatHeaderSize +
+                                                          protocol::kDatagramHeaderSize + data.size() +
+                                                          protocol::kWkcSize),
         0);
     std::memset(f.data(), 0xFF, 6);
-    f[6] = 0x02;                                                      // locally administered master address
-    f[12] = static_cast<std::uint8_t>(esc::kEtherTypeEtherCat >> 8);  // EtherType is big-endian
-    f[13] = static_cast<std::uint8_t>(esc::kEtherTypeEtherCat & 0xFF);
+    f[6] = 0x02;  // locally administered master address
+    f[12] = static_cast<std::uint8_t>(protocol::kEtherTypeEtherCat >> 8);  // EtherType is big-endian
+    f[13] = static_cast<std::uint8_t>(protocol::kEtherTypeEtherCat & 0xFF);
     const std::size_t dlen = data.size();
-    st_le16(f.data() + 14, static_cast<std::uint16_t>((esc::kDatagramHeaderSize + dlen + esc::kWkcSize) |
-                                                      (esc::kEcatTypeCommands << 12)));
+    st_le16(f.data() + 14,
+            static_cast<std::uint16_t>((protocol::kDatagramHeaderSize + dlen + protocol::kWkcSize) |
+                                       (protocol::kEcatTypeCommands << 12)));
     std::uint8_t* d = f.data() + 16;
     d[0] = static_cast<std::uint8_t>(cmd);
     st_le16(d + 2, adp);
     st_le16(d + 4, ado);
     st_le16(d + 6, static_cast<std::uint16_t>(dlen));
-    std::memcpy(d + esc::kDatagramHeaderSize, data.data(), dlen);
-    std::size_t len =
-        esc::kEthHeaderSize + esc::kEcatHeaderSize + esc::kDatagramHeaderSize + dlen + esc::kWkcSize;
+    std::memcpy(d + protocol::kDatagramHeaderSize, data.data(), dlen);
+    std::size_t len = protocol::kEthHeaderSize + protocol::kEcatHeaderSize + protocol::kDatagramHeaderSize +
+                      dlen + protocol::kWkcSize;
     if (!seg.process_frame(Bytes(f.data(), f.size()), len, now_ns)) return 0;
-    std::memcpy(data.data(), d + esc::kDatagramHeaderSize, dlen);
-    return ld_le16(d + esc::kDatagramHeaderSize + dlen);
+    std::memcpy(data.data(), d + protocol::kDatagramHeaderSize, dlen);
+    return ld_le16(d + protocol::kDatagramHeaderSize + dlen);
 }
 
 inline std::uint16_t fpwr(esc::Segment& seg, std::uint16_t station, std::uint16_t ado, ConstBytes v,
                           std::uint64_t now_ns) {
     std::vector<std::uint8_t> b(v.begin(), v.end());
-    return transact(seg, esc::Command::FPWR, station, ado, Bytes(b.data(), b.size()), now_ns);
+    return transact(seg, protocol::Command::FPWR, station, ado, Bytes(b.data(), b.size()), now_ns);
 }
 
 inline constexpr std::uint16_t kFirstStation = 0x1001;
@@ -99,8 +101,8 @@ inline bool bring_to_preop(esc::Segment& seg, const device::DeviceDescription& d
     for (std::size_t i = 0; i < seg.size(); ++i) {
         std::uint8_t a[2];
         st_le16(a, static_cast<std::uint16_t>(kFirstStation + i));
-        transact(seg, esc::Command::APWR, static_cast<std::uint16_t>(-static_cast<int>(i)),
-                 esc::addr(esc::Reg::StationAddress), Bytes(a, 2), now_ns);
+        transact(seg, protocol::Command::APWR, static_cast<std::uint16_t>(-static_cast<int>(i)),
+                 protocol::addr(protocol::Reg::StationAddress), Bytes(a, 2), now_ns);
     }
     for (std::size_t i = 0; i < seg.size(); ++i) {
         const auto station = static_cast<std::uint16_t>(kFirstStation + i);
@@ -111,16 +113,16 @@ inline bool bring_to_preop(esc::Segment& seg, const device::DeviceDescription& d
             st_le16(r + 2, c.length);
             r[4] = c.control;
             r[6] = 0x01;  // enable
-            fpwr(seg, station, static_cast<std::uint16_t>(esc::addr(esc::Reg::Sm0) + 8 * sm),
+            fpwr(seg, station, static_cast<std::uint16_t>(protocol::addr(protocol::Reg::Sm0) + 8 * sm),
                  ConstBytes(r, 8), now_ns);
         }
-        const std::uint8_t ctl[2] = {static_cast<std::uint8_t>(esc::AlState::PreOp), 0};
-        fpwr(seg, station, esc::addr(esc::Reg::AlControl), ConstBytes(ctl, 2), now_ns);
+        const std::uint8_t ctl[2] = {static_cast<std::uint8_t>(protocol::AlState::PreOp), 0};
+        fpwr(seg, station, protocol::addr(protocol::Reg::AlControl), ConstBytes(ctl, 2), now_ns);
     }
     now_ns += 1'000'000;
     seg.tick(now_ns);
     for (std::size_t i = 0; i < seg.size(); ++i)
-        if (seg.slave(i).state() != esc::AlState::PreOp) return false;
+        if (seg.slave(i).state() != protocol::AlState::PreOp) return false;
     return true;
 }
 

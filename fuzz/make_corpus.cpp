@@ -15,7 +15,7 @@
 #include "fuzz_support.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
-#include "net/in_process_link.hpp"
+#include "serve/in_process_link.hpp"
 
 using namespace vecat;
 namespace fs = std::filesystem;
@@ -63,20 +63,20 @@ Seed mailbox_seed(const std::vector<Seed>& frames, const device::DeviceDescripti
     const auto sm0 = d.sync_managers.at(0), sm1 = d.sync_managers.at(1);
     Seed s;
     for (const auto& f : frames) {
-        const auto pf = esc::parse_frame(f);
-        if (pf.error != esc::FrameError::None) continue;
+        const auto pf = protocol::parse_frame(f);
+        if (pf.error != protocol::FrameError::None) continue;
         for (std::size_t i = 0; i < pf.count; ++i) {
             const std::uint8_t* h = f.data() + pf.offsets[i];
-            const auto cmd = static_cast<esc::Command>(h[0]);
+            const auto cmd = static_cast<protocol::Command>(h[0]);
             const std::uint16_t ado = ld_le16(h + 4);
             const std::size_t len = ld_le16(h + 6) & 0x07FF;
-            if (cmd == esc::Command::FPWR && ado == sm0.start && len == sm0.length) {
+            if (cmd == protocol::Command::FPWR && ado == sm0.start && len == sm0.length) {
                 // Only the message itself: the fuzz target pads it to the SM length.
                 const std::size_t used =
-                    std::min<std::size_t>(len, esc::kMailboxHeaderSize + ld_le16(h + 10));
+                    std::min<std::size_t>(len, protocol::kMailboxHeaderSize + ld_le16(h + 10));
                 s.push_back(0);
-                fuzz::put_chunk(s, ConstBytes(h + esc::kDatagramHeaderSize, used));
-            } else if (cmd == esc::Command::FPRD && ado == sm1.start && len == sm1.length) {
+                fuzz::put_chunk(s, ConstBytes(h + protocol::kDatagramHeaderSize, used));
+            } else if (cmd == protocol::Command::FPRD && ado == sm1.start && len == sm1.length) {
                 s.push_back(2);
             }
         }
@@ -139,7 +139,7 @@ int main(int argc, char** argv) {
     RecordingLink link(*seg);
     master::Master m(link);
     std::string why;
-    if (!m.startup(esc::AlState::PreOp, &why)) {
+    if (!m.startup(protocol::AlState::PreOp, &why)) {
         std::fprintf(stderr, "start-up failed: %s\n", why.c_str());
         return 1;
     }
@@ -167,8 +167,8 @@ int main(int argc, char** argv) {
             const std::uint8_t v[5] = {2, 0x00, 0x16, 0x01, 0x16};
             coe.download(0x1C12, 0, ConstBytes(v, 5), true);
         },
-        [&] { coe.od_list(coe::sdo_info::ListAll); },
-        [&] { coe.od_list(coe::sdo_info::ListLengths); },
+        [&] { coe.od_list(protocol::sdo_info::ListAll); },
+        [&] { coe.od_list(protocol::sdo_info::ListLengths); },
         [&] { coe.object_description(0x1018); },
         [&] { coe.entry_description(0x6040, 0, 0x78); },
         [&] { coe.entry_description(0x1018, 9, 0x78); },
@@ -180,10 +180,10 @@ int main(int argc, char** argv) {
         frame_seeds(out / "frame", link.frames, nf);
     }
     link.frames.clear();
-    if (m.request_state(esc::AlState::SafeOp) && m.request_state(esc::AlState::Op))
+    if (m.request_state(protocol::AlState::SafeOp) && m.request_state(protocol::AlState::Op))
         for (int i = 0; i < 20; ++i)
             m.exchange_process_data();
-    m.request_state(esc::AlState::Init);
+    m.request_state(protocol::AlState::Init);
     frame_seeds(out / "frame", link.frames, nf);
 
     sii_seeds(out / "sii", ns);

@@ -9,10 +9,10 @@
 
 #include "coe/coe_application.hpp"
 #include "device/device_description.hpp"
-#include "esc/registers.hpp"
 #include "esc/segment.hpp"
 #include "master/master.hpp"
-#include "net/in_process_link.hpp"
+#include "protocol/registers.hpp"
+#include "serve/in_process_link.hpp"
 
 namespace vecat::test {
 
@@ -60,8 +60,8 @@ inline std::string run_capture(const std::string& cmd) {
     return out;
 }
 
-inline std::uint16_t reg(esc::Reg r) {
-    return esc::addr(r);
+inline std::uint16_t reg(protocol::Reg r) {
+    return protocol::addr(r);
 }
 
 // One datagram sent through a segment as a raw frame; what came back.

@@ -29,12 +29,12 @@
 #include <vector>
 
 #include "cia402/drive.hpp"
-#include "esc/registers.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
-#include "net/server.hpp"
+#include "protocol/registers.hpp"
+#include "serve/server.hpp"
 
 using namespace vecat;
 
@@ -150,9 +150,9 @@ struct ReflectorFrames {
     bool exchange(master::Master& r) {
         for (std::size_t c = 0; c < lrw.size(); ++c) {
             master::DatagramRequest dg[2] = {
-                {esc::Command::LRW, 0x00010000, Bytes(lrw[c].data(), lrw[c].size())},
-                {esc::Command::FRMW,
-                 0x1001u | (static_cast<std::uint32_t>(esc::addr(esc::Reg::DcSystemTime)) << 16),
+                {protocol::Command::LRW, 0x00010000, Bytes(lrw[c].data(), lrw[c].size())},
+                {protocol::Command::FRMW,
+                 0x1001u | (static_cast<std::uint32_t>(protocol::addr(protocol::Reg::DcSystemTime)) << 16),
                  Bytes(time.data(), time.size())}};
             const std::size_t k = (c == 0 && frmw) ? 2 : 1;
             if (!r.transact_frame(std::span<master::DatagramRequest>(dg, k))) return false;
@@ -273,7 +273,7 @@ int run(const Options& o) {
         std::string(o.busy ? "busy-poll" : "blocking") + (o.rx_ring ? " (RX ring)" : ""),
         cpu.master >= 0 ? fmt::format(", master on CPU {}, servers on CPU {}", cpu.master, cpu.server) : "",
         o.fifo ? fmt::format(", SCHED_FIFO {}", o.fifo) : "", o.mlock ? ", memory locked" : "");
-    if (!m.startup(esc::AlState::Op, &why)) {
+    if (!m.startup(protocol::AlState::Op, &why)) {
         fmt::print(stderr, "vecat-roundtrip: start-up failed: {}\n", why);
         rc = 1;
     } else {

@@ -267,7 +267,8 @@ Drive::Drive(const device::DeviceDescription& d,
     if (o_->simulated_fault)
         o_->simulated_fault->hooks().on_download = [](const Entry&, ConstBytes v) {
             const std::uint16_t code = v.size() >= 2 ? ld_le16(v.data()) : 0;
-            return (code == 0 || fault::injectable(code)) ? coe::SdoAbort::None : coe::SdoAbort::ValueRange;
+            return (code == 0 || fault::injectable(code)) ? protocol::SdoAbort::None
+                                                          : protocol::SdoAbort::ValueRange;
         };
     if (o_->compensation_start)
         o_->compensation_start->hooks().after_download = [this](Entry& e) {

@@ -17,7 +17,6 @@
 #include "cia402/drive.hpp"
 #include "cia402/profile_generator.hpp"
 #include "cli/telemetry_commands.hpp"
-#include "coe/coe_protocol.hpp"
 #include "common/bytes.hpp"
 #include "device/device_description.hpp"
 #include "esc/segment.hpp"
@@ -30,12 +29,13 @@
 #include "net/pcapng_writer.hpp"
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
-#include "net/server.hpp"
+#include "protocol/coe.hpp"
+#include "serve/server.hpp"
 
 namespace vecat::cli {
 namespace {
 
-using esc::AlState;
+using protocol::AlState;
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
@@ -267,7 +267,7 @@ void Demo::status_line(bool force) {
     // In place on a terminal ten times a second; a plain line every second into a pipe or file.
     if (!force && now - last_status_ < (tty_ ? milliseconds(100) : milliseconds(1000))) return;
     last_status_ = now;
-    std::string s = fmt::format("  [{}] {}", phase_, esc::to_string(al_));
+    std::string s = fmt::format("  [{}] {}", phase_, protocol::to_string(al_));
     for (std::size_t i = 0; i < axes_.size() && i < 2; ++i)
         s += fmt::format(" | d{} {} {}", i + 1, to_string(axes_[i].state()), axes_[i].position);
     if (axes_.size() > 2) s += fmt::format(" | +{} drives", axes_.size() - 2);
@@ -362,7 +362,7 @@ bool Demo::sdo(std::size_t slave, std::uint16_t index, std::uint8_t sub, std::ui
     const auto r = c.download(index, sub, ConstBytes(b, bytes));
     if (r.ok()) return true;
     return fail(fmt::format("slave {}: SDO download 0x{:04X}:{:02X} = 0x{:X}: {}", slave, index, sub, value,
-                            r.transport_ok ? std::string(coe::describe(r.abort)) : "no reply"));
+                            r.transport_ok ? std::string(protocol::describe(r.abort)) : "no reply"));
 }
 
 // ---- Phases
@@ -378,7 +378,7 @@ bool Demo::scan() {
             "{} SMs, DC {}",
             s.position, s.station, s.sii.device_name(), s.sii.identity.vendor_id, s.sii.identity.product_code,
             s.sii.identity.revision, s.fmmu_count, s.sm_count,
-            (s.features & esc::feature::DcAvailable) ? "yes" : "no");
+            (s.features & protocol::feature::DcAvailable) ? "yes" : "no");
     axes_.assign(master_.slaves().size(), Axis{});
     return true;
 }
@@ -461,7 +461,7 @@ bool Demo::dc() {
     if (!diff) return fail("interrupted");
     dc_difference_ns_ = *diff;
     for (const auto& s : master_.slaves())
-        if ((s.features & esc::feature::DcAvailable) && !master_.start_sync(s.station, kCycleNs, 0))
+        if ((s.features & protocol::feature::DcAvailable) && !master_.start_sync(s.station, kCycleNs, 0))
             return fail(fmt::format("slave {}: SYNC0 could not be started", s.position));
     note(
         "       {} FRMW frames; largest system time difference 0x092C: {} ns; SYNC0 every {} us from 100 ms "
@@ -673,7 +673,7 @@ bool Demo::fault() {
             const auto msg = c.receive(milliseconds(0));
             if (!msg) break;
             if (msg->payload.size() >= 10 &&
-                coe::coe_service(ld_le16(msg->payload.data())) == coe::CoeService::Emergency)
+                protocol::coe_service(ld_le16(msg->payload.data())) == protocol::CoeService::Emergency)
                 note("       drive {}: emergency 0x{:04X}, error register 0x{:02X}", i + 1,
                      ld_le16(msg->payload.data() + 2), msg->payload[4]);
         }
@@ -762,7 +762,7 @@ void Demo::shut_down() {
     dc_running_ = false;
     if (al_ != AlState::Init && master_.request_state(AlState::Init, milliseconds(1000)))
         set_al(AlState::Init);
-    note("       drives disabled, line {}", esc::to_string(al_));
+    note("       drives disabled, line {}", protocol::to_string(al_));
 }
 
 void Demo::stop_server() {

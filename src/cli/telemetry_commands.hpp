@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "esc/segment.hpp"
-#include "net/server.hpp"
+#include "serve/server.hpp"
 
 namespace vecat::cli {
 

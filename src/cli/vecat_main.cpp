@@ -29,7 +29,7 @@
 #include "net/privileges.hpp"
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
-#include "net/server.hpp"
+#include "serve/server.hpp"
 
 namespace {
 

@@ -50,14 +50,14 @@ void CoeApplication::clear_faults() {
     sdo_->emergency({emcy::ErrorReset, 0, {}});
 }
 
-esc::AlStatusCode CoeApplication::check_transition(AlState from, AlState to) {
+protocol::AlStatusCode CoeApplication::check_transition(AlState from, AlState to) {
     requested_ = to;
     if (from == AlState::PreOp && to == AlState::SafeOp) {
         const auto code = map_->validate();
-        return code != esc::AlStatusCode::NoError ? code : sync_->check_safeop();
+        return code != protocol::AlStatusCode::NoError ? code : sync_->check_safeop();
     }
     if (from == AlState::SafeOp && to == AlState::Op) return sync_->check_op();
-    return esc::AlStatusCode::NoError;
+    return protocol::AlStatusCode::NoError;
 }
 
 void CoeApplication::on_state_change(AlState from, AlState to) {
@@ -95,15 +95,15 @@ bool CoeApplication::refresh_inputs(Bytes inputs) {
     return true;
 }
 
-void CoeApplication::on_al_error(esc::AlStatusCode code) {
-    if (code == esc::AlStatusCode::NoError) {
+void CoeApplication::on_al_error(protocol::AlStatusCode code) {
+    if (code == protocol::AlStatusCode::NoError) {
         // Acknowledged: the communication error is gone.
         if (error_register_ && (error_register_->get<std::uint8_t>() & error_register::Communication))
             clear_faults();
         return;
     }
     std::uint16_t e = emcy::Communication;
-    if (code == esc::AlStatusCode::SyncManagerWatchdog)
+    if (code == protocol::AlStatusCode::SyncManagerWatchdog)
         e = emcy::LifeGuard;
     else if (requested_ == AlState::SafeOp)
         e = emcy::PreOpToSafeOp;
@@ -140,8 +140,8 @@ void CoeApplication::outputs_safe_state() {
         if (f.entry) f.entry->assign(ConstBytes(kZeros, std::min<std::size_t>(8, f.entry->capacity())));
 }
 
-esc::MailboxProtocol* CoeApplication::mailbox_protocol(esc::MailboxType t) {
-    return t == esc::MailboxType::CoE ? sdo_.get() : nullptr;
+esc::MailboxProtocol* CoeApplication::mailbox_protocol(protocol::MailboxType t) {
+    return t == protocol::MailboxType::CoE ? sdo_.get() : nullptr;
 }
 
 std::unique_ptr<esc::Segment> make_coe_segment(const device::DeviceDescription& d, std::size_t n,

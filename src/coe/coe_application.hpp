@@ -62,12 +62,12 @@ class CoeApplication : public esc::Application {
     // esc::Application
     unsigned output_bytes() const override { return map_->output_bytes(); }
     unsigned input_bytes() const override { return map_->input_bytes(); }
-    esc::AlStatusCode check_transition(AlState from, AlState to) override;
+    protocol::AlStatusCode check_transition(AlState from, AlState to) override;
     void on_state_change(AlState from, AlState to) override;
-    void on_al_error(esc::AlStatusCode code) override;
+    void on_al_error(protocol::AlStatusCode code) override;
     void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply_outputs, Bytes inputs) override;
     void outputs_safe_state() override;
-    esc::MailboxProtocol* mailbox_protocol(esc::MailboxType t) override;
+    esc::MailboxProtocol* mailbox_protocol(protocol::MailboxType t) override;
     void tick(std::uint64_t now_ns) override;
     void sync_event(unsigned signal, std::uint64_t now_ns) override;
     bool refresh_inputs(Bytes inputs) override;

@@ -12,16 +12,17 @@
 #include <type_traits>
 #include <vector>
 
-#include "coe/sdo_abort.hpp"
 #include "common/bytes.hpp"
 #include "device/object_description.hpp"
-#include "esc/al_status.hpp"
+#include "protocol/al_status.hpp"
+#include "protocol/sdo_abort.hpp"
 
 namespace vecat::coe {
 
 using device::DataType;
 using device::ObjectCode;
-using esc::AlState;
+using protocol::AlState;
+using protocol::SdoAbort;
 
 // An entry refers to its description, which the dictionary keeps (shared by every dictionary built from
 // the same descriptions: a segment of many drives, or a fuzz target building a drive per input, does not

@@ -213,8 +213,8 @@ ProcessDataMap::Plan ProcessDataMap::make_plan(const std::vector<MappedField>& f
         for (const auto& f : fields) {
             if (!f.entry) continue;  // a gap: nothing to copy
             const unsigned size = f.bits / 8u;
-            if (f.bit_offset % 8 != 0 || f.bits % 8 != 0 || (size != 1 && size != 2 && size != 4 && size != 8) ||
-                f.entry->storage().size() < size)
+            if (f.bit_offset % 8 != 0 || f.bits % 8 != 0 ||
+                (size != 1 && size != 2 && size != 4 && size != 8) || f.entry->storage().size() < size)
                 return Plan{};
             if (size == n) p.fields.push_back({f.entry->storage().data(), f.bit_offset / 8u});
         }
@@ -241,10 +241,10 @@ void ProcessDataMap::run_plan(const Plan& p, ImagePtr<ToImage> image) {
     group.template operator()<8>(3);
 }
 
-esc::AlStatusCode ProcessDataMap::validate() const {
-    if (!out_valid_) return esc::AlStatusCode::InvalidOutputMapping;
-    if (!in_valid_) return esc::AlStatusCode::InvalidInputMapping;
-    return esc::AlStatusCode::NoError;
+protocol::AlStatusCode ProcessDataMap::validate() const {
+    if (!out_valid_) return protocol::AlStatusCode::InvalidOutputMapping;
+    if (!in_valid_) return protocol::AlStatusCode::InvalidInputMapping;
+    return protocol::AlStatusCode::NoError;
 }
 
 void ProcessDataMap::copy_outputs(ConstBytes image) {

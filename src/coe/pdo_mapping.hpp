@@ -10,7 +10,7 @@
 #include "coe/object_dictionary.hpp"
 #include "common/bytes.hpp"
 #include "device/device_description.hpp"
-#include "esc/al_status.hpp"
+#include "protocol/al_status.hpp"
 
 namespace vecat::coe {
 
@@ -50,7 +50,7 @@ class ProcessDataMap {
     const std::vector<MappedField>& inputs() const { return in_; }
 
     // NoError, or 0x0024/0x0025 when the current mapping cannot be used (checked at PREOP -> SAFEOP).
-    esc::AlStatusCode validate() const;
+    protocol::AlStatusCode validate() const;
 
     // Copies received outputs into the mapped entries, and the mapped entries into the inputs image.
     void copy_outputs(ConstBytes image);
@@ -86,7 +86,7 @@ class ProcessDataMap {
     };
     struct Plan {
         bool ok = false;
-        std::vector<FastField> fields;        // 1-byte fields first, then 2, 4 and 8
+        std::vector<FastField> fields;       // 1-byte fields first, then 2, 4 and 8
         std::array<std::uint32_t, 5> end{};  // end[k + 1]: end of the fields of 1 << k bytes; end[0] = 0
     };
     template <bool ToImage>

@@ -3,11 +3,22 @@
 #include <algorithm>
 
 namespace vecat::coe {
+
+using protocol::coe_header;
+using protocol::coe_service;
+using protocol::CoeService;
+using protocol::Emergency;
+using protocol::kCoeHeaderSize;
+using protocol::kSdoHeaderSize;
+using protocol::kSdoInfoHeaderSize;
+using protocol::MailboxError;
+using protocol::MailboxType;
+namespace sdo = protocol::sdo;
+namespace sdo_info = protocol::sdo_info;
+
 namespace {
 
-using esc::MailboxError;
 using esc::MailboxReplySink;
-using esc::MailboxType;
 
 // Writes the fields of a reply payload into the sink's buffer; every write is bounds-checked.
 class Reply : public LeWriter<SpanSink> {
@@ -23,7 +34,7 @@ class Reply : public LeWriter<SpanSink> {
 };
 
 void mailbox_error(MailboxError e, MailboxReplySink& out) {
-    const std::size_t n = esc::make_mailbox_error(out.reply_buffer(), e);
+    const std::size_t n = protocol::make_mailbox_error(out.reply_buffer(), e);
     out.commit(MailboxType::Error, n);
 }
 
@@ -111,7 +122,7 @@ void SdoServer::poll(MailboxReplySink& out) {
     }
 }
 
-void SdoServer::handle(const esc::MailboxHeader&, ConstBytes p, MailboxReplySink& out) {
+void SdoServer::handle(const protocol::MailboxHeader&, ConstBytes p, MailboxReplySink& out) {
     if (p.size() < kCoeHeaderSize) {
         mailbox_error(MailboxError::SizeTooShort, out);
         return;

@@ -7,17 +7,11 @@
 #include <functional>
 #include <vector>
 
-#include "coe/coe_protocol.hpp"
 #include "coe/object_dictionary.hpp"
 #include "esc/mailbox.hpp"
+#include "protocol/coe.hpp"
 
 namespace vecat::coe {
-
-struct Emergency {
-    std::uint16_t error_code = 0;
-    std::uint8_t error_register = 0;
-    std::array<std::uint8_t, 5> data{};
-};
 
 struct CoeCounters {
     std::uint64_t sdo_uploads = 0;
@@ -34,13 +28,13 @@ class SdoServer final : public esc::MailboxProtocol {
     // state tells the current AL state (access rights depend on it).
     SdoServer(ObjectDictionary& od, std::function<AlState()> state);
 
-    esc::MailboxType type() const override { return esc::MailboxType::CoE; }
-    void handle(const esc::MailboxHeader& h, ConstBytes payload, esc::MailboxReplySink& out) override;
+    protocol::MailboxType type() const override { return protocol::MailboxType::CoE; }
+    void handle(const protocol::MailboxHeader& h, ConstBytes payload, esc::MailboxReplySink& out) override;
     void poll(esc::MailboxReplySink& out) override;
     void reset() override;
 
     // Queues an emergency (sent when the reply mailbox is free). False when the queue is full.
-    bool emergency(const Emergency& e);
+    bool emergency(const protocol::Emergency& e);
     const CoeCounters& counters() const { return counters_; }
     bool transfer_in_progress() const { return up_.active || down_.active || info_.active; }
 
@@ -93,7 +87,7 @@ class SdoServer final : public esc::MailboxProtocol {
     } info_;
     std::vector<std::uint8_t> info_buf_;
 
-    std::array<Emergency, kEmergencySlots> emcy_{};
+    std::array<protocol::Emergency, kEmergencySlots> emcy_{};
     std::size_t emcy_head_ = 0, emcy_count_ = 0;
     CoeCounters counters_;
 };

@@ -2,12 +2,12 @@
 
 #include <algorithm>
 
-#include "esc/registers.hpp"
+#include "protocol/registers.hpp"
 
 namespace vecat::coe {
 
-using esc::AlState;
-using esc::AlStatusCode;
+using protocol::AlState;
+using protocol::AlStatusCode;
 
 namespace {
 
@@ -123,7 +123,7 @@ std::uint64_t SyncParameters::cycle_time_ns() const {
 AlStatusCode SyncParameters::check_safeop() {
     if (!slave_) return AlStatusCode::NoError;
     const esc::Esc& esc = slave_->esc();
-    const std::uint8_t act = esc.peek(esc::addr(esc::Reg::DcActivation));
+    const std::uint8_t act = esc.peek(protocol::addr(protocol::Reg::DcActivation));
     const bool cyclic = act & esc::dc_act::CyclicOperation;
     const bool s0 = act & esc::dc_act::Sync0;
     const bool s1 = act & esc::dc_act::Sync1;
@@ -136,8 +136,8 @@ AlStatusCode SyncParameters::check_safeop() {
         if (!dc_supported_) return AlStatusCode::SyncNotSupported;
         if (!cyclic || !s0) return AlStatusCode::InvalidDcSyncConfig;
         if (requested == SyncMode::DcSync1 && !s1) return AlStatusCode::InvalidDcSyncConfig;
-        const std::uint32_t c0 = esc.peek32(esc::addr(esc::Reg::DcSync0CycleTime));
-        const std::uint32_t c1 = esc.peek32(esc::addr(esc::Reg::DcSync1CycleTime));
+        const std::uint32_t c0 = esc.peek32(protocol::addr(protocol::Reg::DcSync0CycleTime));
+        const std::uint32_t c1 = esc.peek32(protocol::addr(protocol::Reg::DcSync1CycleTime));
         if (!cycle_supported(c0)) return AlStatusCode::DcInvalidSync0CycleTime;
         const SyncMode m = requested == SyncMode::DcSync1 ? SyncMode::DcSync1 : SyncMode::DcSync0;
         std::uint32_t app = c0;
@@ -164,7 +164,7 @@ AlStatusCode SyncParameters::check_safeop() {
 
 AlStatusCode SyncParameters::check_op() {
     if (dc_mode() || mode_written_ || !slave_) return AlStatusCode::NoError;
-    const std::uint8_t act = slave_->esc().peek(esc::addr(esc::Reg::DcActivation));
+    const std::uint8_t act = slave_->esc().peek(protocol::addr(protocol::Reg::DcActivation));
     if (!(act & (esc::dc_act::Sync0 | esc::dc_act::Sync1))) return AlStatusCode::NoError;
     const AlStatusCode code = check_safeop();
     if (code != AlStatusCode::NoError) return code;
@@ -183,7 +183,8 @@ void SyncParameters::publish() {
     if (dc_mode()) {
         const std::uint32_t shift =
             mode_ == SyncMode::DcSync1
-                ? (slave_ ? slave_->esc().peek32(esc::addr(esc::Reg::DcSync1CycleTime)) % checked_cycle0_ns_
+                ? (slave_ ? slave_->esc().peek32(protocol::addr(protocol::Reg::DcSync1CycleTime)) %
+                                checked_cycle0_ns_
                           : 0)
                 : 0;
         for (std::uint16_t idx : {kOutPar, kInPar}) {

@@ -24,8 +24,8 @@
 
 #include "coe/object_dictionary.hpp"
 #include "device/device_description.hpp"
-#include "esc/al_status.hpp"
 #include "esc/slave.hpp"
+#include "protocol/al_status.hpp"
 
 namespace vecat::coe {
 
@@ -56,19 +56,19 @@ class SyncParameters {
     void attach(esc::Slave& slave);
 
     // PREOP -> SAFEOP: chooses the mode from 0x1C32:01 and the DC activation (0x0981); NoError or the code.
-    esc::AlStatusCode check_safeop();
+    protocol::AlStatusCode check_safeop();
     // SAFEOP -> OP: a master that activated SYNC0 only in SAFEOP (SOEM's ecx_dcsync0 after ecx_config_map)
     // without choosing a mode in 0x1C32:01 gets DC mode now, with the same checks as at PREOP -> SAFEOP.
-    esc::AlStatusCode check_op();
+    protocol::AlStatusCode check_op();
     // Entering SAFEOP from PREOP publishes the mode and cycle (0x1C32/0x1C33, 0x60C2) and resets the
     // counters.
-    void on_state_change(esc::AlState from, esc::AlState to);
+    void on_state_change(protocol::AlState from, protocol::AlState to);
     esc::OpReadiness op_readiness(std::uint64_t now_ns, std::uint64_t since_ns) const;
     // A SYNC pulse: true when it is the one the application cycle runs on (DC mode). Counts and may raise
     // the fatal sync error through the slave.
-    bool on_sync_event(unsigned signal, std::uint64_t now_ns, esc::AlState state);
+    bool on_sync_event(unsigned signal, std::uint64_t now_ns, protocol::AlState state);
     // Time-driven supervision (SYNC lost in OP, PLL).
-    void tick(std::uint64_t now_ns, esc::AlState state);
+    void tick(std::uint64_t now_ns, protocol::AlState state);
 
     SyncMode mode() const { return mode_; }
     bool dc_mode() const { return mode_ == SyncMode::DcSync0 || mode_ == SyncMode::DcSync1; }
@@ -82,7 +82,7 @@ class SyncParameters {
 
   private:
     void publish();
-    void raise(esc::AlStatusCode code);
+    void raise(protocol::AlStatusCode code);
     std::uint32_t min_cycle_ns() const;
     template <class T>
     void put(std::uint16_t index, std::uint8_t sub, T v);

@@ -5,6 +5,9 @@
 #include <cstdint>
 
 namespace vecat::esc {
+
+using protocol::addr;
+using protocol::Reg;
 namespace {
 
 bool overlaps(std::uint32_t lo, std::uint32_t hi, std::uint32_t a, std::uint32_t len) {

@@ -12,7 +12,7 @@
 #include <limits>
 
 #include "common/bytes.hpp"
-#include "esc/registers.hpp"
+#include "protocol/registers.hpp"
 
 namespace vecat::esc {
 
@@ -126,8 +126,8 @@ class DistributedClock {
     std::uint64_t sync1_time_for(std::uint64_t sync0_index) const;
     void schedule_sync1();
     void reset_loop();
-    std::uint8_t& reg(Reg r) { return regs_[addr(r)]; }
-    std::uint8_t reg(Reg r) const { return regs_[addr(r)]; }
+    std::uint8_t& reg(protocol::Reg r) { return regs_[protocol::addr(r)]; }
+    std::uint8_t reg(protocol::Reg r) const { return regs_[protocol::addr(r)]; }
 
     std::uint8_t* regs_;
     double drift_ppm_;

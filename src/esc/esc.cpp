@@ -3,10 +3,31 @@
 #include <algorithm>
 #include <cstring>
 
-#include "esc/al_status.hpp"
 #include "esc/sii_image.hpp"
+#include "protocol/al_status.hpp"
 
 namespace vecat::esc {
+
+using protocol::addr;
+using protocol::AlState;
+using protocol::Command;
+using protocol::DatagramView;
+using protocol::fmmu_addr;
+using protocol::kFmmuSize;
+using protocol::kMaxFmmus;
+using protocol::kMaxSms;
+using protocol::kRegisterSpaceSize;
+using protocol::kSmSize;
+using protocol::make_write_mask_table;
+using protocol::Reg;
+using protocol::sii_config_crc;
+using protocol::sm_addr;
+namespace al_event = protocol::al_event;
+namespace dl_status = protocol::dl_status;
+namespace fmmu = protocol::fmmu;
+namespace sii = protocol::sii;
+namespace sii_ctrl = protocol::sii_ctrl;
+namespace sm = protocol::sm;
 namespace {
 
 constexpr std::uint16_t kDefaultWatchdogDivider = 2498;  // (2498 + 2) x 40 ns = 100 us

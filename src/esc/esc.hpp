@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "common/bytes.hpp"
-#include "esc/datagram.hpp"
 #include "esc/distributed_clock.hpp"
-#include "esc/registers.hpp"
+#include "protocol/frame.hpp"
+#include "protocol/registers.hpp"
 
 namespace vecat::esc {
 
@@ -22,8 +22,9 @@ struct EscConfig {
     std::uint8_t sm_count = 8;
     std::uint32_t ram_bytes = 8192;       // process RAM from 0x1000, at least 8 KiB
     std::uint8_t port_descriptor = 0x0F;  // ports 0 and 1: MII; ports 2, 3 not implemented
-    std::uint16_t features = feature::DcAvailable | feature::Dc64Bit | feature::EnhancedLinkMii |
-                             feature::SeparateFcsErrors | feature::EnhancedDcSyncActivation;
+    std::uint16_t features = protocol::feature::DcAvailable | protocol::feature::Dc64Bit |
+                             protocol::feature::EnhancedLinkMii | protocol::feature::SeparateFcsErrors |
+                             protocol::feature::EnhancedDcSyncActivation;
     bool sii_read_8_bytes = true;
     double dc_drift_ppm = 0.0;        // local clock drift against the host clock
     std::uint64_t dc_initial_ns = 0;  // local time at power-on
@@ -49,7 +50,7 @@ class Esc {
     // ---- EtherCAT side
     // Processes one datagram as this ESC; updates data, working counter and (auto-increment) ADP. Returns
     // true when the datagram addressed this ESC (it added to the working counter).
-    bool process(DatagramView d, const FrameTiming& t);
+    bool process(protocol::DatagramView d, const FrameTiming& t);
     // A frame this ESC could not parse: counted as a real ESC counts a malformed frame on port 0.
     void count_invalid_frame(unsigned port = 0);
     // A frame already marked invalid by a previous ESC arrived at this port (0x0308 + port).
@@ -62,12 +63,14 @@ class Esc {
     bool port_link(unsigned port) const { return (link_mask_ >> port) & 1u; }
 
     // ---- PDI side (the slave application)
-    std::uint32_t al_events() const { return ld_le32(&mem_[addr(Reg::AlEventRequest)]); }
+    std::uint32_t al_events() const { return ld_le32(&mem_[protocol::addr(protocol::Reg::AlEventRequest)]); }
     // Reads AL control like a PDI does: clears the AL control event.
     std::uint16_t pdi_read_al_control();
     void pdi_write_al_status(std::uint8_t status, std::uint16_t code);
-    std::uint8_t al_status() const { return mem_[addr(Reg::AlStatus)]; }
-    std::uint16_t al_status_code() const { return ld_le16(&mem_[addr(Reg::AlStatusCode)]); }
+    std::uint8_t al_status() const { return mem_[protocol::addr(protocol::Reg::AlStatus)]; }
+    std::uint16_t al_status_code() const {
+        return ld_le16(&mem_[protocol::addr(protocol::Reg::AlStatusCode)]);
+    }
 
     struct SmConfigView {
         std::uint16_t start;
@@ -101,7 +104,9 @@ class Esc {
 
     // Time: runs the watchdogs. Call regularly with the host clock in ns.
     void tick(std::uint64_t now_ns);
-    bool pd_watchdog_expired() const { return (mem_[addr(Reg::WatchdogStatusProcessData)] & 1) == 0; }
+    bool pd_watchdog_expired() const {
+        return (mem_[protocol::addr(protocol::Reg::WatchdogStatusProcessData)] & 1) == 0;
+    }
 
     // DC local time (ns) at a given host time.
     std::uint64_t local_time(std::uint64_t host_ns) const { return dc_.local_time(host_ns); }
@@ -122,7 +127,7 @@ class Esc {
     const std::vector<std::uint8_t>& eeprom() const { return eeprom_; }
     const EscConfig& config() const { return cfg_; }
     const EscCounters& counters() const { return counters_; }
-    std::uint16_t station_address() const { return peek16(addr(Reg::StationAddress)); }
+    std::uint16_t station_address() const { return peek16(protocol::addr(protocol::Reg::StationAddress)); }
 
     // Reloads the ESC configuration area from the EEPROM (as at power-on and on an SII reload command).
     void reload_eeprom();
@@ -153,9 +158,10 @@ class Esc {
     };
 
     bool addressed_fixed(std::uint16_t adp) const;
-    void physical(DatagramView d, std::uint16_t ado, bool do_read, bool do_write, bool or_read,
+    void physical(protocol::DatagramView d, std::uint16_t ado, bool do_read, bool do_write, bool or_read,
                   const FrameTiming& t, unsigned& wkc_add);
-    void logical(DatagramView d, bool do_read, bool do_write, const FrameTiming& t, unsigned& wkc_add);
+    void logical(protocol::DatagramView d, bool do_read, bool do_write, const FrameTiming& t,
+                 unsigned& wkc_add);
 
     // Accesses with full ECAT semantics (masks, SyncManagers, side effects); true if any byte counted.
     bool ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_into, const FrameTiming& t);
@@ -180,9 +186,9 @@ class Esc {
     std::vector<std::uint8_t> mem_;  // 0x0000 .. 0x1000 + ram_bytes
     DistributedClock dc_;            // works on mem_'s DC registers
     std::vector<std::uint8_t> eeprom_;
-    WriteMaskTable wmask_;
-    std::array<SmState, kMaxSms> sm_{};
-    std::array<FmmuState, kMaxFmmus> fmmu_{};
+    protocol::WriteMaskTable wmask_;
+    std::array<SmState, protocol::kMaxSms> sm_{};
+    std::array<FmmuState, protocol::kMaxFmmus> fmmu_{};
     std::uint32_t sm_active_mask_ = 0;
     // Active FMMUs that read / write, and the logical bit range all active FMMUs cover together (a
     // logical datagram outside it is rejected without looking at each FMMU).

@@ -3,10 +3,20 @@
 #include <algorithm>
 #include <cstring>
 
-#include "esc/datagram.hpp"
-#include "esc/registers.hpp"
+#include "protocol/frame.hpp"
+#include "protocol/registers.hpp"
 
 namespace vecat::esc {
+
+using protocol::addr;
+using protocol::Command;
+using protocol::DatagramView;
+using protocol::FrameError;
+using protocol::kEthHeaderSize;
+using protocol::kMinEthFrame;
+using protocol::parse_frame;
+using protocol::ParsedFrame;
+using protocol::Reg;
 
 void Segment::add(std::unique_ptr<Slave> s) {
     slaves_.push_back(std::move(s));

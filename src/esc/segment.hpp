@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "common/bytes.hpp"
-#include "esc/datagram.hpp"
 #include "esc/slave.hpp"
+#include "protocol/frame.hpp"
 
 namespace vecat::esc {
 
@@ -109,7 +109,7 @@ class Segment {
     void run(std::size_t k, std::uint64_t now_ns);
     void count_corruption(const FrameDamage& d, std::size_t reached);
     void update_links(std::size_t i);
-    void return_receive_times(const ParsedFrame& pf, Bytes frame);
+    void return_receive_times(const protocol::ParsedFrame& pf, Bytes frame);
 
     // The receive-time latch last sent downstream, until it returns (one slot: masters wait for the reply
     // of the latch frame; a newer latch replaces an unanswered one). Its working counter on return tells

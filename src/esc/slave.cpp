@@ -4,6 +4,27 @@
 #include <cstring>
 
 namespace vecat::esc {
+
+using protocol::addr;
+using protocol::AlState;
+using protocol::AlStatusCode;
+using protocol::is_valid_state;
+using protocol::kAlErrorFlag;
+using protocol::kAlIdentFlag;
+using protocol::kAlStateMask;
+using protocol::kMailboxHeaderSize;
+using protocol::kMaxMailboxSize;
+using protocol::kMaxSms;
+using protocol::MailboxError;
+using protocol::MailboxHeader;
+using protocol::MailboxType;
+using protocol::make_mailbox_error;
+using protocol::parse_mailbox_header;
+using protocol::Reg;
+using protocol::sm_addr;
+using protocol::write_mailbox_header;
+namespace al_event = protocol::al_event;
+namespace sm = protocol::sm;
 namespace {
 
 constexpr unsigned rank(AlState s) {

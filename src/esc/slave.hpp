@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "device/device_description.hpp"
-#include "esc/al_status.hpp"
 #include "esc/esc.hpp"
 #include "esc/mailbox.hpp"
 #include "esc/sii_image.hpp"
+#include "protocol/al_status.hpp"
 
 namespace vecat::esc {
 
@@ -20,8 +20,8 @@ class Slave;
 
 // Whether the application lets a waiting SAFEOP -> OP transition complete (see Application::op_readiness).
 struct OpReadiness {
-    bool ready = true;                           // false: keep waiting
-    AlStatusCode error = AlStatusCode::NoError;  // not NoError: refuse with this code
+    bool ready = true;                                               // false: keep waiting
+    protocol::AlStatusCode error = protocol::AlStatusCode::NoError;  // not NoError: refuse with this code
 };
 
 // What the application behind the PDI provides. The slave calls it from the frame-processing thread.
@@ -32,16 +32,18 @@ class Application {
     virtual unsigned output_bytes() const = 0;
     virtual unsigned input_bytes() const = 0;
     // Application-specific checks of a transition (PDO mapping, sync configuration...). NoError allows it.
-    virtual AlStatusCode check_transition(AlState /*from*/, AlState /*to*/) { return AlStatusCode::NoError; }
-    virtual void on_state_change(AlState /*from*/, AlState /*to*/) {}
+    virtual protocol::AlStatusCode check_transition(protocol::AlState /*from*/, protocol::AlState /*to*/) {
+        return protocol::AlStatusCode::NoError;
+    }
+    virtual void on_state_change(protocol::AlState /*from*/, protocol::AlState /*to*/) {}
     // The slave signalled an AL error (code), or the master acknowledged it (NoError).
-    virtual void on_al_error(AlStatusCode /*code*/) {}
+    virtual void on_al_error(protocol::AlStatusCode /*code*/) {}
     // One process data exchange. outputs is empty when no valid outputs exist (below OP they are not
     // applied).
     virtual void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply_outputs, Bytes inputs) = 0;
     // The outputs must go to their safe state (watchdog expired, left OP).
     virtual void outputs_safe_state() {}
-    virtual MailboxProtocol* mailbox_protocol(MailboxType) { return nullptr; }
+    virtual MailboxProtocol* mailbox_protocol(protocol::MailboxType) { return nullptr; }
     // Called regularly, also without frames (time-driven behaviour).
     virtual void tick(std::uint64_t /*now_ns*/) {}
     // One SYNC pulse of the DC unit (signal 0 = SYNC0, 1 = SYNC1), with its time on the host clock. Called
@@ -82,7 +84,7 @@ class ProcessImageApplication : public Application {
 class MailboxInterceptor {
   public:
     virtual ~MailboxInterceptor() = default;
-    virtual bool intercept(Slave& slave, const MailboxHeader& h, ConstBytes payload,
+    virtual bool intercept(Slave& slave, const protocol::MailboxHeader& h, ConstBytes payload,
                            MailboxProtocol* protocol, MailboxReplySink& sink) = 0;
 };
 
@@ -96,7 +98,7 @@ enum class AlAction : std::uint8_t {
     CheckOutputs,      // SAFEOP -> OP: waits for valid outputs
     Refuse,            // 0x0011 invalid requested state change
 };
-AlAction al_transition(AlState from, AlState to) noexcept;
+AlAction al_transition(protocol::AlState from, protocol::AlState to) noexcept;
 
 struct SlaveCounters {
     std::uint64_t mailbox_requests = 0;
@@ -135,11 +137,11 @@ class Slave {
     // Firmware step after a frame went through the ESC, and on timer ticks.
     void run(std::uint64_t now_ns);
 
-    AlState state() const { return state_; }
+    protocol::AlState state() const { return state_; }
     bool error() const { return error_; }
-    AlStatusCode status_code() const { return code_; }
+    protocol::AlStatusCode status_code() const { return code_; }
     // Forces an error as the application would (fault injection, sync loss...): falls back to target.
-    void raise_error(AlStatusCode code, AlState fallback);
+    void raise_error(protocol::AlStatusCode code, protocol::AlState fallback);
     const SlaveCounters& counters() const { return counters_; }
     void set_mailbox_interceptor(MailboxInterceptor* i) { interceptor_ = i; }
 
@@ -147,13 +149,13 @@ class Slave {
 
   private:
     void handle_al_control(std::uint64_t now_ns);
-    void enter(AlState to, std::uint64_t now_ns);
-    void set_error(AlStatusCode code, AlState stay, std::uint64_t now_ns);
+    void enter(protocol::AlState to, std::uint64_t now_ns);
+    void set_error(protocol::AlStatusCode code, protocol::AlState stay, std::uint64_t now_ns);
     void clear_error();
     bool outputs_valid() const;
     void publish_status();
-    AlStatusCode check_mailbox_config() const;
-    AlStatusCode check_process_data_config() const;
+    protocol::AlStatusCode check_mailbox_config() const;
+    protocol::AlStatusCode check_process_data_config() const;
     void service_mailbox();
     void send_pending_replies();
     void exchange_process_data(std::uint64_t now_ns);
@@ -165,9 +167,9 @@ class Slave {
     const device::DeviceDescription& desc_;  // *model_.description
     Esc esc_;
     std::unique_ptr<Application> app_;
-    AlState state_ = AlState::Init;
+    protocol::AlState state_ = protocol::AlState::Init;
     bool error_ = false;
-    AlStatusCode code_ = AlStatusCode::NoError;
+    protocol::AlStatusCode code_ = protocol::AlStatusCode::NoError;
     bool ident_ = false;
     bool op_pending_ = false;
     std::uint64_t op_pending_since_ = 0;

@@ -70,11 +70,11 @@ double parse_double(std::string_view key, std::string_view v) {
     }
 }
 
-esc::AlState parse_state(std::string_view v) {
-    if (v == "init" || v == "INIT") return esc::AlState::Init;
-    if (v == "preop" || v == "PREOP") return esc::AlState::PreOp;
-    if (v == "safeop" || v == "SAFEOP") return esc::AlState::SafeOp;
-    if (v == "op" || v == "OP") return esc::AlState::Op;
+protocol::AlState parse_state(std::string_view v) {
+    if (v == "init" || v == "INIT") return protocol::AlState::Init;
+    if (v == "preop" || v == "PREOP") return protocol::AlState::PreOp;
+    if (v == "safeop" || v == "SAFEOP") return protocol::AlState::SafeOp;
+    if (v == "op" || v == "OP") return protocol::AlState::Op;
     throw std::invalid_argument("state: one of init, preop, safeop, op: " + std::string(v));
 }
 
@@ -130,7 +130,8 @@ FaultSpec make_fault(std::string_view name, const KeyValues& kv) {
     f.kind = info ? info->kind : FaultKind::External;
     if (name.empty()) throw std::invalid_argument("fault kind missing");
     // Defaults that differ per kind.
-    if (f.kind == FaultKind::AlError) f.code = static_cast<std::uint32_t>(esc::AlStatusCode::Unspecified);
+    if (f.kind == FaultKind::AlError)
+        f.code = static_cast<std::uint32_t>(protocol::AlStatusCode::Unspecified);
     if (f.kind == FaultKind::SdoAbort) f.code = 0x08000000;  // general error
     for (const auto& [key, value] : kv) {
         f.params[key] = value;

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "esc/al_status.hpp"
+#include "protocol/al_status.hpp"
 
 namespace vecat::faults {
 
@@ -58,9 +58,9 @@ struct FaultSpec {
     std::uint64_t delay_ns = 0;
     // Error codes: AL status code, SDO abort code, drive error code.
     std::uint32_t code = 0;
-    esc::AlState state = esc::AlState::SafeOp;  // al_error: state the slave falls back to
-    std::uint16_t index = 0;                    // sdo_abort: only this object (0: any)
-    int subindex = -1;                          // -1: any
+    protocol::AlState state = protocol::AlState::SafeOp;  // al_error: state the slave falls back to
+    std::uint16_t index = 0;                              // sdo_abort: only this object (0: any)
+    int subindex = -1;                                    // -1: any
     // dc_drift: absolute ppm, or a step added to the current drift.
     double ppm = 0.0;
     bool ppm_is_step = false;

@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "coe/coe_application.hpp"
-#include "coe/coe_protocol.hpp"
+#include "protocol/coe.hpp"
 
 namespace vecat::faults {
 namespace {
@@ -37,7 +37,7 @@ class LosingSink final : public esc::MailboxReplySink {
   public:
     explicit LosingSink(esc::MailboxReplySink& inner) : inner_(inner) {}
     Bytes reply_buffer() override { return inner_.reply_buffer(); }
-    void commit(esc::MailboxType, std::size_t) override { ++lost; }
+    void commit(protocol::MailboxType, std::size_t) override { ++lost; }
     bool can_commit() const override { return inner_.can_commit(); }
     std::size_t pending() const override { return inner_.pending(); }
     std::uint64_t lost = 0;
@@ -117,7 +117,7 @@ std::string FaultInjector::start(FaultSpec f, std::uint64_t now_ns) {
     switch (f.kind) {
         case FaultKind::AlError:
             // An event, not a state: the slave stays in error until the master acknowledges it.
-            seg_.slave(f.slave).raise_error(static_cast<esc::AlStatusCode>(f.code), f.state);
+            seg_.slave(f.slave).raise_error(static_cast<protocol::AlStatusCode>(f.code), f.state);
             ++counters_.faults_started;
             note("fault " + describe(f) + ": AL error raised");
             return f.id;
@@ -339,7 +339,7 @@ std::uint64_t FaultInjector::next_due_ns() const {
     return t;
 }
 
-bool FaultInjector::intercept(esc::Slave& slave, const esc::MailboxHeader& h, ConstBytes payload,
+bool FaultInjector::intercept(esc::Slave& slave, const protocol::MailboxHeader& h, ConstBytes payload,
                               esc::MailboxProtocol* protocol, esc::MailboxReplySink& sink) {
     if (active_.empty()) return false;
     const std::size_t idx = slave_index(slave);
@@ -348,24 +348,25 @@ bool FaultInjector::intercept(esc::Slave& slave, const esc::MailboxHeader& h, Co
         if (a->done || !mailbox_fault(f.kind) || f.slave != idx) continue;
         if (f.kind == FaultKind::SdoAbort) {
             // SDO initiate requests (they name the object) of the chosen object, answered with an abort.
-            if (h.type != static_cast<std::uint8_t>(esc::MailboxType::CoE) ||
-                payload.size() < coe::kCoeHeaderSize + 4)
+            if (h.type != static_cast<std::uint8_t>(protocol::MailboxType::CoE) ||
+                payload.size() < protocol::kCoeHeaderSize + 4)
                 continue;
             if ((ld_le16(payload.data()) >> 12) != kCoeServiceSdoRequest) continue;
-            const std::uint8_t ccs = coe::sdo::ccs(payload[2]);
-            if (ccs != coe::sdo::CcsInitiateDownload && ccs != coe::sdo::CcsInitiateUpload) continue;
+            const std::uint8_t ccs = protocol::sdo::ccs(payload[2]);
+            if (ccs != protocol::sdo::CcsInitiateDownload && ccs != protocol::sdo::CcsInitiateUpload)
+                continue;
             const std::uint16_t index = ld_le16(payload.data() + 3);
             const std::uint8_t sub = payload[5];
             if ((f.index != 0 && f.index != index) || (f.subindex >= 0 && f.subindex != sub)) continue;
             if (!roll(f.probability) || !hit(*a)) continue;
             Bytes out = sink.reply_buffer();
-            if (out.size() < coe::kCoeHeaderSize + coe::kSdoHeaderSize) return false;
+            if (out.size() < protocol::kCoeHeaderSize + protocol::kSdoHeaderSize) return false;
             st_le16(out.data(), static_cast<std::uint16_t>(kCoeServiceSdoRequest << 12));
-            out[2] = coe::sdo::AbortCommand;
+            out[2] = protocol::sdo::AbortCommand;
             st_le16(out.data() + 3, index);
             out[5] = sub;
             st_le32(out.data() + 6, f.code);
-            sink.commit(esc::MailboxType::CoE, coe::kCoeHeaderSize + coe::kSdoHeaderSize);
+            sink.commit(protocol::MailboxType::CoE, protocol::kCoeHeaderSize + protocol::kSdoHeaderSize);
             ++counters_.sdo_aborts;
             return true;
         }

@@ -83,7 +83,7 @@ class FaultInjector final : public net::FrameFilter, public esc::MailboxIntercep
     std::uint64_t next_due_ns() const override;
 
     // esc::MailboxInterceptor
-    bool intercept(esc::Slave& slave, const esc::MailboxHeader& h, ConstBytes payload,
+    bool intercept(esc::Slave& slave, const protocol::MailboxHeader& h, ConstBytes payload,
                    esc::MailboxProtocol* protocol, esc::MailboxReplySink& sink) override;
 
     static constexpr std::size_t kHeldReplies = 64;  // replies a delay fault can hold at once

@@ -32,8 +32,8 @@ void TwinsyncFaults::write(const FaultSpec& f, bool on) {
             // Through the SDO path's hook, which hands the count to the cable.
             std::uint8_t v[4] = {static_cast<std::uint8_t>(n), static_cast<std::uint8_t>(n >> 8),
                                  static_cast<std::uint8_t>(n >> 16), static_cast<std::uint8_t>(n >> 24)};
-            const auto abort = od.download(kInjection, 3, false, esc::AlState::PreOp, ConstBytes(v, 4));
-            if (abort != coe::SdoAbort::None || !e)
+            const auto abort = od.download(kInjection, 3, false, protocol::AlState::PreOp, ConstBytes(v, 4));
+            if (abort != protocol::SdoAbort::None || !e)
                 throw std::invalid_argument("0x2104:03 refused the count");
         } else {
             const double p = on ? std::clamp(f.probability, 0.0, 1.0) : 0.0;

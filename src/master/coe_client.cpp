@@ -3,22 +3,26 @@
 #include <algorithm>
 #include <thread>
 
-#include "esc/registers.hpp"
+#include "protocol/registers.hpp"
+#include "protocol/sync_manager.hpp"
 
 namespace vecat::master {
 
-using namespace coe;
+using namespace protocol;
 using Clock = std::chrono::steady_clock;
 
 CoeClient::CoeClient(Master& m, std::uint16_t station) : m_(m), station_(station) {
     for (auto& s : m_.slaves())
         if (s.station == station) counter_ = &s.mailbox_counter;
-    std::uint8_t b[16] = {};
-    if (auto w = m_.fprd(station_, esc::sm_addr(0), Bytes(b, 16)); w && *w == 1) {
-        sm0_ = ld_le16(b);
-        sm0_len_ = ld_le16(b + 2);
-        sm1_ = ld_le16(b + 8);
-        sm1_len_ = ld_le16(b + 10);
+    // SM0 (master to slave) and SM1 (slave to master) as configured, in one read.
+    std::uint8_t b[2 * SmConfig::kSize] = {};
+    if (auto w = m_.fprd(station_, sm_addr(0), Bytes(b, sizeof b)); w && *w == 1) {
+        const auto sm0 = SmConfig::unpack(std::span(b).first<SmConfig::kSize>());
+        const auto sm1 = SmConfig::unpack(std::span(b).last<SmConfig::kSize>());
+        sm0_ = sm0.physical_start;
+        sm0_len_ = sm0.length;
+        sm1_ = sm1.physical_start;
+        sm1_len_ = sm1.length;
     }
 }
 
@@ -27,15 +31,15 @@ std::uint8_t CoeClient::next_counter() {
     return *counter_;
 }
 
-bool CoeClient::send(esc::MailboxType type, ConstBytes payload, std::uint8_t counter) {
-    if (!sm0_len_ || payload.size() + esc::kMailboxHeaderSize > sm0_len_) return false;
+bool CoeClient::send(MailboxType type, ConstBytes payload, std::uint8_t counter) {
+    if (!sm0_len_ || payload.size() + kMailboxHeaderSize > sm0_len_) return false;
     std::vector<std::uint8_t> buf(sm0_len_, 0);
-    esc::MailboxHeader h;
+    MailboxHeader h;
     h.length = static_cast<std::uint16_t>(payload.size());
     h.type = static_cast<std::uint8_t>(type);
     h.counter = counter;
-    esc::write_mailbox_header(Bytes(buf.data(), esc::kMailboxHeaderSize), h);
-    std::copy(payload.begin(), payload.end(), buf.begin() + esc::kMailboxHeaderSize);
+    write_mailbox_header(Bytes(buf.data(), kMailboxHeaderSize), h);
+    std::copy(payload.begin(), payload.end(), buf.begin() + kMailboxHeaderSize);
     // At least one try, however late this thread runs: a deadline that passed while the thread was not
     // scheduled (a loaded machine) must not fail a write that was never attempted.
     const auto deadline = Clock::now() + std::chrono::milliseconds(100);
@@ -53,18 +57,17 @@ std::optional<MailboxMessage> CoeClient::receive(std::chrono::milliseconds timeo
     std::vector<std::uint8_t> buf(sm1_len_);
     do {
         std::uint8_t st = 0;
-        auto w =
-            m_.fprd(station_, static_cast<std::uint16_t>(esc::sm_addr(1) + esc::sm::Status), Bytes(&st, 1));
-        if (w && *w == 1 && (st & esc::sm::StatusMailboxFull)) {
+        auto w = m_.fprd(station_, static_cast<std::uint16_t>(sm_addr(1) + sm::Status), Bytes(&st, 1));
+        if (w && *w == 1 && (st & sm::StatusMailboxFull)) {
             auto r = m_.fprd(station_, sm1_, Bytes(buf.data(), buf.size()));
             if (r && *r == 1) {
-                auto h = esc::parse_mailbox_header(ConstBytes(buf.data(), buf.size()));
+                auto h = parse_mailbox_header(ConstBytes(buf.data(), buf.size()));
                 if (!h) return std::nullopt;
                 MailboxMessage msg;
                 msg.header = *h;
-                const std::size_t n = std::min<std::size_t>(h->length, buf.size() - esc::kMailboxHeaderSize);
-                msg.payload.assign(buf.begin() + esc::kMailboxHeaderSize,
-                                   buf.begin() + static_cast<std::ptrdiff_t>(esc::kMailboxHeaderSize + n));
+                const std::size_t n = std::min<std::size_t>(h->length, buf.size() - kMailboxHeaderSize);
+                msg.payload.assign(buf.begin() + kMailboxHeaderSize,
+                                   buf.begin() + static_cast<std::ptrdiff_t>(kMailboxHeaderSize + n));
                 return msg;
             }
         }
@@ -73,7 +76,7 @@ std::optional<MailboxMessage> CoeClient::receive(std::chrono::milliseconds timeo
     return std::nullopt;
 }
 
-std::optional<MailboxMessage> CoeClient::request(esc::MailboxType type, ConstBytes payload,
+std::optional<MailboxMessage> CoeClient::request(MailboxType type, ConstBytes payload,
                                                  std::chrono::milliseconds timeout) {
     if (!send(type, payload, next_counter())) return std::nullopt;
     const auto deadline = Clock::now() + timeout;
@@ -82,14 +85,11 @@ std::optional<MailboxMessage> CoeClient::request(esc::MailboxType type, ConstByt
         const auto left = std::max(Clock::duration::zero(), deadline - Clock::now());
         auto msg = receive(std::chrono::duration_cast<std::chrono::milliseconds>(left));
         if (!msg) return std::nullopt;
-        const bool coe = msg->header.type == static_cast<std::uint8_t>(esc::MailboxType::CoE);
-        if (coe && msg->payload.size() >= 10 &&
+        const bool coe = msg->header.type == static_cast<std::uint8_t>(MailboxType::CoE);
+        if (coe && msg->payload.size() >= kCoeHeaderSize + Emergency::kSize &&
             coe_service(ld_le16(msg->payload.data())) == CoeService::Emergency) {
-            coe::Emergency e;
-            e.error_code = ld_le16(msg->payload.data() + 2);
-            e.error_register = msg->payload[4];
-            std::copy_n(msg->payload.begin() + 5, 5, e.data.begin());
-            emergencies_.push_back(e);
+            emergencies_.push_back(
+                Emergency::unpack(std::span(msg->payload).subspan<kCoeHeaderSize, Emergency::kSize>()));
             if (Clock::now() >= deadline) return std::nullopt;
             continue;
         }
@@ -99,18 +99,26 @@ std::optional<MailboxMessage> CoeClient::request(esc::MailboxType type, ConstByt
 
 namespace {
 
+constexpr std::size_t kSdoMessage = kCoeHeaderSize + kSdoHeaderSize;  // the shortest SDO message
+
+// The SDO header of a response at least kSdoMessage long.
+SdoHeader sdo_header(const MailboxMessage& m) {
+    return SdoHeader::unpack(std::span(m.payload).subspan<kCoeHeaderSize, kSdoHeaderSize>());
+}
+
 bool is_abort(const MailboxMessage& m) {
-    return m.payload.size() >= 10 && m.payload[2] == sdo::AbortCommand;
+    return m.payload.size() >= kSdoMessage && sdo_header(m).command == sdo::AbortCommand;
+}
+
+SdoAbort abort_code(const MailboxMessage& m) {
+    return static_cast<SdoAbort>(sdo_header(m).data);
 }
 
 std::vector<std::uint8_t> sdo_frame(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub,
                                     std::uint32_t data = 0) {
-    std::vector<std::uint8_t> p(10, 0);
+    std::vector<std::uint8_t> p(kSdoMessage, 0);
     st_le16(p.data(), coe_header(CoeService::SdoRequest));
-    p[2] = cmd;
-    st_le16(p.data() + 3, index);
-    p[5] = sub;
-    st_le32(p.data() + 6, data);
+    SdoHeader{cmd, index, sub, data}.pack(std::span(p).subspan<kCoeHeaderSize, kSdoHeaderSize>());
     return p;
 }
 
@@ -118,44 +126,43 @@ std::vector<std::uint8_t> sdo_frame(std::uint8_t cmd, std::uint16_t index, std::
 
 SdoResult CoeClient::upload(std::uint16_t index, std::uint8_t sub, bool complete) {
     SdoResult res;
-    auto req = sdo_frame(
-        static_cast<std::uint8_t>((sdo::CcsInitiateUpload << 5) | (complete ? sdo::CompleteAccess : 0)),
-        index, sub);
-    auto rsp = request(esc::MailboxType::CoE, req);
-    if (!rsp || rsp->payload.size() < 10) return res;
+    auto req =
+        sdo_frame(sdo::command(sdo::CcsInitiateUpload, complete ? sdo::CompleteAccess : 0), index, sub);
+    auto rsp = request(MailboxType::CoE, req);
+    if (!rsp || rsp->payload.size() < kSdoMessage) return res;
     res.transport_ok = true;
     if (is_abort(*rsp)) {
-        res.abort = static_cast<SdoAbort>(ld_le32(rsp->payload.data() + 6));
+        res.abort = abort_code(*rsp);
         return res;
     }
-    const std::uint8_t cmd = rsp->payload[2];
-    res.command = cmd;
-    if (cmd & sdo::Expedited) {
-        const std::size_t n = (cmd & sdo::SizeIndicated) ? 4 - ((cmd >> 2) & 3) : 4;
-        res.data.assign(rsp->payload.begin() + 6, rsp->payload.begin() + 6 + static_cast<std::ptrdiff_t>(n));
+    const SdoHeader h = sdo_header(*rsp);
+    res.command = h.command;
+    if (h.command & sdo::Expedited) {
+        const auto value = rsp->payload.begin() + kCoeHeaderSize + 4;  // the data field of the SDO header
+        res.data.assign(value, value + static_cast<std::ptrdiff_t>(sdo::expedited_length(h.command)));
         return res;
     }
-    const std::uint32_t total = ld_le32(rsp->payload.data() + 6);
-    res.data.assign(rsp->payload.begin() + 10, rsp->payload.end());
+    const std::uint32_t total = h.data;
+    res.data.assign(rsp->payload.begin() + kSdoMessage, rsp->payload.end());
     if (res.data.size() > total) res.data.resize(total);
     std::uint8_t toggle = 0;
     while (res.data.size() < total) {
         auto seg =
-            request(esc::MailboxType::CoE,
-                    sdo_frame(static_cast<std::uint8_t>((sdo::CcsUploadSegment << 5) | toggle), index, sub));
-        if (!seg || seg->payload.size() < 10) {
+            request(MailboxType::CoE, sdo_frame(sdo::command(sdo::CcsUploadSegment, toggle), index, sub));
+        if (!seg || seg->payload.size() < kSdoMessage) {
             res.transport_ok = false;
             return res;
         }
         if (is_abort(*seg)) {
-            res.abort = static_cast<SdoAbort>(ld_le32(seg->payload.data() + 6));
+            res.abort = abort_code(*seg);
             return res;
         }
-        const std::uint8_t c = seg->payload[2];
-        std::size_t n = seg->payload.size() - 3;
-        if (seg->payload.size() == 10) n = 7 - ((c >> 1) & 7);
-        res.data.insert(res.data.end(), seg->payload.begin() + 3,
-                        seg->payload.begin() + 3 + static_cast<std::ptrdiff_t>(n));
+        const std::uint8_t c = seg->payload[kCoeHeaderSize];
+        constexpr std::size_t kData = kCoeHeaderSize + sdo::kSegmentHeaderSize;
+        std::size_t n = seg->payload.size() - kData;
+        if (seg->payload.size() == kSdoMessage) n = sdo::segment_length(c);
+        res.data.insert(res.data.end(), seg->payload.begin() + kData,
+                        seg->payload.begin() + static_cast<std::ptrdiff_t>(kData + n));
         toggle ^= sdo::Toggle;
         if (c & sdo::LastSegment) break;
     }
@@ -170,11 +177,11 @@ SdoResult CoeClient::download(std::uint16_t index, std::uint8_t sub, ConstBytes 
     if (how == Transfer::Auto)
         how = data.size() <= 4 && !data.empty() ? Transfer::Expedited : Transfer::Normal;
     auto finish = [&](const std::optional<MailboxMessage>& rsp) {
-        if (!rsp || rsp->payload.size() < 10) return false;
+        if (!rsp || rsp->payload.size() < kSdoMessage) return false;
         res.transport_ok = true;
-        res.command = rsp->payload[2];
+        res.command = sdo_header(*rsp).command;
         if (is_abort(*rsp)) {
-            res.abort = static_cast<SdoAbort>(ld_le32(rsp->payload.data() + 6));
+            res.abort = abort_code(*rsp);
             return false;
         }
         return true;
@@ -183,38 +190,33 @@ SdoResult CoeClient::download(std::uint16_t index, std::uint8_t sub, ConstBytes 
         std::uint32_t v = 0;
         for (std::size_t i = 0; i < data.size() && i < 4; ++i)
             v |= static_cast<std::uint32_t>(data[i]) << (8 * i);
-        const auto cmd =
-            static_cast<std::uint8_t>((sdo::CcsInitiateDownload << 5) | ca | ((4 - data.size()) << 2) |
-                                      sdo::Expedited | sdo::SizeIndicated);
-        finish(request(esc::MailboxType::CoE, sdo_frame(cmd, index, sub, v)));
+        const auto cmd = sdo::command(sdo::CcsInitiateDownload, ca | sdo::expedited_size(data.size()));
+        finish(request(MailboxType::CoE, sdo_frame(cmd, index, sub, v)));
         return res;
     }
     // Normal: as much as fits in the first message; the rest in segments (forced with Transfer::Segmented).
-    const std::size_t max_first = sm0_len_ - esc::kMailboxHeaderSize - 10;
+    const std::size_t max_first = sm0_len_ - kMailboxHeaderSize - kSdoMessage;
     std::size_t first = std::min(data.size(), max_first);
     if (how == Transfer::Segmented) first = 0;
-    auto req = sdo_frame(static_cast<std::uint8_t>((sdo::CcsInitiateDownload << 5) | ca | sdo::SizeIndicated),
-                         index, sub, static_cast<std::uint32_t>(data.size()));
+    auto req = sdo_frame(sdo::command(sdo::CcsInitiateDownload, ca | sdo::SizeIndicated), index, sub,
+                         static_cast<std::uint32_t>(data.size()));
     req.insert(req.end(), data.begin(), data.begin() + static_cast<std::ptrdiff_t>(first));
-    if (!finish(request(esc::MailboxType::CoE, req))) return res;
+    if (!finish(request(MailboxType::CoE, req))) return res;
     std::size_t off = first;
     std::uint8_t toggle = 0;
-    const std::size_t max_seg = sm0_len_ - esc::kMailboxHeaderSize - 3;
+    constexpr std::size_t kData = kCoeHeaderSize + sdo::kSegmentHeaderSize;
+    const std::size_t max_seg = sm0_len_ - kMailboxHeaderSize - kData;
     while (off < data.size()) {
         const std::size_t n = std::min(max_seg, data.size() - off);
         const bool last = off + n == data.size();
-        std::vector<std::uint8_t> seg(3, 0);
+        std::vector<std::uint8_t> seg(kData, 0);
         st_le16(seg.data(), coe_header(CoeService::SdoRequest));
-        std::uint8_t cmd =
-            static_cast<std::uint8_t>((sdo::CcsDownloadSegment << 5) | toggle | (last ? 1 : 0));
         seg.insert(seg.end(), data.begin() + static_cast<std::ptrdiff_t>(off),
                    data.begin() + static_cast<std::ptrdiff_t>(off + n));
-        if (n < 7) {
-            cmd = static_cast<std::uint8_t>(cmd | ((7 - n) << 1));
-            seg.resize(10, 0);
-        }
-        seg[2] = cmd;
-        if (!finish(request(esc::MailboxType::CoE, seg))) return res;
+        if (n < sdo::kSegmentMin) seg.resize(kSdoMessage, 0);
+        seg[kCoeHeaderSize] = sdo::command(sdo::CcsDownloadSegment,
+                                           toggle | sdo::segment_unused(n) | (last ? sdo::LastSegment : 0));
+        if (!finish(request(MailboxType::CoE, seg))) return res;
         off += n;
         toggle ^= sdo::Toggle;
     }
@@ -251,7 +253,7 @@ std::optional<MailboxMessage> CoeClient::info_request(std::uint8_t opcode, Const
     req[2] = opcode;
     req.insert(req.end(), args.begin(), args.end());
     last_abort_ = SdoAbort::None;
-    auto rsp = request(esc::MailboxType::CoE, req);
+    auto rsp = request(MailboxType::CoE, req);
     if (!rsp || rsp->payload.size() < 6) return std::nullopt;
     const std::uint8_t op = rsp->payload[2] & 0x7F;
     if (op == sdo_info::InfoErrorRequest) {

@@ -8,26 +8,25 @@
 #include <string>
 #include <vector>
 
-#include "coe/coe_protocol.hpp"
-#include "coe/sdo_abort.hpp"
-#include "coe/sdo_server.hpp"
 #include "common/bytes.hpp"
-#include "esc/mailbox.hpp"
 #include "master/master.hpp"
+#include "protocol/coe.hpp"
+#include "protocol/mailbox.hpp"
+#include "protocol/sdo_abort.hpp"
 
 namespace vecat::master {
 
 struct MailboxMessage {
-    esc::MailboxHeader header;
+    protocol::MailboxHeader header;
     std::vector<std::uint8_t> payload;  // header.length bytes after the 6-byte header
 };
 
 struct SdoResult {
     bool transport_ok = false;  // a reply came at all
-    coe::SdoAbort abort = coe::SdoAbort::None;
+    protocol::SdoAbort abort = protocol::SdoAbort::None;
     std::vector<std::uint8_t> data;  // uploaded value
     std::uint8_t command = 0;        // command byte of the (first) response, for layout checks
-    bool ok() const { return transport_ok && abort == coe::SdoAbort::None; }
+    bool ok() const { return transport_ok && abort == protocol::SdoAbort::None; }
 };
 
 struct ObjectInfo {
@@ -54,10 +53,10 @@ class CoeClient {
     CoeClient(Master& m, std::uint16_t station);
 
     // Mailbox level: writes one message into SM0 (waits while it is full) / reads one from SM1.
-    bool send(esc::MailboxType type, ConstBytes payload, std::uint8_t counter);
+    bool send(protocol::MailboxType type, ConstBytes payload, std::uint8_t counter);
     std::optional<MailboxMessage> receive(std::chrono::milliseconds timeout = std::chrono::milliseconds(700));
     // Sends and waits for the reply; emergencies that arrive in between are collected.
-    std::optional<MailboxMessage> request(esc::MailboxType type, ConstBytes payload,
+    std::optional<MailboxMessage> request(protocol::MailboxType type, ConstBytes payload,
                                           std::chrono::milliseconds timeout = std::chrono::milliseconds(700));
     std::uint8_t next_counter();
 
@@ -79,10 +78,10 @@ class CoeClient {
     std::optional<ObjectInfo> object_description(std::uint16_t index);
     std::optional<EntryInfo> entry_description(std::uint16_t index, std::uint8_t sub,
                                                std::uint8_t value_info);
-    coe::SdoAbort last_abort() const { return last_abort_; }
+    protocol::SdoAbort last_abort() const { return last_abort_; }
     int last_fragments() const { return last_fragments_; }
 
-    std::vector<coe::Emergency>& emergencies() { return emergencies_; }
+    std::vector<protocol::Emergency>& emergencies() { return emergencies_; }
     std::size_t mailbox_size_out() const { return sm0_len_; }
     std::size_t mailbox_size_in() const { return sm1_len_; }
 
@@ -93,8 +92,8 @@ class CoeClient {
     std::uint16_t sm0_ = 0, sm0_len_ = 0, sm1_ = 0, sm1_len_ = 0;
     std::uint8_t own_counter_ = 0;
     std::uint8_t* counter_ = &own_counter_;  // the slave's counter in the master's list when known
-    std::vector<coe::Emergency> emergencies_;
-    coe::SdoAbort last_abort_ = coe::SdoAbort::None;
+    std::vector<protocol::Emergency> emergencies_;
+    protocol::SdoAbort last_abort_ = protocol::SdoAbort::None;
     int last_fragments_ = 0;
 };
 

@@ -4,53 +4,55 @@
 #include <cstring>
 #include <thread>
 
-#include "esc/registers.hpp"
 #include "master/coe_client.hpp"
+#include "protocol/fmmu.hpp"
+#include "protocol/registers.hpp"
+#include "protocol/sync_manager.hpp"
 
 namespace vecat::master {
 
-using esc::AlState;
-using esc::Command;
-using esc::Reg;
+using protocol::AlState;
+using protocol::Command;
+using protocol::DatagramHeader;
+using protocol::FmmuConfig;
+using protocol::Reg;
+using protocol::SmConfig;
 
 namespace {
-constexpr std::uint8_t kBroadcast[6] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF};
-// A unicast, locally administered source address (the ESC sets bit 0x02 of the first byte on return).
-constexpr std::uint8_t kSource[6] = {0x10, 0x10, 0x10, 0x10, 0x10, 0x10};
+// Broadcast, from a unicast, locally administered source address (the ESC sets bit 0x02 of the first byte
+// on return).
+constexpr protocol::EthernetHeader kFrameHeader{protocol::kBroadcastMac,
+                                                {0x10, 0x10, 0x10, 0x10, 0x10, 0x10}};
 std::uint16_t ra(Reg r) {
-    return esc::addr(r);
+    return protocol::addr(r);
 }
 }  // namespace
 
 Master::Master(net::Link& link, MasterOptions opt) : link_(link), opt_(opt) {}
 
 std::size_t Master::build_frame(std::span<DatagramRequest> dgs) {
-    std::memcpy(tx_.data(), kBroadcast, 6);
-    std::memcpy(tx_.data() + 6, kSource, 6);
-    tx_[12] = 0x88;
-    tx_[13] = 0xA4;
-    std::size_t off = esc::kEthHeaderSize + esc::kEcatHeaderSize;
+    kFrameHeader.pack(std::span(tx_).first<protocol::kEthHeaderSize>());
+    std::size_t off = protocol::kEthHeaderSize + protocol::kEcatHeaderSize;
     std::size_t total = off;
     for (const auto& d : dgs)
-        total += esc::kDatagramHeaderSize + d.data.size() + esc::kWkcSize;
-    if (total > esc::kMaxEthFrame || dgs.size() > esc::kMaxDatagramsPerFrame) return 0;
+        total += protocol::kDatagramHeaderSize + d.data.size() + protocol::kWkcSize;
+    if (total > protocol::kMaxEthFrame || dgs.size() > protocol::kMaxDatagramsPerFrame) return 0;
     for (std::size_t i = 0; i < dgs.size(); ++i) {
         auto& d = dgs[i];
         std::uint8_t* p = tx_.data() + off;
-        p[0] = static_cast<std::uint8_t>(d.cmd);
-        p[1] = static_cast<std::uint8_t>(index_ + i);
-        st_le32(p + 2, d.address);
-        std::uint16_t lf = static_cast<std::uint16_t>(d.data.size() & 0x07FF);
-        if (i + 1 < dgs.size()) lf |= 0x8000;
-        st_le16(p + 6, lf);
-        st_le16(p + 8, 0);
-        std::memcpy(p + esc::kDatagramHeaderSize, d.data.data(), d.data.size());
-        st_le16(p + esc::kDatagramHeaderSize + d.data.size(), 0);
-        off += esc::kDatagramHeaderSize + d.data.size() + esc::kWkcSize;
+        const DatagramHeader h{d.cmd,     static_cast<std::uint8_t>(index_ + i),
+                               d.address, static_cast<std::uint16_t>(d.data.size()),
+                               false,     i + 1 < dgs.size(),
+                               0};
+        h.pack(std::span<std::uint8_t, DatagramHeader::kSize>(p, DatagramHeader::kSize));
+        std::memcpy(p + protocol::kDatagramHeaderSize, d.data.data(), d.data.size());
+        st_le16(p + protocol::kDatagramHeaderSize + d.data.size(), 0);
+        off += protocol::kDatagramHeaderSize + d.data.size() + protocol::kWkcSize;
     }
-    const std::size_t ecat_len = off - esc::kEthHeaderSize - esc::kEcatHeaderSize;
-    st_le16(tx_.data() + esc::kEthHeaderSize, static_cast<std::uint16_t>(ecat_len | 0x1000));
-    return std::max(off, esc::kMinEthFrame);
+    const std::size_t ecat_len = off - protocol::kEthHeaderSize - protocol::kEcatHeaderSize;
+    protocol::EcatHeader{static_cast<std::uint16_t>(ecat_len)}.pack(
+        std::span(tx_).subspan<protocol::kEthHeaderSize, protocol::kEcatHeaderSize>());
+    return std::max(off, protocol::kMinEthFrame);
 }
 
 bool Master::wait_reply(std::span<DatagramRequest> dgs) {
@@ -63,8 +65,8 @@ bool Master::wait_reply(std::span<DatagramRequest> dgs) {
         const long n = link_.receive(Bytes(rx_.data(), rx_.size()), left);
         if (n < 0) return false;
         if (n == 0) continue;
-        const auto pf = esc::parse_frame(ConstBytes(rx_.data(), static_cast<std::size_t>(n)));
-        if (pf.error != esc::FrameError::None || pf.count != dgs.size()) continue;
+        const auto pf = protocol::parse_frame(ConstBytes(rx_.data(), static_cast<std::size_t>(n)));
+        if (pf.error != protocol::FrameError::None || pf.count != dgs.size()) continue;
         bool match = true;
         for (std::size_t i = 0; i < dgs.size() && match; ++i) {
             auto d = pf.datagram(Bytes(rx_.data(), static_cast<std::size_t>(n)), i);
@@ -96,7 +98,7 @@ bool Master::transact_frame(std::span<DatagramRequest> dgs) {
 }
 
 std::optional<std::uint16_t> Master::transact(Command cmd, std::uint16_t adp, std::uint16_t ado, Bytes data) {
-    DatagramRequest r{cmd, static_cast<std::uint32_t>(adp) | (static_cast<std::uint32_t>(ado) << 16), data};
+    DatagramRequest r{cmd, protocol::datagram::address(adp, ado), data};
     if (!transact_frame(std::span<DatagramRequest>(&r, 1))) return std::nullopt;
     return r.wkc;
 }
@@ -148,7 +150,7 @@ bool Master::reset_slaves() {
         return bwr(ado, b).has_value();
     };
     std::uint8_t init[2] = {
-        static_cast<std::uint8_t>(static_cast<unsigned>(AlState::Init) | esc::kAlErrorFlag), 0};
+        static_cast<std::uint8_t>(static_cast<unsigned>(AlState::Init) | protocol::kAlErrorFlag), 0};
     return bw(ra(Reg::DlControl) + 3, 1, 0) &&                            // no alias addressing
            bwr(ra(Reg::AlControl), init).has_value() &&                   // INIT with acknowledge
            bw(ra(Reg::DlControl), 1, 0) &&                                // forwarding rule
@@ -181,7 +183,7 @@ std::optional<std::uint32_t> Master::read_sii_dword(std::uint16_t station, std::
         for (int i = 0; i < 100; ++i) {
             auto st = read16(station, ra(Reg::SiiControl));
             if (!st) return std::nullopt;
-            if (!(*st & (esc::sii_ctrl::Busy | esc::sii_ctrl::CmdMask))) return st;
+            if (!(*st & (protocol::sii_ctrl::Busy | protocol::sii_ctrl::CmdMask))) return st;
             std::this_thread::sleep_for(std::chrono::microseconds(50));
         }
         return std::nullopt;
@@ -189,16 +191,16 @@ std::optional<std::uint32_t> Master::read_sii_dword(std::uint16_t station, std::
     for (int attempt = 0; attempt < 3; ++attempt) {
         auto st = wait_idle();
         if (!st) return std::nullopt;
-        if (*st & (esc::sii_ctrl::ErrorAck | esc::sii_ctrl::ErrorWriteEnable))
+        if (*st & (protocol::sii_ctrl::ErrorAck | protocol::sii_ctrl::ErrorWriteEnable))
             write16(station, ra(Reg::SiiControl), 0);
         std::uint8_t cmd[6];
-        st_le16(cmd, esc::sii_ctrl::CmdRead);
+        st_le16(cmd, protocol::sii_ctrl::CmdRead);
         st_le32(cmd + 2, word);
         auto w = fpwr(station, ra(Reg::SiiControl), cmd);
         if (!w || *w != 1) return std::nullopt;
         st = wait_idle();
         if (!st) return std::nullopt;
-        if (*st & esc::sii_ctrl::ErrorAck) continue;  // NACK: retry
+        if (*st & protocol::sii_ctrl::ErrorAck) continue;  // NACK: retry
         return read32(station, ra(Reg::SiiData));
     }
     return std::nullopt;
@@ -216,12 +218,12 @@ std::optional<std::vector<std::uint8_t>> Master::read_sii_image(std::uint16_t st
         }
         return true;
     };
-    if (!read_words(0, esc::sii::FirstCategory)) return std::nullopt;
-    std::uint32_t word = esc::sii::FirstCategory;
+    if (!read_words(0, protocol::sii::FirstCategory)) return std::nullopt;
+    std::uint32_t word = protocol::sii::FirstCategory;
     for (int guard = 0; guard < 256; ++guard) {
         if (!read_words(word, 2)) return std::nullopt;
         const std::uint16_t type = ld_le16(img.data() + 2 * word);
-        if (type == 0xFFFF) break;
+        if (type == protocol::sii::kEndMarker) break;
         const std::uint16_t len = ld_le16(img.data() + 2 * word + 2);
         if (word + 2 + len > 0x8000) return std::nullopt;
         if (len && !read_words(word + 2, len)) return std::nullopt;
@@ -246,8 +248,8 @@ bool Master::read_slave_information() {
         auto img = read_sii_image(s.station);
         if (!img) return false;
         s.sii_image = *img;
-        s.sii = esc::parse_sii(s.sii_image);
-        auto bits = [](const std::vector<esc::SiiPdo>& pdos, std::uint8_t sm) {
+        s.sii = protocol::parse_sii(s.sii_image);
+        auto bits = [](const std::vector<protocol::SiiPdo>& pdos, std::uint8_t sm) {
             unsigned n = 0;
             for (const auto& p : pdos)
                 if (p.sm == sm)
@@ -258,8 +260,10 @@ bool Master::read_slave_information() {
         // Process data sizes: the PDOs of the SII assigned to the output / input SyncManagers.
         for (std::size_t i = 0; i < s.sii.sync_managers.size(); ++i) {
             const auto& sm = s.sii.sync_managers[i];
-            if (sm.type == 3) s.out_bytes = bits(s.sii.rx_pdos, static_cast<std::uint8_t>(i));
-            if (sm.type == 4) s.in_bytes = bits(s.sii.tx_pdos, static_cast<std::uint8_t>(i));
+            if (sm.type == protocol::sii::SmTypeOutputs)
+                s.out_bytes = bits(s.sii.rx_pdos, static_cast<std::uint8_t>(i));
+            if (sm.type == protocol::sii::SmTypeInputs)
+                s.in_bytes = bits(s.sii.tx_pdos, static_cast<std::uint8_t>(i));
         }
     }
     return true;
@@ -270,12 +274,9 @@ bool Master::configure_mailboxes() {
         if (!s.sii.std_rx_mbx_size) continue;
         for (std::size_t i = 0; i < s.sii.sync_managers.size() && i < 2; ++i) {
             const auto& sm = s.sii.sync_managers[i];
-            std::uint8_t b[8] = {};
-            st_le16(b, sm.start);
-            st_le16(b + 2, sm.length);
-            b[4] = sm.control;
-            b[6] = sm.length ? 1 : 0;
-            auto w = fpwr(s.station, esc::sm_addr(static_cast<unsigned>(i)), b);
+            std::uint8_t b[SmConfig::kSize];
+            SmConfig::master(sm.start, sm.length, sm.control).pack(b);
+            auto w = fpwr(s.station, protocol::sm_addr(static_cast<unsigned>(i)), b);
             if (!w || *w != 1) return false;
         }
     }
@@ -321,7 +322,7 @@ bool Master::read_pdo_sizes_coe(SlaveInfo& s) {
 
 bool Master::configure_process_data() {
     for (auto& s : slaves_)
-        if ((s.sii.mailbox_protocols & 0x0004) && s.sii.std_rx_mbx_size)
+        if ((s.sii.mailbox_protocols & protocol::sii::MailboxCoE) && s.sii.std_rx_mbx_size)
             if (!read_pdo_sizes_coe(s)) return false;
     std::uint32_t laddr = opt_.logical_base;
     std::size_t off = 0;
@@ -357,28 +358,21 @@ bool Master::configure_process_data() {
         unsigned fmmu = 0;
         for (std::size_t i = 0; i < s.sii.sync_managers.size(); ++i) {
             const auto& sm = s.sii.sync_managers[i];
-            if (sm.type != 3 && sm.type != 4) continue;
-            const unsigned bytes = sm.type == 3 ? s.out_bytes : s.in_bytes;
-            std::uint8_t b[8] = {};
-            st_le16(b, sm.start);
-            st_le16(b + 2, static_cast<std::uint16_t>(bytes));
-            b[4] = sm.control;
-            b[6] = bytes ? 1 : 0;
-            auto w = fpwr(s.station, esc::sm_addr(static_cast<unsigned>(i)), b);
+            const bool outputs = sm.type == protocol::sii::SmTypeOutputs;
+            if (!outputs && sm.type != protocol::sii::SmTypeInputs) continue;
+            const auto bytes = static_cast<std::uint16_t>(outputs ? s.out_bytes : s.in_bytes);
+            std::uint8_t b[SmConfig::kSize];
+            SmConfig::master(sm.start, bytes, sm.control).pack(b);
+            auto w = fpwr(s.station, protocol::sm_addr(static_cast<unsigned>(i)), b);
             if (!w || *w != 1) return false;
             if (!bytes) continue;
-            std::uint8_t f[16] = {};
-            st_le32(f, sm.type == 3 ? s.out_logical : s.in_logical);
-            st_le16(f + 4, static_cast<std::uint16_t>(bytes));
-            f[6] = 0;
-            f[7] = 7;
-            st_le16(f + 8, sm.start);
-            f[10] = 0;
-            f[11] = sm.type == 3 ? 2 : 1;
-            f[12] = 1;
-            w = fpwr(s.station, esc::fmmu_addr(fmmu++), f);
+            // Outputs: the master writes the logical range (the FMMU writes into the ESC); inputs: it reads.
+            std::uint8_t f[FmmuConfig::kSize];
+            FmmuConfig::bytes(outputs ? s.out_logical : s.in_logical, bytes, sm.start, !outputs, outputs)
+                .pack(f);
+            w = fpwr(s.station, protocol::fmmu_addr(fmmu++), f);
             if (!w || *w != 1) return false;
-            (sm.type == 3 ? n_out : n_in)++;
+            (outputs ? n_out : n_in)++;
         }
     }
     expected_wkc_ = static_cast<std::uint16_t>(2 * n_out + n_in);
@@ -398,7 +392,7 @@ AlStatusReading Master::read_al_status(std::uint16_t station) {
 
 bool Master::acknowledge_error(std::uint16_t station, AlState s) {
     return write16(station, ra(Reg::AlControl),
-                   static_cast<std::uint16_t>(static_cast<unsigned>(s) | esc::kAlErrorFlag));
+                   static_cast<std::uint16_t>(static_cast<unsigned>(s) | protocol::kAlErrorFlag));
 }
 
 bool Master::request_state(AlState s, std::chrono::milliseconds timeout) {
@@ -479,7 +473,7 @@ bool Master::configure_dc(std::uint64_t master_time_ns) {
     if (!bwr(ra(Reg::DcRecvTimePort0), zero)) return false;  // every slave latches its receive times
     SlaveInfo* parent = nullptr;
     for (auto& s : slaves_) {
-        s.has_dc = (s.features & esc::feature::DcAvailable) != 0;
+        s.has_dc = (s.features & protocol::feature::DcAvailable) != 0;
         if (!s.has_dc) continue;
         std::uint8_t times[16] = {};
         std::uint8_t pu[8] = {};
@@ -492,7 +486,7 @@ bool Master::configure_dc(std::uint64_t master_time_ns) {
         // Delay on a line: half the difference between the parent's loop time (port 0 -> port 1 back) and
         // this slave's own, plus the parent's delay. Port 1 open when DL status shows communication on it.
         auto loop_time = [](const SlaveInfo& x) -> std::int64_t {
-            const bool port1 = (x.dl_status & esc::dl_status::communication(1)) != 0;
+            const bool port1 = (x.dl_status & protocol::dl_status::communication(1)) != 0;
             return port1 ? static_cast<std::int32_t>(x.dc_port_time[1] - x.dc_port_time[0]) : 0;
         };
         if (!parent) {

@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "common/bytes.hpp"
-#include "esc/al_status.hpp"
-#include "esc/datagram.hpp"
-#include "esc/sii_image.hpp"
 #include "net/link.hpp"
+#include "protocol/al_status.hpp"
+#include "protocol/frame.hpp"
+#include "protocol/sii.hpp"
 
 namespace vecat::master {
 
@@ -21,8 +21,10 @@ struct AlStatusReading {
     std::uint8_t status = 0;  // AL status register (state | error flag)
     std::uint16_t code = 0;   // AL status code
     bool ok = false;          // the read itself succeeded
-    esc::AlState state() const { return static_cast<esc::AlState>(status & esc::kAlStateMask); }
-    bool error() const { return (status & esc::kAlErrorFlag) != 0; }
+    protocol::AlState state() const {
+        return static_cast<protocol::AlState>(status & protocol::kAlStateMask);
+    }
+    bool error() const { return (status & protocol::kAlErrorFlag) != 0; }
 };
 
 struct SlaveInfo {
@@ -34,7 +36,7 @@ struct SlaveInfo {
     std::uint16_t features = 0;
     std::uint16_t dl_status = 0;
     std::vector<std::uint8_t> sii_image;
-    esc::SiiInfo sii;
+    protocol::SiiInfo sii;
     unsigned out_bytes = 0;
     unsigned in_bytes = 0;
     std::uint32_t out_logical = 0;
@@ -62,7 +64,7 @@ struct DcOptions {
 };
 
 struct DatagramRequest {
-    esc::Command cmd;
+    protocol::Command cmd;
     std::uint32_t address;  // ADP | ADO << 16, or the logical address
     Bytes data;
     std::uint16_t wkc = 0;
@@ -80,28 +82,29 @@ class Master {
     explicit Master(net::Link& link, MasterOptions opt = {});
 
     // ---- Datagram services. Return the working counter, nullopt when no reply came.
-    std::optional<std::uint16_t> transact(esc::Command cmd, std::uint16_t adp, std::uint16_t ado, Bytes data);
-    std::optional<std::uint16_t> transact_logical(esc::Command cmd, std::uint32_t laddr, Bytes data);
+    std::optional<std::uint16_t> transact(protocol::Command cmd, std::uint16_t adp, std::uint16_t ado,
+                                          Bytes data);
+    std::optional<std::uint16_t> transact_logical(protocol::Command cmd, std::uint32_t laddr, Bytes data);
     // Several datagrams in one frame; false when no reply.
     bool transact_frame(std::span<DatagramRequest> dgs);
 
     std::optional<std::uint16_t> brd(std::uint16_t ado, Bytes d) {
-        return transact(esc::Command::BRD, 0, ado, d);
+        return transact(protocol::Command::BRD, 0, ado, d);
     }
     std::optional<std::uint16_t> bwr(std::uint16_t ado, Bytes d) {
-        return transact(esc::Command::BWR, 0, ado, d);
+        return transact(protocol::Command::BWR, 0, ado, d);
     }
     std::optional<std::uint16_t> aprd(std::uint16_t pos, std::uint16_t ado, Bytes d) {
-        return transact(esc::Command::APRD, static_cast<std::uint16_t>(-pos), ado, d);
+        return transact(protocol::Command::APRD, static_cast<std::uint16_t>(-pos), ado, d);
     }
     std::optional<std::uint16_t> apwr(std::uint16_t pos, std::uint16_t ado, Bytes d) {
-        return transact(esc::Command::APWR, static_cast<std::uint16_t>(-pos), ado, d);
+        return transact(protocol::Command::APWR, static_cast<std::uint16_t>(-pos), ado, d);
     }
     std::optional<std::uint16_t> fprd(std::uint16_t st, std::uint16_t ado, Bytes d) {
-        return transact(esc::Command::FPRD, st, ado, d);
+        return transact(protocol::Command::FPRD, st, ado, d);
     }
     std::optional<std::uint16_t> fpwr(std::uint16_t st, std::uint16_t ado, Bytes d) {
-        return transact(esc::Command::FPWR, st, ado, d);
+        return transact(protocol::Command::FPWR, st, ado, d);
     }
     // Typed register helpers (one-slave fixed addressing); nullopt unless WKC == 1.
     std::optional<std::uint16_t> read16(std::uint16_t station, std::uint16_t ado);
@@ -122,13 +125,14 @@ class Master {
     bool configure_process_data();
     bool read_pdo_sizes_coe(SlaveInfo& s);
     // Requests a state from all slaves (broadcast) and waits until each has it or reports an error.
-    bool request_state(esc::AlState s, std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));
-    bool request_state(std::uint16_t station, esc::AlState s,
+    bool request_state(protocol::AlState s,
+                       std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));
+    bool request_state(std::uint16_t station, protocol::AlState s,
                        std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));
     AlStatusReading read_al_status(std::uint16_t station);
-    bool acknowledge_error(std::uint16_t station, esc::AlState s);
+    bool acknowledge_error(std::uint16_t station, protocol::AlState s);
     // Runs the whole sequence up to the target state.
-    bool startup(esc::AlState target, std::string* why = nullptr);
+    bool startup(protocol::AlState target, std::string* why = nullptr);
 
     // ---- Distributed clocks
     // Latches the receive times (BWR 0x0900), reads them, writes each DC slave's system time offset so that

@@ -2,7 +2,7 @@
 
 #include "cia402/drive.hpp"
 #include "coe/coe_application.hpp"
-#include "esc/registers.hpp"
+#include "protocol/registers.hpp"
 
 namespace vecat::telemetry {
 
@@ -171,15 +171,16 @@ void Sampler::status(Slot& s, std::uint64_t now_ns) {
     st.al_status = e.al_status();
     st.al_status_code = e.al_status_code();
     // 0x092C: bit 31 is the sign (1: local copy of the system time smaller than the received one).
-    const std::uint32_t diff = e.peek32(esc::addr(esc::Reg::DcSystemTimeDifference));
+    const std::uint32_t diff = e.peek32(protocol::addr(protocol::Reg::DcSystemTimeDifference));
     const std::int32_t mag = static_cast<std::int32_t>(diff & 0x7FFF'FFFFu);
     st.dc_time_difference_ns = (diff & 0x8000'0000u) ? -mag : mag;
-    st.watchdog_pd_expiries = e.peek(esc::addr(esc::Reg::WatchdogCounterProcessData));
-    st.watchdog_pdi_expiries = e.peek(esc::addr(esc::Reg::WatchdogCounterPdi));
+    st.watchdog_pd_expiries = e.peek(protocol::addr(protocol::Reg::WatchdogCounterProcessData));
+    st.watchdog_pdi_expiries = e.peek(protocol::addr(protocol::Reg::WatchdogCounterPdi));
     for (std::uint16_t i = 0; i < 8; ++i)
-        st.rx_errors += e.peek(static_cast<std::uint16_t>(esc::addr(esc::Reg::RxErrorCounter) + i));
+        st.rx_errors += e.peek(static_cast<std::uint16_t>(protocol::addr(protocol::Reg::RxErrorCounter) + i));
     for (std::uint16_t i = 0; i < 4; ++i)
-        st.lost_links += e.peek(static_cast<std::uint16_t>(esc::addr(esc::Reg::LostLinkCounter) + i));
+        st.lost_links +=
+            e.peek(static_cast<std::uint16_t>(protocol::addr(protocol::Reg::LostLinkCounter) + i));
     st.mailbox_errors = s.slave->counters().mailbox_errors;
     if (s.coe) {
         st.frames = s.coe->exchanges();

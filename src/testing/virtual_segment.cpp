@@ -7,7 +7,7 @@
 #include "common/bytes.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
-#include "net/server.hpp"
+#include "serve/server.hpp"
 
 namespace vecat::testing {
 namespace {
@@ -41,7 +41,7 @@ VirtualSegment::VirtualSegment(SegmentOptions opt)
     faults::register_twinsync_faults(injector_, twinsync_faults_);
     link_.set_time(now_);
     link_.set_filter(&injector_);
-    if (opt_.target != esc::AlState::Init) {
+    if (opt_.target != protocol::AlState::Init) {
         std::string why;
         if (!master_.startup(opt_.target, &why))
             throw std::runtime_error("vecat::testing: master start-up failed: " + why);

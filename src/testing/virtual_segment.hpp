@@ -33,7 +33,7 @@
 #include "faults/injector.hpp"
 #include "faults/twinsync_faults.hpp"
 #include "master/master.hpp"
-#include "net/in_process_link.hpp"
+#include "serve/in_process_link.hpp"
 #include "telemetry/recording.hpp"
 #include "telemetry/sampler.hpp"
 
@@ -46,7 +46,7 @@ struct SegmentOptions {
     device::DeviceDescription device = device::default_drive();
     esc::EscConfig esc{};
     // VirtualSegment only: the AL state the master brings the line to (Init: no start-up at all).
-    esc::AlState target = esc::AlState::Op;
+    protocol::AlState target = protocol::AlState::Op;
     std::uint64_t cycle_ns = 1'000'000;           // one cycle() of process data
     std::int64_t master_reply_timeout_us = 2000;  // a lost frame costs this much (simulated time is not used)
     std::uint64_t fault_seed = 1;                 // of the fault probabilities

@@ -11,7 +11,7 @@
 namespace vecat::twinsync {
 
 using coe::Entry;
-using coe::SdoAbort;
+using protocol::SdoAbort;
 
 // The dictionary entries the card uses, looked up once.
 struct Port::Config {

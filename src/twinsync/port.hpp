@@ -111,8 +111,8 @@ class Port {
         std::size_t bytes = 0;
     };
     struct Config;
-    coe::SdoAbort validate_write(coe::Entry& e, ConstBytes value);
-    coe::SdoAbort check_configuration();
+    protocol::SdoAbort validate_write(coe::Entry& e, ConstBytes value);
+    protocol::SdoAbort check_configuration();
     bool resolve(const MappingWords& words, bool extended, std::vector<Mapped>& out, std::size_t& bytes,
                  std::string& why) const;
     void set_message(std::string m);

@@ -18,7 +18,7 @@
 namespace vecat::faults {
 namespace {
 
-using esc::AlState;
+using protocol::AlState;
 constexpr std::uint64_t kMs = 1'000'000;
 
 master::MasterOptions quick_master() {
@@ -41,8 +41,8 @@ struct FaultBench {
         inj.tick(now);
     }
     std::uint16_t station(std::size_t i) const { return static_cast<std::uint16_t>(0x1001 + i); }
-    std::optional<std::uint16_t> reg16(std::size_t i, esc::Reg r) {
-        return master.read16(station(i), esc::addr(r));
+    std::optional<std::uint16_t> reg16(std::size_t i, protocol::Reg r) {
+        return master.read16(station(i), protocol::addr(r));
     }
     std::uint8_t reg8(std::size_t i, std::uint16_t a) {
         std::uint8_t v = 0xEE;
@@ -51,7 +51,7 @@ struct FaultBench {
         return v;
     }
     // A frame the master sends once (no retry): its working counter, nullopt if no reply.
-    std::optional<std::uint16_t> once(esc::Command cmd, std::uint16_t adp, std::uint16_t ado, Bytes d) {
+    std::optional<std::uint16_t> once(protocol::Command cmd, std::uint16_t adp, std::uint16_t ado, Bytes d) {
         master::MasterOptions o = quick_master();
         o.retries = 0;
         master::Master single(link, o);
@@ -155,7 +155,7 @@ TEST_F(FaultTest, DroppedFrameNeverComesBackButSlavesBeforeTheCableProcessedIt) 
     // ECAT event mask 0x0200: a register the master may write.
     std::uint16_t mask = 0x1234;
     auto write_mask = [&] {
-        return b->once(esc::Command::FPWR, b->station(0), 0x0200,
+        return b->once(protocol::Command::FPWR, b->station(0), 0x0200,
                        Bytes(reinterpret_cast<std::uint8_t*>(&mask), 2));
     };
     // Lost on cable 2 (between slave 1 and 2) on the way out: slave 0 has executed the write.
@@ -181,7 +181,8 @@ TEST_F(FaultTest, ProbabilisticDropLosesAboutThatShareOfFrames) {
     int lost = 0;
     std::uint16_t v = 0;
     for (int i = 0; i < 200; ++i)
-        if (!b->once(esc::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2))) ++lost;
+        if (!b->once(protocol::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2)))
+            ++lost;
     EXPECT_GT(lost, 35);
     EXPECT_LT(lost, 85);
 }
@@ -190,7 +191,7 @@ TEST_F(FaultTest, CorruptedFrameIsCountedInTheErrorCountersOfTheEscsThatSawIt) {
     up(3);
     ASSERT_EQ(b->inject("corrupt cable=1 count=1").substr(0, 2), "ok");
     std::uint16_t v = 0;
-    EXPECT_FALSE(b->once(esc::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2)));
+    EXPECT_FALSE(b->once(protocol::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2)));
     // Slave 1 received the bad FCS on port 0 (invalid frame, processing unit), slave 2 the marked frame
     // (forwarded error); on the way back slaves 0 and 1 got the marked frame on port 1.
     EXPECT_EQ(b->reg8(0, 0x0300), 0);
@@ -205,7 +206,7 @@ TEST_F(FaultTest, CorruptedFrameIsCountedInTheErrorCountersOfTheEscsThatSawIt) {
     EXPECT_EQ(b->reg8(2, 0x030C), 1);
     // On the way back on cable 2: slave 1 sees it first at port 1, slave 0 forwarded.
     ASSERT_EQ(b->inject("corrupt cable=2 direction=back count=1").substr(0, 2), "ok");
-    EXPECT_FALSE(b->once(esc::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2)));
+    EXPECT_FALSE(b->once(protocol::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2)));
     EXPECT_EQ(b->reg8(1, 0x0302), 1);
     EXPECT_EQ(b->reg8(0, 0x0309), 2);
     EXPECT_EQ(b->reg8(2, 0x0308), 1);  // it had processed the frame intact
@@ -216,7 +217,7 @@ TEST_F(FaultTest, DelayedReplyComesTooLateAndTheMasterDiscardsIt) {
     up(1);
     ASSERT_EQ(b->inject("delay delay=5ms count=1").substr(0, 2), "ok");
     std::uint16_t v = 0;
-    EXPECT_FALSE(b->once(esc::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2)));
+    EXPECT_FALSE(b->once(protocol::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2)));
     EXPECT_EQ(b->inj.counters().replies_delayed, 1u);
     EXPECT_NE(b->inj.next_due_ns(), ~std::uint64_t{0});
     b->advance(5 * kMs);
@@ -236,37 +237,37 @@ TEST_F(FaultTest, LinkDownCutsTheLineAndShowsInDlStatusAndLostLinkCounter) {
     const auto w = b->master.exchange_process_data();
     ASSERT_TRUE(w);
     EXPECT_LT(*w, wkc_ok);
-    const auto dl = b->reg16(1, esc::Reg::DlStatus);
+    const auto dl = b->reg16(1, protocol::Reg::DlStatus);
     ASSERT_TRUE(dl);
-    EXPECT_FALSE(*dl & esc::dl_status::link(1));
-    EXPECT_TRUE(*dl & esc::dl_status::loop_closed(1));
-    EXPECT_EQ(b->reg8(1, 0x0311), 1);               // lost link counter port 1
-    EXPECT_FALSE(b->reg16(2, esc::Reg::DlStatus));  // slave 2 is gone
+    EXPECT_FALSE(*dl & protocol::dl_status::link(1));
+    EXPECT_TRUE(*dl & protocol::dl_status::loop_closed(1));
+    EXPECT_EQ(b->reg8(1, 0x0311), 1);                    // lost link counter port 1
+    EXPECT_FALSE(b->reg16(2, protocol::Reg::DlStatus));  // slave 2 is gone
     ASSERT_EQ(b->inj.execute("clear cut", b->now), "ok 1 cleared");
     EXPECT_EQ(b->master.count_slaves(), 3);
-    const auto dl2 = b->reg16(1, esc::Reg::DlStatus);
+    const auto dl2 = b->reg16(1, protocol::Reg::DlStatus);
     ASSERT_TRUE(dl2);
-    EXPECT_TRUE(*dl2 & esc::dl_status::link(1));
+    EXPECT_TRUE(*dl2 & protocol::dl_status::link(1));
 }
 
 TEST_F(FaultTest, PoweredOffSlaveBreaksTheLineAndRestartsInInit) {
     up(3, AlState::PreOp);
     ASSERT_EQ(b->inject("power_off slave=1").substr(0, 2), "ok");
     EXPECT_EQ(b->master.count_slaves(), 1);
-    const auto dl = b->reg16(0, esc::Reg::DlStatus);
+    const auto dl = b->reg16(0, protocol::Reg::DlStatus);
     ASSERT_TRUE(dl);
-    EXPECT_FALSE(*dl & esc::dl_status::link(1));
+    EXPECT_FALSE(*dl & protocol::dl_status::link(1));
     b->advance(10 * kMs);
     ASSERT_EQ(b->inj.execute("clear power_off", b->now), "ok 1 cleared");
     EXPECT_EQ(b->master.count_slaves(), 3);
     // A fresh device: no station address, INIT; its neighbours kept theirs.
     std::uint16_t st = 0xFFFF;
-    ASSERT_EQ(b->master.aprd(1, esc::addr(esc::Reg::StationAddress),
+    ASSERT_EQ(b->master.aprd(1, protocol::addr(protocol::Reg::StationAddress),
                              Bytes(reinterpret_cast<std::uint8_t*>(&st), 2)),
               1);
     EXPECT_EQ(st, 0);
     std::uint8_t al = 0;
-    ASSERT_EQ(b->master.aprd(1, esc::addr(esc::Reg::AlStatus), Bytes(&al, 1)), 1);
+    ASSERT_EQ(b->master.aprd(1, protocol::addr(protocol::Reg::AlStatus), Bytes(&al, 1)), 1);
     EXPECT_EQ(al, static_cast<std::uint8_t>(AlState::Init));
     EXPECT_EQ(b->master.read_al_status(b->station(2)).state(), AlState::PreOp);
     // Slave 1 was drive 0's TWINsync partner: the rebuilt drive is not on the cable, and drive 0 keeps
@@ -426,7 +427,7 @@ events:
 )"));
     std::uint16_t v = 0;
     auto brd = [&] {
-        return b->once(esc::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2));
+        return b->once(protocol::Command::BRD, 0, 0x0000, Bytes(reinterpret_cast<std::uint8_t*>(&v), 2));
     };
     EXPECT_EQ(brd(), 2);  // frame 0 sets the time origin
     EXPECT_EQ(brd(), 2);

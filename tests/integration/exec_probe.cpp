@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
         vecat::net::RawSocket sock(argv[1]);
         vecat::master::Master m(sock);
         std::string why;
-        if (!m.startup(vecat::esc::AlState::Op, &why)) {
+        if (!m.startup(vecat::protocol::AlState::Op, &why)) {
             std::fprintf(stderr, "start-up failed: %s\n", why.c_str());
             return 1;
         }

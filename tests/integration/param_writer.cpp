@@ -26,12 +26,14 @@ int main(int argc, char** argv) {
         for (std::uint8_t sub = 1; sub <= 7; ++sub) {
             std::uint8_t v[4];
             st_le32(v, g);
-            if (od.download(0x2000, sub, false, esc::AlState::PreOp, ConstBytes(v, 4)) != coe::SdoAbort::None)
+            if (od.download(0x2000, sub, false, protocol::AlState::PreOp, ConstBytes(v, 4)) !=
+                protocol::SdoAbort::None)
                 return 4;
         }
         std::uint8_t save[4];
         st_le32(save, coe::kStoreSignature);
-        if (od.download(0x1010, 1, false, esc::AlState::PreOp, ConstBytes(save, 4)) != coe::SdoAbort::None)
+        if (od.download(0x1010, 1, false, protocol::AlState::PreOp, ConstBytes(save, 4)) !=
+            protocol::SdoAbort::None)
             return 5;
     }
 }

@@ -22,7 +22,7 @@
 extern char** environ;
 
 using namespace vecat;
-using esc::AlState;
+using protocol::AlState;
 
 namespace {
 

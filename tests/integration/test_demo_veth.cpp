@@ -47,7 +47,7 @@ void expect_files(const fs::path& dir) {
     const std::vector<std::uint8_t> sii((std::istreambuf_iterator<char>(f)),
                                         std::istreambuf_iterator<char>());
     EXPECT_EQ(sii, esc::build_sii_image(dev));
-    const auto info = esc::parse_sii(sii);
+    const auto info = protocol::parse_sii(sii);
     EXPECT_EQ(info.identity.vendor_id, dev.identity.vendor_id);
     EXPECT_EQ(info.identity.product_code, dev.identity.product_code);
     EXPECT_GT(fs::file_size(dir / "scope.csv"), 1000u);

@@ -63,7 +63,7 @@ TEST(VethTelemetry, SubscriberReceivesWhatTheMasterReadWithinOneCycle) {
 
     net::RawSocket sock("tlm");
     master::Master m(sock);
-    ASSERT_TRUE(m.startup(esc::AlState::Op, &why)) << why;
+    ASSERT_TRUE(m.startup(protocol::AlState::Op, &why)) << why;
     std::vector<MasterRead> reads;
     reads.reserve(2000);
     auto next = std::chrono::steady_clock::now();
@@ -97,7 +97,7 @@ TEST(VethTelemetry, SubscriberReceivesWhatTheMasterReadWithinOneCycle) {
     for (int k = 0; k < 100; ++k)
         cycle(0x0F, a0 + 500'000, b0 - 250'000);
     EXPECT_NEAR(reads.back().position[0], a0 + 500'000, 200);  // settled
-    ASSERT_TRUE(m.request_state(esc::AlState::Init));
+    ASSERT_TRUE(m.request_state(protocol::AlState::Init));
     EXPECT_EQ(vecat.stop(), 0);
     std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the last samples travel
     ASSERT_EQ(scope.stop(), 0);

@@ -11,15 +11,15 @@
 #include <thread>
 
 #include "child_process.hpp"
-#include "esc/registers.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
+#include "protocol/registers.hpp"
 #include "test_support.hpp"
 
 using namespace vecat;
-using esc::AlState;
+using protocol::AlState;
 
 namespace {
 
@@ -214,9 +214,9 @@ TEST(VethCoe, RemapInPreOpReachesOpWithTheNewLayout) {
     ASSERT_TRUE(c.download_value(0x1A02, 3, u32(0x60770010)).ok());
     ASSERT_TRUE(c.download_value<std::uint8_t>(0x1A02, 0, 3).ok());
     // Rules of ETG.1020: entries change only while subindex 0 is 0; only mappable objects are accepted.
-    EXPECT_EQ(c.download_value(0x1A02, 1, u32(0x60410010)).abort, coe::SdoAbort::Subindex0NotZero);
-    EXPECT_EQ(c.download_value<std::uint8_t>(0x1A03, 0, 0).abort, coe::SdoAbort::None);
-    EXPECT_EQ(c.download_value(0x1A03, 1, u32(0x60400010)).abort, coe::SdoAbort::NotMappable);
+    EXPECT_EQ(c.download_value(0x1A02, 1, u32(0x60410010)).abort, protocol::SdoAbort::Subindex0NotZero);
+    EXPECT_EQ(c.download_value<std::uint8_t>(0x1A03, 0, 0).abort, protocol::SdoAbort::None);
+    EXPECT_EQ(c.download_value(0x1A03, 1, u32(0x60400010)).abort, protocol::SdoAbort::NotMappable);
     ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C13, 0, 0).ok());
     ASSERT_TRUE(c.download_value<std::uint16_t>(0x1C13, 1, 0x1A02).ok());
     ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C13, 0, 1).ok());
@@ -237,18 +237,18 @@ TEST(VethCoe, RemapInPreOpReachesOpWithTheNewLayout) {
     auto tp = c.upload(0x607A, 0);
     ASSERT_TRUE(tp.ok());
     EXPECT_EQ(ld_le32(tp.data.data()), 123456u);
-    EXPECT_EQ(c.download_value<std::int32_t>(0x607A, 0, 1).abort, coe::SdoAbort::MappedToRxPdo);
-    EXPECT_EQ(c.download_value<std::uint8_t>(0x1C12, 0, 0).abort, coe::SdoAbort::WrongState);
+    EXPECT_EQ(c.download_value<std::int32_t>(0x607A, 0, 1).abort, protocol::SdoAbort::MappedToRxPdo);
+    EXPECT_EQ(c.download_value<std::uint8_t>(0x1C12, 0, 0).abort, protocol::SdoAbort::WrongState);
 
     // A wrong SM2 length is refused at PREOP -> SAFEOP with 0x001D.
     ASSERT_TRUE(m.request_state(AlState::PreOp));
     std::uint8_t sm2[8] = {};
-    ASSERT_EQ(m.fpwr(st, esc::sm_addr(2), sm2).value_or(0), 1);  // disable, then configure 11 bytes
+    ASSERT_EQ(m.fpwr(st, protocol::sm_addr(2), sm2).value_or(0), 1);  // disable, then configure 11 bytes
     st_le16(sm2, 0x1000);
     st_le16(sm2 + 2, 11);
     sm2[4] = 0x64;
     sm2[6] = 1;
-    ASSERT_EQ(m.fpwr(st, esc::sm_addr(2), sm2).value_or(0), 1);
+    ASSERT_EQ(m.fpwr(st, protocol::sm_addr(2), sm2).value_or(0), 1);
     EXPECT_FALSE(m.request_state(AlState::SafeOp, std::chrono::milliseconds(300)));
     const auto r = m.read_al_status(st);
     EXPECT_EQ(r.state(), AlState::PreOp);
@@ -382,7 +382,7 @@ TEST(VethDc, Sync0AtOneMillisecondInOpWithDriftingClocks) {
     for (int c = 0; c < 500; ++c)  // SAFEOP: SYNC0 starts (100 ms after the start-up), the master locks on
         cycle();
     std::uint8_t op[2] = {static_cast<std::uint8_t>(AlState::Op), 0};
-    ASSERT_TRUE(m.bwr(esc::addr(esc::Reg::AlControl), op));
+    ASSERT_TRUE(m.bwr(protocol::addr(protocol::Reg::AlControl), op));
     bool all_op = false;
     for (int c = 0; c < 1500 && !all_op; ++c) {
         cycle();

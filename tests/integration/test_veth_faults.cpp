@@ -14,7 +14,7 @@
 #include "test_support.hpp"
 
 using namespace vecat;
-using esc::AlState;
+using protocol::AlState;
 
 namespace {
 

@@ -83,13 +83,14 @@ TEST(Replay, SoemRequestsToARealAkdGetRepliesOfTheSameLayout) {
         RecordingLink rec(b.link, w);
         master::Master m(rec);
         std::string why;
-        ASSERT_TRUE(m.startup(esc::AlState::PreOp, &why)) << why;
+        ASSERT_TRUE(m.startup(protocol::AlState::PreOp, &why)) << why;
         master::CoeClient c(m, m.slaves()[0].station);
         for (std::size_t i = 0; i < requests.size(); ++i) {
             const auto& rq = requests[i].bytes;
             const auto& real = replies[i].bytes;
             // When: the same CoE request, with the same mailbox counter, goes to vecat.
-            ASSERT_TRUE(c.send(esc::MailboxType::CoE, ConstBytes(rq.data() + 6, rq.size() - 6), rq[5] >> 4));
+            ASSERT_TRUE(
+                c.send(protocol::MailboxType::CoE, ConstBytes(rq.data() + 6, rq.size() - 6), rq[5] >> 4));
             auto rsp = c.receive();
             ASSERT_TRUE(rsp) << "request " << i << " got no reply";
             // Then: the reply is laid out like the real drive's.

@@ -16,7 +16,7 @@ TEST(VirtualSegment, BringsTheDrivesToOpAndEnablesThem) {
     ASSERT_EQ(vs.size(), 2u);
     ASSERT_EQ(vs.master().slaves().size(), 2u);
     for (std::size_t i = 0; i < 2; ++i)
-        EXPECT_EQ(vs.master().read_al_status(vs.station(i)).state(), esc::AlState::Op);
+        EXPECT_EQ(vs.master().read_al_status(vs.station(i)).state(), protocol::AlState::Op);
     EXPECT_TRUE(vs.cycles(10));
     EXPECT_EQ(vs.last_wkc(), vs.master().expected_wkc());
     const std::uint64_t t0 = vs.now_ns();
@@ -79,7 +79,7 @@ TEST(VethSegment, AMasterOnTheOtherEndFindsTheDrives) {
     net::RawSocket sock(vs.master_interface());
     master::Master m(sock);
     std::string why;
-    ASSERT_TRUE(m.startup(esc::AlState::Op, &why)) << why;
+    ASSERT_TRUE(m.startup(protocol::AlState::Op, &why)) << why;
     EXPECT_EQ(m.slaves().size(), 2u);
     for (int i = 0; i < 50; ++i)
         ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());

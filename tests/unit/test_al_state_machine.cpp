@@ -6,8 +6,8 @@
 
 using namespace vecat;
 using namespace vecat::test;
-using esc::AlState;
-using esc::AlStatusCode;
+using protocol::AlState;
+using protocol::AlStatusCode;
 
 namespace {
 
@@ -115,10 +115,10 @@ TEST(AlStateMachine, InvalidMailboxConfigurationIsRefused) {
     reach(b, S::Init);
     const auto st = b.master.slaves()[0].station;
     ASSERT_TRUE(b.master.configure_mailboxes());
-    ASSERT_TRUE(b.master.write16(st, esc::sm_addr(0) + 2, 0x0080));  // locked: SM0 is enabled
-    ASSERT_TRUE(b.master.write8(st, esc::sm_addr(0) + 6, 0));        // disable SM0
-    ASSERT_TRUE(b.master.write16(st, esc::sm_addr(0) + 2, 0x0080));  // wrong length
-    ASSERT_TRUE(b.master.write8(st, esc::sm_addr(0) + 6, 1));
+    ASSERT_TRUE(b.master.write16(st, protocol::sm_addr(0) + 2, 0x0080));  // locked: SM0 is enabled
+    ASSERT_TRUE(b.master.write8(st, protocol::sm_addr(0) + 6, 0));        // disable SM0
+    ASSERT_TRUE(b.master.write16(st, protocol::sm_addr(0) + 2, 0x0080));  // wrong length
+    ASSERT_TRUE(b.master.write8(st, protocol::sm_addr(0) + 6, 1));
     const auto r = request(b, static_cast<std::uint16_t>(S::PreOp));
     EXPECT_EQ(r.state(), S::Init);
     EXPECT_EQ(r.code, 0x0016);
@@ -130,9 +130,9 @@ TEST(AlStateMachine, WrongProcessDataSyncManagersAreRefused) {
         reach(b, S::PreOp);
         ASSERT_TRUE(b.master.configure_process_data());
         const auto st = b.master.slaves()[0].station;
-        ASSERT_TRUE(b.master.write8(st, static_cast<std::uint16_t>(esc::sm_addr(smi) + 6), 0));
-        ASSERT_TRUE(b.master.write16(st, static_cast<std::uint16_t>(esc::sm_addr(smi) + 2), 3));
-        ASSERT_TRUE(b.master.write8(st, static_cast<std::uint16_t>(esc::sm_addr(smi) + 6), 1));
+        ASSERT_TRUE(b.master.write8(st, static_cast<std::uint16_t>(protocol::sm_addr(smi) + 6), 0));
+        ASSERT_TRUE(b.master.write16(st, static_cast<std::uint16_t>(protocol::sm_addr(smi) + 2), 3));
+        ASSERT_TRUE(b.master.write8(st, static_cast<std::uint16_t>(protocol::sm_addr(smi) + 6), 1));
         const auto r = request(b, static_cast<std::uint16_t>(S::SafeOp));
         EXPECT_EQ(r.state(), S::PreOp);
         EXPECT_EQ(r.code, smi == 2 ? 0x001D : 0x001E);

@@ -49,7 +49,7 @@ TEST(BadInput, AddressesAtTheEndOfTheSpaces) {
 
 TEST(BadInput, RandomFramesNeverCrash) {
     Bench b(3);
-    ASSERT_TRUE(b.master.startup(esc::AlState::Op));
+    ASSERT_TRUE(b.master.startup(protocol::AlState::Op));
     std::mt19937 rng(20261122);
     std::vector<std::uint8_t> f(1600);
     std::uint64_t replies = 0;
@@ -73,7 +73,7 @@ TEST(BadInput, RandomFramesNeverCrash) {
 
 TEST(BadInput, NonsenseAlRequestsGetAStatusCode) {
     Bench b(1);
-    ASSERT_TRUE(b.master.startup(esc::AlState::Init));
+    ASSERT_TRUE(b.master.startup(protocol::AlState::Init));
     const auto st = b.master.slaves()[0].station;
     ASSERT_TRUE(b.master.write16(st, 0x0120, 0x00FF));
     const auto r = b.master.read_al_status(st);
@@ -87,7 +87,7 @@ TEST(BadInput, NonsenseAlRequestsGetAStatusCode) {
 TEST(BadInput, RandomCoeMessagesAlwaysGetAnAnswer) {
     Bench b(1);
     std::string why;
-    ASSERT_TRUE(b.master.startup(esc::AlState::PreOp, &why)) << why;
+    ASSERT_TRUE(b.master.startup(protocol::AlState::PreOp, &why)) << why;
     const auto st = b.master.slaves()[0].station;
     master::CoeClient c(b.master, st);
     std::mt19937 rng(20261122);
@@ -102,7 +102,7 @@ TEST(BadInput, RandomCoeMessagesAlwaysGetAnAnswer) {
         if (p.size() >= 2 && i % 3 != 0)
             p[1] = static_cast<std::uint8_t>((i % 2 ? 0x20 : 0x80) | (p[1] & 0x01));
         const bool master_abort = p.size() >= 3 && (p[1] >> 4) == 2 && (p[2] >> 5) == 4;
-        ASSERT_TRUE(c.send(esc::MailboxType::CoE, p, c.next_counter()));
+        ASSERT_TRUE(c.send(protocol::MailboxType::CoE, p, c.next_counter()));
         auto r = c.receive(std::chrono::milliseconds(master_abort ? 1 : 50));
         if (master_abort && p.size() >= 10) {
             EXPECT_FALSE(r) << "a master abort request is not answered";
@@ -126,22 +126,22 @@ TEST(BadInput, RandomCoeMessagesAlwaysGetAnAnswer) {
 // A mailbox protocol that reads every byte it is given: answers with their sum (32 bits) and count.
 class SummingProtocol final : public esc::MailboxProtocol {
   public:
-    esc::MailboxType type() const override { return esc::MailboxType::CoE; }
-    void handle(const esc::MailboxHeader&, ConstBytes payload, esc::MailboxReplySink& out) override {
+    protocol::MailboxType type() const override { return protocol::MailboxType::CoE; }
+    void handle(const protocol::MailboxHeader&, ConstBytes payload, esc::MailboxReplySink& out) override {
         std::uint32_t sum = 0;
         for (auto x : payload)
             sum += x;
         auto r = out.reply_buffer();
         st_le32(r.data(), sum);
         st_le32(r.data() + 4, static_cast<std::uint32_t>(payload.size()));
-        out.commit(esc::MailboxType::CoE, 8);
+        out.commit(protocol::MailboxType::CoE, 8);
     }
 };
 class SummingApplication final : public esc::ProcessImageApplication {
   public:
     using ProcessImageApplication::ProcessImageApplication;
-    esc::MailboxProtocol* mailbox_protocol(esc::MailboxType t) override {
-        return t == esc::MailboxType::CoE ? &proto_ : nullptr;
+    esc::MailboxProtocol* mailbox_protocol(protocol::MailboxType t) override {
+        return t == protocol::MailboxType::CoE ? &proto_ : nullptr;
     }
 
   private:
@@ -165,7 +165,7 @@ TEST(BadInput, MailboxLargerThanAnEthernetFrame) {
     dev.sync_managers[3].start = 0x2100;
     Bench b(1, {}, dev, &summing_segment);
     std::string why;
-    ASSERT_TRUE(b.master.startup(esc::AlState::PreOp, &why)) << why;
+    ASSERT_TRUE(b.master.startup(protocol::AlState::PreOp, &why)) << why;
     const auto st = b.master.slaves()[0].station;
     // 2000 bytes of 0x01 after the header, written in two datagrams (no frame holds 2048 bytes).
     std::vector<std::uint8_t> m(2048, 0x01);

@@ -35,7 +35,7 @@ TEST(Bounds, CaptureFileStopsAtItsLimit) {
 TEST(Bounds, UnreadMailboxRepliesAreDroppedAndCounted) {
     test::Bench b(1);
     std::string why;
-    ASSERT_TRUE(b.master.startup(esc::AlState::PreOp, &why)) << why;
+    ASSERT_TRUE(b.master.startup(protocol::AlState::PreOp, &why)) << why;
     const auto st = b.master.slaves()[0].station;
     const auto sm0 = b.desc.sync_managers[0];
     constexpr int kRequests = 20;

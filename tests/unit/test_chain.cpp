@@ -8,14 +8,14 @@
 
 #include "coe/coe_application.hpp"
 #include "device/device_description.hpp"
-#include "esc/datagram.hpp"
-#include "esc/registers.hpp"
 #include "esc/segment.hpp"
 #include "master/master.hpp"
 #include "net/link.hpp"
+#include "protocol/frame.hpp"
+#include "protocol/registers.hpp"
 
 using namespace vecat;
-using esc::AlState;
+using protocol::AlState;
 
 namespace {
 
@@ -165,23 +165,23 @@ TEST(ChainedSegments, ReturnLatchesPort1FromTheSlavesBehind) {
     f[13] = 0xA4;
     const std::size_t dlen = 4;
     st_le16(f.data() + 14,
-            static_cast<std::uint16_t>((esc::kDatagramHeaderSize + dlen + esc::kWkcSize) | 0x1000));
+            static_cast<std::uint16_t>((protocol::kDatagramHeaderSize + dlen + protocol::kWkcSize) | 0x1000));
     std::uint8_t* d = f.data() + 16;
-    d[0] = static_cast<std::uint8_t>(esc::Command::BWR);
+    d[0] = static_cast<std::uint8_t>(protocol::Command::BWR);
     d[1] = 0x42;
-    st_le16(d + 4, esc::addr(esc::Reg::DcRecvTimePort0));
+    st_le16(d + 4, protocol::addr(protocol::Reg::DcRecvTimePort0));
     st_le16(d + 6, dlen);
-    std::size_t len = 16 + esc::kDatagramHeaderSize + dlen + esc::kWkcSize;
+    std::size_t len = 16 + protocol::kDatagramHeaderSize + dlen + protocol::kWkcSize;
     const std::uint64_t t0 = 5'000'000'000;
     ASSERT_TRUE(a->process_frame(Bytes(f.data(), f.size()), len, t0));
     ASSERT_TRUE(a->frame_goes_downstream());
-    esc::DatagramView v(d);
+    protocol::DatagramView v(d);
     EXPECT_EQ(v.wkc(), 2);
     v.set_wkc(5);  // three more slaves downstream
     ASSERT_TRUE(a->return_frame(Bytes(f.data(), f.size()), len, t0 + 80'000));
     auto port_time = [&](std::size_t k, unsigned p) {
         return a->slave(k).esc().peek32(
-            static_cast<std::uint16_t>(esc::addr(esc::Reg::DcRecvTimePort0) + 4 * p));
+            static_cast<std::uint16_t>(protocol::addr(protocol::Reg::DcRecvTimePort0) + 4 * p));
     };
     // Slave 0: 4 slaves behind it, 8 hops out and back; slave 1: 3 behind, 6 hops.
     EXPECT_EQ(port_time(0, 1) - port_time(0, 0), 8u * 500u);

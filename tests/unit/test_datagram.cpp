@@ -3,10 +3,10 @@
 
 #include <vector>
 
-#include "esc/datagram.hpp"
+#include "protocol/frame.hpp"
 
 using namespace vecat;
-using namespace vecat::esc;
+using namespace vecat::protocol;
 
 namespace {
 std::vector<std::uint8_t> frame(std::initializer_list<std::uint16_t> lens, bool vlan = false) {

@@ -14,8 +14,8 @@
 
 using namespace vecat;
 using namespace vecat::test;
-using esc::AlState;
-using esc::AlStatusCode;
+using protocol::AlState;
+using protocol::AlStatusCode;
 
 namespace {
 
@@ -152,7 +152,7 @@ TEST(DcRegisters, TimesAtTheEndsOfTheSixtyFourBitRangeSaturate) {
     // Found by fuzz_frame: a SYNC0 start time 2^63 ns away from the local time, with a clock a little slow,
     // gave a host time outside the range of int64 (undefined behaviour, reported by UBSan in CI's sanitizer
     // run of this test). Such times now saturate.
-    std::vector<std::uint8_t> regs(esc::kRegisterSpaceSize);
+    std::vector<std::uint8_t> regs(protocol::kRegisterSpaceSize);
     esc::DistributedClock slow(regs.data(), -50.0, 0);
     slow.reset_registers();
     constexpr auto kMax = static_cast<std::uint64_t>(INT64_MAX);
@@ -528,7 +528,7 @@ struct SyncBench {
     }
     bool request(AlState s) {
         std::uint8_t b[2] = {static_cast<std::uint8_t>(s), 0};
-        return master.bwr(esc::addr(esc::Reg::AlControl), b).has_value();
+        return master.bwr(protocol::addr(protocol::Reg::AlControl), b).has_value();
     }
     master::AlStatusReading status(std::size_t i = 0) {
         return master.read_al_status(master.slaves()[i].station);

@@ -344,8 +344,8 @@ TEST(EsiReader, MoreThanSixteenSyncManagersAreCutToWhatAnEscHas) {
     net::InProcessLink link(*seg);
     link.set_time(1'000'000'000);
     master::Master m(link);
-    EXPECT_FALSE(m.startup(esc::AlState::PreOp));
-    EXPECT_NE(seg->slave(0).state(), esc::AlState::PreOp);
+    EXPECT_FALSE(m.startup(protocol::AlState::PreOp));
+    EXPECT_NE(seg->slave(0).state(), protocol::AlState::PreOp);
 }
 
 // Found by fuzz_esi: Eeprom ByteSize 4294967265 made the SII builder allocate 4 GB. A size outside what an
@@ -523,10 +523,10 @@ TEST(EsiSoes, SiiFromTheirEsiAgainstTheirImageListsEachDifferingByte) {
             EXPECT_FALSE(d.why.empty());
             // The ESC configuration area, identity and mailbox words must agree (size word 0x3E excepted:
             // the generated image needs more than ByteSize 256).
-            EXPECT_GE(d.offset, 2u * esc::sii::Size) << d.where;
+            EXPECT_GE(d.offset, 2u * protocol::sii::Size) << d.where;
         }
-        const auto a = esc::parse_sii(ConstBytes(gen.data(), gen.size()));
-        const auto b = esc::parse_sii(ConstBytes(ref.data(), ref.size()));
+        const auto a = protocol::parse_sii(ConstBytes(gen.data(), gen.size()));
+        const auto b = protocol::parse_sii(ConstBytes(ref.data(), ref.size()));
         EXPECT_TRUE(b.checksum_ok);
         EXPECT_TRUE(a.checksum_ok);
         // FMMU usage; the byte padding an odd count is 0xFF in vecat, 0x00 in SOES (both mean unused).
@@ -564,7 +564,7 @@ TEST(EsiRun, EachVendorDeviceReachesOpWithItsDefaultPdos) {
         EXPECT_TRUE(esi::check_consistency(r.desc, esc::build_sii_image(r.desc)).empty());
         test::Bench b{1, {}, r.desc, &cia402::make_drive_segment};
         std::string why;
-        ASSERT_TRUE(b.master.startup(esc::AlState::Op, &why)) << "start-up: " << why;
+        ASSERT_TRUE(b.master.startup(protocol::AlState::Op, &why)) << "start-up: " << why;
         const auto& s = b.master.slaves().at(0);
         EXPECT_EQ(s.sii.identity.vendor_id, c.vendor);
         EXPECT_EQ(s.sii.identity.product_code, c.product);

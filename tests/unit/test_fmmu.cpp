@@ -51,7 +51,7 @@ TEST(Fmmu, BitGranularMapping) {
 
 TEST(Fmmu, MapsRegisterSpaceLikeSoemMailboxStatus) {
     Bench b(1);
-    ASSERT_TRUE(b.master.startup(esc::AlState::PreOp));
+    ASSERT_TRUE(b.master.startup(protocol::AlState::PreOp));
     const auto st = b.master.slaves()[0].station;
     raw_datagram(*b.seg, 5, phys(st, 0x0620), fmmu(0x9000, 1, 0, 7, 0x080D, 0, 1));
     auto empty = raw_datagram(*b.seg, 10, 0x9000, {0});

@@ -20,7 +20,7 @@
 #include "lock_counter.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
-#include "net/server.hpp"
+#include "serve/server.hpp"
 #include "test_support.hpp"
 
 using namespace vecat;
@@ -54,12 +54,12 @@ TEST(NoLock, CounterSeesTheStandardLocks) {
 
 TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
     Bench b(4);
-    ASSERT_TRUE(b.master.startup(esc::AlState::Op));
+    ASSERT_TRUE(b.master.startup(protocol::AlState::Op));
     // A typical cyclic frame: LRW over the process image + FRMW of the reference clock's system time.
     std::vector<std::uint8_t> img(4 * (16 + 28), 0);
     std::uint8_t t[8] = {};
-    master::DatagramRequest dg[2] = {{esc::Command::LRW, 0x00010000, Bytes(img.data(), img.size())},
-                                     {esc::Command::FRMW, 0x09101001, Bytes(t, 8)}};
+    master::DatagramRequest dg[2] = {{protocol::Command::LRW, 0x00010000, Bytes(img.data(), img.size())},
+                                     {protocol::Command::FRMW, 0x09101001, Bytes(t, 8)}};
     for (int i = 0; i < 10; ++i)
         ASSERT_TRUE(b.master.transact_frame(dg));
     const auto before = test::allocations();
@@ -77,7 +77,7 @@ TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
 // nothing either: CSP, PP with new set-points, PV, CST and homing through process data in OP.
 TEST(NoAllocation, DriveMovingInEveryMode) {
     Bench b(2, {}, device::default_drive(), &cia402::make_drive_segment);
-    ASSERT_TRUE(b.master.startup(esc::AlState::Op));
+    ASSERT_TRUE(b.master.startup(protocol::AlState::Op));
     auto run = [&](int cycles, std::int8_t mode, std::uint16_t cw, std::int32_t pos, std::int32_t vel) {
         for (int i = 0; i < cycles; ++i) {
             for (std::size_t s = 0; s < 2; ++s) {
@@ -149,7 +149,7 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
     mo.dc.sync0_cycle_ns = 0;
     mo.dc.static_drift_frames = 100;
     master::Master m(ms, mo);
-    const bool up = m.startup(esc::AlState::Op, &why);
+    const bool up = m.startup(protocol::AlState::Op, &why);
     for (std::size_t i = 0; i < m.last_states().size() && !up; ++i)
         why +=
             " " + std::to_string(m.last_states()[i].status) + "/" + std::to_string(m.last_states()[i].code);

@@ -11,7 +11,7 @@
 
 using namespace vecat;
 using namespace vecat::coe;
-using esc::AlState;
+using protocol::AlState;
 namespace acc = device::access;
 
 namespace {

@@ -16,7 +16,7 @@ TEST(Registers, InformationRegisters) {
     EXPECT_EQ(r.data[5], 8);     // SyncManagers
     EXPECT_EQ(r.data[6], 16);    // RAM in KiB
     EXPECT_EQ(r.data[7], 0x0F);  // ports 0, 1 MII
-    EXPECT_TRUE(ld_le16(&r.data[8]) & esc::feature::DcAvailable);
+    EXPECT_TRUE(ld_le16(&r.data[8]) & protocol::feature::DcAvailable);
 }
 
 TEST(Registers, ReadOnlyRegistersCountButKeepTheirValue) {

@@ -9,23 +9,24 @@
 #include <vector>
 
 #include "coe/coe_application.hpp"
-#include "coe/coe_protocol.hpp"
 #include "coe/sdo_server.hpp"
 #include "device/device_description.hpp"
 #include "esc/mailbox.hpp"
 #include "master/coe_client.hpp"
+#include "protocol/coe.hpp"
 #include "test_support.hpp"
 
 using namespace vecat;
 using namespace vecat::coe;
-using esc::AlState;
-using esc::MailboxType;
+using protocol::AlState;
+using protocol::MailboxType;
 
 namespace {
 
 using Buf = std::vector<std::uint8_t>;
 
-constexpr std::size_t kMailboxPayload = 0xF6 - esc::kMailboxHeaderSize;  // SM1 length of the default drive
+constexpr std::size_t kMailboxPayload =
+    0xF6 - protocol::kMailboxHeaderSize;  // SM1 length of the default drive
 
 struct Reply {
     MailboxType type = MailboxType::Error;
@@ -146,7 +147,7 @@ class Sdo : public ::testing::Test {
     Sdo() : app(device::default_drive()) { app.on_state_change(AlState::Init, AlState::PreOp); }
 
     void handle(const Buf& p, FakeSink& s) {
-        esc::MailboxHeader h;
+        protocol::MailboxHeader h;
         h.length = static_cast<std::uint16_t>(p.size());
         h.type = static_cast<std::uint8_t>(MailboxType::CoE);
         app.sdo_server().handle(h, ConstBytes(p.data(), p.size()), s);
@@ -674,7 +675,7 @@ TEST_F(Sdo, CompleteAccessDownloadWithBadEntryIsRolledBack) {
     EXPECT_EQ(od().find(0x1C12, 1)->get<std::uint16_t>(), 0x1600);
     EXPECT_EQ(od().find(0x1C12, 2)->get<std::uint16_t>(), 0u);
     EXPECT_EQ(app.process_data().output_bytes(), 16u);
-    EXPECT_EQ(app.process_data().validate(), esc::AlStatusCode::NoError);
+    EXPECT_EQ(app.process_data().validate(), protocol::AlStatusCode::NoError);
 }
 
 TEST_F(Sdo, CompleteAccessDownloadOfMapping) {
@@ -712,7 +713,7 @@ TEST_F(Sdo, RemapChangesTheOutputImage) {
     // copy_outputs stores the fields into the mapped objects (the gap is skipped).
     remap(0x1600, {0x60400010, 0x00000008, 0x607A0020});
     EXPECT_EQ(app.process_data().output_bytes(), 7u);
-    EXPECT_EQ(app.process_data().validate(), esc::AlStatusCode::NoError);
+    EXPECT_EQ(app.process_data().validate(), protocol::AlStatusCode::NoError);
     EXPECT_EQ(send(upload_req(0x1600, 0)), (Buf{0x00, 0x30, 0x4F, 0x00, 0x16, 0x00, 0x03, 0x00, 0x00, 0x00}));
     const Buf image = {0x0F, 0x00, 0xEE, 0x78, 0x56, 0x34, 0x12};
     app.process_data().copy_outputs(ConstBytes(image.data(), image.size()));
@@ -810,7 +811,7 @@ TEST_F(Sdo, ProcessImageBeyondTheSyncManagerIsRefused) {
     ASSERT_EQ(write_u8(0x1601, 0, 7), 0u);
     ASSERT_EQ(write_u8(0x1C12, 0, 2), 0u);
     EXPECT_EQ(app.process_data().output_bytes(), 85u);
-    EXPECT_EQ(app.process_data().validate(), esc::AlStatusCode::NoError);
+    EXPECT_EQ(app.process_data().validate(), protocol::AlStatusCode::NoError);
     // Growing the assigned 0x1601 by its 8th entry: refused.
     ASSERT_EQ(write_u8(0x1601, 0, 0), 0u);
     EXPECT_EQ(send(expedited_req(0x1601, 0, {8})), abort_frame(0x1601, 0, 0x06040042));
@@ -884,14 +885,16 @@ TEST_F(Sdo, ApplicationServesCoeOnly) {
 TEST_F(Sdo, InvalidMappingFailsTheTransitionToSafeOp) {
     // A mapping that became invalid behind the SDO checks (the application's own write) is reported by
     // check_transition as "invalid output mapping" (0x0025).
-    EXPECT_EQ(app.check_transition(AlState::PreOp, AlState::SafeOp), esc::AlStatusCode::NoError);
+    EXPECT_EQ(app.check_transition(AlState::PreOp, AlState::SafeOp), protocol::AlStatusCode::NoError);
     od().find(0x1600, 1)->set(std::uint32_t{0x10180120});
     app.process_data().rebuild();
-    EXPECT_EQ(app.check_transition(AlState::PreOp, AlState::SafeOp), esc::AlStatusCode::InvalidOutputMapping);
+    EXPECT_EQ(app.check_transition(AlState::PreOp, AlState::SafeOp),
+              protocol::AlStatusCode::InvalidOutputMapping);
     od().find(0x1600, 1)->set(std::uint32_t{0x60400010});
     od().find(0x1A00, 2)->set(std::uint32_t{0x60400010});
     app.process_data().rebuild();
-    EXPECT_EQ(app.check_transition(AlState::PreOp, AlState::SafeOp), esc::AlStatusCode::InvalidInputMapping);
+    EXPECT_EQ(app.check_transition(AlState::PreOp, AlState::SafeOp),
+              protocol::AlStatusCode::InvalidInputMapping);
 }
 
 // =========================================================================================================
@@ -1177,15 +1180,15 @@ TEST_F(Sdo, ClearFaultsSendsErrorReset) {
 
 TEST_F(Sdo, AlErrorDuringPreOpToSafeOpIsReported) {
     // The AL status code 0x001D goes into the first data bytes of emergency 0xA000.
-    EXPECT_EQ(app.check_transition(AlState::PreOp, AlState::SafeOp), esc::AlStatusCode::NoError);
-    app.on_al_error(esc::AlStatusCode::InvalidOutputConfig);
+    EXPECT_EQ(app.check_transition(AlState::PreOp, AlState::SafeOp), protocol::AlStatusCode::NoError);
+    app.on_al_error(protocol::AlStatusCode::InvalidOutputConfig);
     EXPECT_EQ(od().find(0x1001, 0)->as_uint64(), 0x11u);  // communication + generic
     EXPECT_EQ(od().find(0x603F, 0)->as_uint64(), 0u);     // not a device fault
     app.sdo_server().poll(sink);
     ASSERT_EQ(sink.queued(), 1u);
     EXPECT_EQ(sink.take().bytes, (Buf{0x00, 0x10, 0x00, 0xA0, 0x11, 0x1D, 0x00, 0x00, 0x00, 0x00}));
     // Acknowledged: the error register clears and an error reset follows.
-    app.on_al_error(esc::AlStatusCode::NoError);
+    app.on_al_error(protocol::AlStatusCode::NoError);
     EXPECT_EQ(od().find(0x1001, 0)->as_uint64(), 0u);
     app.sdo_server().poll(sink);
     ASSERT_EQ(sink.queued(), 1u);
@@ -1194,8 +1197,8 @@ TEST_F(Sdo, AlErrorDuringPreOpToSafeOpIsReported) {
 
 TEST_F(Sdo, AlErrorDuringSafeOpToOpAndWatchdog) {
     app.check_transition(AlState::SafeOp, AlState::Op);
-    app.on_al_error(esc::AlStatusCode::NoValidOutputs);
-    app.on_al_error(esc::AlStatusCode::SyncManagerWatchdog);
+    app.on_al_error(protocol::AlStatusCode::NoValidOutputs);
+    app.on_al_error(protocol::AlStatusCode::SyncManagerWatchdog);
     app.sdo_server().poll(sink);
     ASSERT_EQ(sink.queued(), 1u);  // one at a time: the next waits until this one is read
     EXPECT_EQ(sink.take().bytes, (Buf{0x00, 0x10, 0x01, 0xA0, 0x11, 0x19, 0x00, 0x00, 0x00, 0x00}));
@@ -1207,12 +1210,12 @@ TEST_F(Sdo, AlErrorDuringSafeOpToOpAndWatchdog) {
 TEST_F(Sdo, RefusalWithoutACheckedTransitionIsAGenericCommunicationError) {
     // Given a PREOP->SAFEOP check that was refused and reported ...
     app.check_transition(AlState::PreOp, AlState::SafeOp);
-    app.on_al_error(esc::AlStatusCode::InvalidOutputConfig);
+    app.on_al_error(protocol::AlStatusCode::InvalidOutputConfig);
     app.sdo_server().poll(sink);
     ASSERT_EQ(sink.queued(), 1u);
     EXPECT_EQ(ld_le16(sink.take().bytes.data() + 2), 0xA000);
     // ... a later refusal that runs no check (0x0011) does not reuse that transition's code.
-    app.on_al_error(esc::AlStatusCode::InvalidRequestedStateChange);
+    app.on_al_error(protocol::AlStatusCode::InvalidRequestedStateChange);
     app.sdo_server().poll(sink);
     ASSERT_EQ(sink.queued(), 1u);
     const Buf e = sink.take().bytes;
@@ -1251,7 +1254,7 @@ TEST(CoeClientThroughTheSlave, SdoInformationAndSegmentedTransfers) {
     std::string why;
     ASSERT_TRUE(b.master.startup(AlState::PreOp, &why)) << why;
     vecat::master::CoeClient c(b.master, b.master.slaves()[0].station);
-    auto all = c.od_list(vecat::coe::sdo_info::ListAll);
+    auto all = c.od_list(vecat::protocol::sdo_info::ListAll);
     ASSERT_TRUE(all);
     ASSERT_EQ(all->size(), b.od().objects().size());
     for (std::size_t i = 0; i < all->size(); ++i)

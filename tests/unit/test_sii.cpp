@@ -11,6 +11,7 @@
 using namespace vecat;
 using namespace vecat::test;
 using namespace vecat::esc;
+using namespace vecat::protocol;
 
 namespace {
 std::vector<std::uint8_t> load(const std::string& rel) {

@@ -7,6 +7,7 @@
 
 using namespace vecat;
 using namespace vecat::esc;
+using namespace vecat::protocol;
 
 namespace {
 // An ESC without firmware: the test plays the PDI side.

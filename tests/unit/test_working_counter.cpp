@@ -5,7 +5,7 @@
 
 using namespace vecat;
 using namespace vecat::test;
-using esc::Command;
+using protocol::Command;
 
 namespace {
 constexpr std::uint8_t c(Command x) {
@@ -122,7 +122,7 @@ TEST_F(Line, NopAndUnknownCommandsPassUntouched) {
 TEST(LogicalCommands, WorkingCounterPerFmmuDirection) {
     Bench b(3);
     std::string why;
-    ASSERT_TRUE(b.master.startup(esc::AlState::SafeOp, &why)) << why;
+    ASSERT_TRUE(b.master.startup(protocol::AlState::SafeOp, &why)) << why;
     EXPECT_EQ(b.master.expected_wkc(), 9);
     EXPECT_EQ(b.master.exchange_process_data().value(), 9);  // LRW: 3 x (1 read + 2 write)
     const std::uint32_t base = 0x00010000;

@@ -12,7 +12,7 @@
 
 #include "cia402/drive.hpp"
 #include "master/coe_client.hpp"
-#include "net/in_process_link.hpp"
+#include "serve/in_process_link.hpp"
 #include "test_support.hpp"
 
 namespace vecat::cia402 {
@@ -49,7 +49,7 @@ struct DriveTest : ::testing::Test {
     }
     void SetUp() override {
         std::string why;
-        ASSERT_TRUE(b.master.startup(esc::AlState::PreOp, &why)) << why;
+        ASSERT_TRUE(b.master.startup(protocol::AlState::PreOp, &why)) << why;
         run_ms(1);
     }
     void enable(Mode m) {
@@ -243,13 +243,13 @@ TEST_F(DriveTest, VelocityOverrideAndPositionCompensationOfTheProfileModes) {
     EXPECT_NEAR(position(), start + 800'000, 100);
     // Position compensation: 50000 extra within a length of 400000 of a 1e6 move.
     master::CoeClient c(b.master, 0x1001);
-    ASSERT_EQ(c.download_value<std::int32_t>(0x2111, 1, 50'000).abort, coe::SdoAbort::None);
-    ASSERT_EQ(c.download_value<std::uint32_t>(0x2111, 2, 400'000).abort, coe::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::int32_t>(0x2111, 1, 50'000).abort, protocol::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint32_t>(0x2111, 2, 400'000).abort, protocol::SdoAbort::None);
     set<std::int32_t>(0x607A, start + 1'800'000);
     set<std::uint16_t>(0x6040, 0x1F);
     run_ms(200);
     set<std::uint16_t>(0x6040, 0x0F);
-    ASSERT_EQ(c.download_value<std::uint8_t>(0x2111, 3, 1).abort, coe::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint8_t>(0x2111, 3, 1).abort, protocol::SdoAbort::None);
     ASSERT_GT(run_until([&] { return statusword() & sw::TargetReached; }, 10000), 0);
     EXPECT_NEAR(position(), start + 1'850'000, 100);
 }
@@ -362,8 +362,8 @@ TEST_F(DriveTest, FollowingErrorFaultsWith8611AndAnEmergency) {
 TEST_F(DriveTest, InjectedFaultNeedsTheCauseGoneBeforeReset) {
     enable(Mode::ProfileVelocity);
     master::CoeClient c(b.master, 0x1001);
-    EXPECT_EQ(c.download_value<std::uint16_t>(0x2101, 0, 0x1234).abort, coe::SdoAbort::ValueRange);
-    ASSERT_EQ(c.download_value<std::uint16_t>(0x2101, 0, fault::Encoder).abort, coe::SdoAbort::None);
+    EXPECT_EQ(c.download_value<std::uint16_t>(0x2101, 0, 0x1234).abort, protocol::SdoAbort::ValueRange);
+    ASSERT_EQ(c.download_value<std::uint16_t>(0x2101, 0, fault::Encoder).abort, protocol::SdoAbort::None);
     run_ms(2);
     EXPECT_EQ(drive().cia402_state(), State::Fault);
     EXPECT_EQ(e(0x603F).get<std::uint16_t>(), fault::Encoder);
@@ -371,7 +371,7 @@ TEST_F(DriveTest, InjectedFaultNeedsTheCauseGoneBeforeReset) {
     run_ms(2);
     EXPECT_EQ(drive().cia402_state(), State::Fault) << "reset refused while the encoder is broken";
     set<std::uint16_t>(0x6040, 0x00);
-    ASSERT_EQ(c.download_value<std::uint16_t>(0x2101, 0, 0).abort, coe::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint16_t>(0x2101, 0, 0).abort, protocol::SdoAbort::None);
     run_ms(1);
     set<std::uint16_t>(0x6040, 0x80);
     run_ms(2);
@@ -585,7 +585,7 @@ TEST(FactorGroup, ConvertsExactlyAndRefusesFactorsBeyond62Bits) {
 struct DriveCyclic : DriveTest {
     void SetUp() override {
         std::string why;
-        ASSERT_TRUE(b.master.startup(esc::AlState::Op, &why)) << why;
+        ASSERT_TRUE(b.master.startup(protocol::AlState::Op, &why)) << why;
     }
     Bytes out() { return b.master.outputs(0); }
     ConstBytes in() { return b.master.inputs(0); }
@@ -674,11 +674,11 @@ TEST(DriveSync, OutputsTakeEffectAtSync0InDcModeAndAtOnceInFreeRun) {
         mo.dc.start_delay_ns = 5'000'000;
         master::Master m(link, mo);
         std::string why;
-        if (!m.startup(esc::AlState::Op, &why)) {
+        if (!m.startup(protocol::AlState::Op, &why)) {
             ADD_FAILURE() << why;
             return true;  // not a stall: no new attempt
         }
-        const auto in_op = [&] { return seg->slave(0).state() == esc::AlState::Op; };
+        const auto in_op = [&] { return seg->slave(0).state() == protocol::AlState::Op; };
         auto& od = dynamic_cast<Drive&>(seg->slave(0).app()).dictionary();
         EXPECT_EQ(od.find(0x1C32, 1)->get<std::uint16_t>(), dc ? 2 : 1);
         const auto& pulses = seg->slave(0).esc().dc().counters().sync_pulses[0];

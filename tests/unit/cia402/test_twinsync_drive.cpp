@@ -43,7 +43,7 @@ struct TwinBench : ::testing::Test {
     }
     void SetUp() override {
         std::string why;
-        ASSERT_TRUE(b.master.startup(esc::AlState::Op, &why)) << why;
+        ASSERT_TRUE(b.master.startup(protocol::AlState::Op, &why)) << why;
     }
     // One 1 ms process data cycle: controlword, mode and target position for each drive.
     void cycle(std::uint16_t cw0, std::int32_t pos0, std::uint16_t cw1 = 0, std::int8_t mode1 = 8,
@@ -205,11 +205,12 @@ TEST_F(TwinBench, TwoMastersGive40_02) {
     // Drive 2 parametrised as master too, and enabled over EtherCAT by its own controlword.
     master::CoeClient c(b.master, 0x1002);
     ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::ControlSelector), 0, 0).abort,
-              coe::SdoAbort::None);
+              protocol::SdoAbort::None);
     ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::SetpointSelector), 0, 0).abort,
-              coe::SdoAbort::None);
-    ASSERT_EQ(c.download_value<std::uint8_t>(object_index(p::Setting), 0, 29).abort, coe::SdoAbort::None);
-    ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::Mode), 0, 2).abort, coe::SdoAbort::None);
+              protocol::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint8_t>(object_index(p::Setting), 0, 29).abort,
+              protocol::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::Mode), 0, 2).abort, protocol::SdoAbort::None);
     const std::int32_t p0 = pos(0), p1 = pos(1);
     for (int i = 0; i < 10; ++i)
         cycle(0, p0, 0, 8, p1);
@@ -232,7 +233,7 @@ TEST_F(TwinBench, TwoMastersGive40_02) {
 TEST_F(TwinBench, DifferentSwitchingFrequenciesGive40_01) {
     master::CoeClient c(b.master, 0x1002);
     ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::SwitchingFrequency), 0, 3).abort,
-              coe::SdoAbort::None);
+              protocol::SdoAbort::None);
     for (int i = 0; i < 5; ++i)
         cycle(0, pos(0));
     EXPECT_EQ(par(0, p::Statusword).get<std::uint16_t>() & 0x0E, 3 << 1);  // the slave's 8 kHz
@@ -299,7 +300,7 @@ TEST_F(TwinBench, RefusedConfigurationsSayWhy) {
     master::CoeClient c(b.master, 0x1002);
     // A mode that needs hardware vecat does not emulate.
     EXPECT_EQ(c.download_value<std::uint8_t>(object_index(p::Setting), 0, 14).abort,
-              coe::SdoAbort::CannotTransfer);
+              protocol::SdoAbort::CannotTransfer);
     auto msg = c.upload(0x2102, 0);
     ASSERT_TRUE(msg.ok());
     const std::string text(msg.data.begin(), msg.data.end());
@@ -307,22 +308,22 @@ TEST_F(TwinBench, RefusedConfigurationsSayWhy) {
     EXPECT_EQ(par(1, p::Setting).get<std::uint8_t>(), 30);  // unchanged
     // 250 kBaud cannot carry the 16-byte frame in 250 us.
     EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::PhyLinkConfig), 1, 6).abort,
-              coe::SdoAbort::ParameterIncompatible);
+              protocol::SdoAbort::ParameterIncompatible);
     msg = c.upload(0x2102, 0);
     EXPECT_NE(std::string(msg.data.begin(), msg.data.end()).find("640.0 us"), std::string::npos);
     // 250 kBaud with the 6-byte frame fits, but the gantry mapping (8 bytes) does not fit the frame.
     EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::PhyLinkConfig), 2, 5).abort,
-              coe::SdoAbort::ParameterIncompatible);
+              protocol::SdoAbort::ParameterIncompatible);
     // Automatic mappings are not edited by hand.
     EXPECT_EQ(c.download_value<std::uint32_t>(object_index(p::ProcessSendData), 1, 0).abort,
-              coe::SdoAbort::CannotTransfer);
+              protocol::SdoAbort::CannotTransfer);
     // The mapping follows P2580: PCON_SLAVE.
-    EXPECT_EQ(c.download_value<std::uint8_t>(object_index(p::Setting), 0, 8).abort, coe::SdoAbort::None);
+    EXPECT_EQ(c.download_value<std::uint8_t>(object_index(p::Setting), 0, 8).abort, protocol::SdoAbort::None);
     EXPECT_EQ(par(1, p::ProcessReceiveData, 2).get<std::uint32_t>(), 0x0A300020u);
     EXPECT_EQ(par(1, p::ProcessReceiveData, 3).get<std::uint32_t>(), 0x0A2E0010u);
     // Out of range.
     EXPECT_EQ(c.download_value<std::uint8_t>(object_index(p::Setting), 0, 35).abort,
-              coe::SdoAbort::ValueTooHigh);
+              protocol::SdoAbort::ValueTooHigh);
 }
 
 std::unique_ptr<esc::Segment> speed_line(const device::DeviceDescription& d, std::size_t n,
@@ -384,7 +385,7 @@ TEST_F(TwinBench, ExtendedMappingCarriesWhatTheUserMapped) {
     // A scope signal (type 1) is refused.
     master::CoeClient c(b.master, 0x1002);
     EXPECT_EQ(c.download_value<std::uint32_t>(object_index(p::ProcessReceiveData), 4, 0x03F30001u).abort,
-              coe::SdoAbort::NotMappable);
+              protocol::SdoAbort::NotMappable);
 }
 
 struct TwinPosition : TwinBench {

@@ -73,7 +73,7 @@ struct SamplerTest : ::testing::Test {
 
     void SetUp() override {
         std::string why;
-        ASSERT_TRUE(b.master.startup(esc::AlState::Op, &why)) << why;
+        ASSERT_TRUE(b.master.startup(protocol::AlState::Op, &why)) << why;
     }
     // One 1 ms cycle: CSP set-points, one LRW, then the sampler as the serve loop calls it.
     void cycle(Sampler& s, std::uint16_t cw, std::int32_t p0, std::int32_t p1) {
@@ -148,7 +148,7 @@ TEST_F(SamplerTest, DecimationKeepsEveryNthCycle) {
         }
     EXPECT_EQ(s.stats().samples, 50u);
     for (const auto& st : r.status)
-        EXPECT_EQ(st.al_status, static_cast<std::uint8_t>(esc::AlState::Op));
+        EXPECT_EQ(st.al_status, static_cast<std::uint8_t>(protocol::AlState::Op));
 }
 
 TEST_F(SamplerTest, StateChangesFaultsAndEmergenciesAreEvents) {
@@ -160,7 +160,7 @@ TEST_F(SamplerTest, StateChangesFaultsAndEmergenciesAreEvents) {
     b.od(1).find(0x2101, 0)->set<std::uint16_t>(cia402::fault::OverCurrent);
     for (int i = 0; i < 10; ++i)
         cycle(s, 0x0F, 0, 0);
-    ASSERT_TRUE(b.master.request_state(esc::AlState::SafeOp));
+    ASSERT_TRUE(b.master.request_state(protocol::AlState::SafeOp));
     s.on_frame(b.now);
     const Recording r = drain();
     auto count = [&](EventKind k, std::uint16_t slave) {
@@ -179,8 +179,8 @@ TEST_F(SamplerTest, StateChangesFaultsAndEmergenciesAreEvents) {
     EXPECT_EQ(count(EventKind::AlState, 0), 1);  // OP -> SAFEOP
     const auto al = std::find_if(r.events.begin(), r.events.end(),
                                  [](const Event& e) { return e.kind == EventKind::AlState; });
-    EXPECT_EQ(al->old_value, static_cast<int>(esc::AlState::Op));
-    EXPECT_EQ(al->new_value, static_cast<int>(esc::AlState::SafeOp));
+    EXPECT_EQ(al->old_value, static_cast<int>(protocol::AlState::Op));
+    EXPECT_EQ(al->new_value, static_cast<int>(protocol::AlState::SafeOp));
 }
 
 TEST_F(SamplerTest, CyclicPathAllocatesNothingAndAFullQueueIsCountedNotWaitedFor) {

@@ -1,11 +1,12 @@
-// The slave side of the transport: receives frames on a raw socket, runs them through the segment and
-// sends the replies back in place. Nothing on this path allocates or locks.
+// The serve loop, the slave side of the transport: receives frames on a raw socket (src/net), runs them
+// through the segment (src/esc) and sends the replies back in place. Nothing on this path allocates or locks.
 #pragma once
 
 #include <atomic>
 #include <cstdint>
 
 #include "esc/segment.hpp"
+#include "net/clock.hpp"
 #include "net/frame_filter.hpp"
 #include "net/pcapng_writer.hpp"
 #include "net/raw_socket.hpp"
@@ -53,8 +54,5 @@ struct ServeStats {
 
 // Runs until stop becomes true.
 ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, const std::atomic<bool>& stop);
-
-std::uint64_t monotonic_ns();
-std::uint64_t realtime_ns();
 
 }  // namespace vecat::net

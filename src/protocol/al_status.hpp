@@ -1,10 +1,11 @@
-// AL states and AL status codes (ETG.1000.6 clause 5.3, Table 11).
+// AL states (the AL control and AL status registers 0x0120, 0x0130) and AL status codes (0x0134) with their
+// messages (ETG.1000.6 clause 5.3, Table 11).
 #pragma once
 
 #include <cstdint>
 #include <string_view>
 
-namespace vecat::esc {
+namespace vecat::protocol {
 
 enum class AlState : std::uint8_t {
     Init = 0x01,
@@ -19,7 +20,15 @@ inline constexpr std::uint8_t kAlErrorFlag = 0x10;  // AL status: error indicati
 inline constexpr std::uint8_t kAlIdentFlag = 0x20;  // device identification request / loaded
 
 constexpr bool is_valid_state(std::uint8_t s) noexcept {
-    return s == 0x01 || s == 0x02 || s == 0x03 || s == 0x04 || s == 0x08;
+    switch (static_cast<AlState>(s)) {
+        case AlState::Init:
+        case AlState::PreOp:
+        case AlState::Boot:
+        case AlState::SafeOp:
+        case AlState::Op:
+            return true;
+    }
+    return false;
 }
 
 constexpr std::string_view to_string(AlState s) noexcept {
@@ -203,4 +212,4 @@ constexpr std::string_view describe(AlStatusCode c) noexcept {
     return "Unknown AL status code";
 }
 
-}  // namespace vecat::esc
+}  // namespace vecat::protocol

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string_view>
 
-namespace vecat::coe {
+namespace vecat::protocol {
 
 enum class SdoAbort : std::uint32_t {
     None = 0x00000000,
@@ -112,4 +112,4 @@ constexpr std::string_view describe(SdoAbort a) noexcept {
     return "Unknown abort code";
 }
 
-}  // namespace vecat::coe
+}  // namespace vecat::protocol

@@ -1,4 +1,4 @@
-// The ESC register map (ETG.1000.4 clause 6 and the ESC datasheets), as one typed table.
+// The ESC register map (ETG.1000.4 clause 6 and the ESC datasheets, section II), as one typed table.
 // Each register carries its address, width, name and the bits the EtherCAT side may write.
 // Repeated blocks (FMMUs, SyncManagers) are computed from their base.
 #pragma once
@@ -7,7 +7,10 @@
 #include <cstdint>
 #include <string_view>
 
-namespace vecat::esc {
+#include "protocol/fmmu.hpp"
+#include "protocol/sync_manager.hpp"
+
+namespace vecat::protocol {
 
 enum class Reg : std::uint16_t {
     Type = 0x0000,
@@ -101,62 +104,16 @@ constexpr std::uint16_t addr(Reg r) noexcept {
     return static_cast<std::uint16_t>(r);
 }
 
-inline constexpr unsigned kFmmuSize = 16;
-inline constexpr unsigned kSmSize = 8;
-inline constexpr unsigned kMaxFmmus = 16;
-inline constexpr unsigned kMaxSms = 16;
 inline constexpr std::uint16_t kRegisterSpaceSize = 0x1000;
 
+// The repeated blocks: FMMU i at 0x0600 + 16 i (protocol/fmmu.hpp), SyncManager i at 0x0800 + 8 i
+// (protocol/sync_manager.hpp).
 constexpr std::uint16_t fmmu_addr(unsigned i) noexcept {
-    return static_cast<std::uint16_t>(0x0600 + kFmmuSize * i);
+    return static_cast<std::uint16_t>(addr(Reg::Fmmu0) + kFmmuSize * i);
 }
 constexpr std::uint16_t sm_addr(unsigned i) noexcept {
-    return static_cast<std::uint16_t>(0x0800 + kSmSize * i);
+    return static_cast<std::uint16_t>(addr(Reg::Sm0) + kSmSize * i);
 }
-
-// Offsets inside one FMMU block (ETG.1000.4 Table 56).
-namespace fmmu {
-inline constexpr unsigned LogicalStart = 0;  // u32
-inline constexpr unsigned Length = 4;        // u16, bytes
-inline constexpr unsigned LogicalStartBit = 6;
-inline constexpr unsigned LogicalStopBit = 7;
-inline constexpr unsigned PhysicalStart = 8;  // u16
-inline constexpr unsigned PhysicalStartBit = 10;
-inline constexpr unsigned Type = 11;      // bit 0 read, bit 1 write
-inline constexpr unsigned Activate = 12;  // bit 0
-}  // namespace fmmu
-
-// Offsets inside one SyncManager block (ETG.1000.4 Table 58) and their bits.
-namespace sm {
-inline constexpr unsigned PhysicalStart = 0;  // u16
-inline constexpr unsigned Length = 2;         // u16
-inline constexpr unsigned Control = 4;
-inline constexpr unsigned Status = 5;
-inline constexpr unsigned Activate = 6;
-inline constexpr unsigned PdiControl = 7;
-
-inline constexpr std::uint8_t CtrlModeMask = 0x03;  // 00 buffered (3 buffers), 10 mailbox
-inline constexpr std::uint8_t CtrlModeBuffered = 0x00;
-inline constexpr std::uint8_t CtrlModeMailbox = 0x02;
-inline constexpr std::uint8_t CtrlDirMask = 0x0C;  // 00 ECAT reads, 01 ECAT writes
-inline constexpr std::uint8_t CtrlDirRead = 0x00;
-inline constexpr std::uint8_t CtrlDirWrite = 0x04;
-inline constexpr std::uint8_t CtrlIrqEcat = 0x10;
-inline constexpr std::uint8_t CtrlIrqPdi = 0x20;
-inline constexpr std::uint8_t CtrlWatchdog = 0x40;
-
-inline constexpr std::uint8_t StatusIrqWrite = 0x01;
-inline constexpr std::uint8_t StatusIrqRead = 0x02;
-inline constexpr std::uint8_t StatusMailboxFull = 0x08;
-inline constexpr std::uint8_t StatusBufferShift = 4;  // bits 4-5: last written buffer
-inline constexpr std::uint8_t StatusReadBufferInUse = 0x40;
-inline constexpr std::uint8_t StatusWriteBufferInUse = 0x80;
-
-inline constexpr std::uint8_t ActEnable = 0x01;
-inline constexpr std::uint8_t ActRepeatRequest = 0x02;
-inline constexpr std::uint8_t PdiDeactivate = 0x01;
-inline constexpr std::uint8_t PdiRepeatAck = 0x02;
-}  // namespace sm
 
 // DL status bits (0x0110).
 namespace dl_status {
@@ -273,7 +230,7 @@ constexpr WriteMaskTable make_write_mask_table(unsigned fmmu_count, unsigned sm_
             t.mask[r.address + i] = r.ecat_write_mask[i];
     for (unsigned f = 0; f < fmmu_count && f < kMaxFmmus; ++f) {
         const unsigned b = fmmu_addr(f);
-        for (unsigned i = 0; i < 6; ++i)
+        for (unsigned i = 0; i < fmmu::LogicalStartBit; ++i)  // logical start and length
             t.mask[b + i] = 0xFF;
         t.mask[b + fmmu::LogicalStartBit] = 0x07;
         t.mask[b + fmmu::LogicalStopBit] = 0x07;
@@ -285,7 +242,7 @@ constexpr WriteMaskTable make_write_mask_table(unsigned fmmu_count, unsigned sm_
     }
     for (unsigned s = 0; s < sm_count && s < kMaxSms; ++s) {
         const unsigned b = sm_addr(s);
-        for (unsigned i = 0; i < 4; ++i)
+        for (unsigned i = 0; i < sm::Control; ++i)  // physical start and length
             t.mask[b + i] = 0xFF;
         t.mask[b + sm::Control] = 0x7F;
         t.mask[b + sm::Activate] = 0xC3;
@@ -293,4 +250,4 @@ constexpr WriteMaskTable make_write_mask_table(unsigned fmmu_count, unsigned sm_
     return t;
 }
 
-}  // namespace vecat::esc
+}  // namespace vecat::protocol
