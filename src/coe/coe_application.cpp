@@ -78,6 +78,7 @@ esc::OpReadiness CoeApplication::op_readiness(std::uint64_t now_ns, std::uint64_
 
 void CoeApplication::tick(std::uint64_t now_ns) {
     sync_->tick(now_ns, state_);
+    sdo_->tick(now_ns);
 }
 
 void CoeApplication::sync_event(unsigned signal, std::uint64_t now_ns) {

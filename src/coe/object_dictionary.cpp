@@ -343,6 +343,18 @@ SdoAbort ObjectDictionary::download_entry(Entry& e, AlState state, ConstBytes da
     return SdoAbort::None;
 }
 
+SdoAbort ObjectDictionary::check_download_start(std::uint16_t index, std::uint8_t sub, bool complete,
+                                                AlState state, std::size_t size) const {
+    const Object* o = find(index);
+    if (!o) return SdoAbort::ObjectDoesNotExist;
+    if (complete) return SdoAbort::None;  // sizes and access of a complete access are checked with the data
+    const Entry* e = o->entry(sub);
+    if (!e) return SdoAbort::SubindexDoesNotExist;
+    if (!e->writable(state)) return (e->access() & acc::WriteAll) ? SdoAbort::WrongState : SdoAbort::ReadOnly;
+    if (size > e->capacity()) return SdoAbort::LengthTooHigh;
+    return SdoAbort::None;
+}
+
 SdoAbort ObjectDictionary::download(std::uint16_t index, std::uint8_t sub, bool complete, AlState state,
                                     ConstBytes data) {
     Object* o = find(index);

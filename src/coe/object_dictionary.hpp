@@ -192,6 +192,11 @@ class ObjectDictionary {
                     std::size_t& len);
     // SDO download with every check (access, length, range, hooks).
     SdoAbort download(std::uint16_t index, std::uint8_t sub, bool complete, AlState state, ConstBytes data);
+    // What a download of `size` bytes is refused for before its data is there (a segmented download is
+    // refused at its start, so that no segment is taken for it): the object, the subindex, the access in
+    // this state and the size. The value checks come with download().
+    SdoAbort check_download_start(std::uint16_t index, std::uint8_t sub, bool complete, AlState state,
+                                  std::size_t size) const;
     // Checked before every SDO write of an entry (e.g. objects mapped into an active RxPDO).
     std::function<SdoAbort(const Entry&, AlState)> download_guard;
 

@@ -13,6 +13,7 @@ using protocol::kSdoHeaderSize;
 using protocol::kSdoInfoHeaderSize;
 using protocol::MailboxError;
 using protocol::MailboxType;
+using protocol::SdoHeader;
 namespace sdo = protocol::sdo;
 namespace sdo_info = protocol::sdo_info;
 
@@ -87,10 +88,24 @@ SdoServer::SdoServer(ObjectDictionary& od, std::function<AlState()> state)
 }
 
 void SdoServer::reset() {
-    up_ = {};
-    down_ = {};
-    info_ = {};
+    set_transfer(Idle{});
     emcy_head_ = emcy_count_ = 0;
+}
+
+void SdoServer::tick(std::uint64_t now_ns) {
+    if (std::holds_alternative<Idle>(transfer_)) return;
+    if (quiet_since_ns_ == kNotYet) {
+        quiet_since_ns_ = now_ns;
+        return;
+    }
+    if (now_ns - quiet_since_ns_ < kSdoTimeoutNs) return;
+    // Dropped; the master hears of it with its next segment request (see segment_acceptable).
+    if (const auto* u = std::get_if<Upload>(&transfer_))
+        set_transfer(TimedOut{u->index, u->sub});
+    else if (const auto* d = std::get_if<Download>(&transfer_))
+        set_transfer(TimedOut{d->index, d->sub});
+    else
+        set_transfer(Idle{});
 }
 
 bool SdoServer::emergency(const Emergency& e) {
@@ -104,16 +119,16 @@ bool SdoServer::emergency(const Emergency& e) {
 }
 
 void SdoServer::poll(MailboxReplySink& out) {
-    while (info_.active && out.can_commit())
+    while (std::holds_alternative<InfoResponse>(transfer_) && out.can_commit())
         if (!send_info_fragment(out)) break;
     // Emergencies go out when nothing else is waiting, so they never sit between a request and its reply.
-    while (emcy_count_ > 0 && !info_.active && out.pending() == 0 && out.can_commit()) {
-        const Emergency& e = emcy_[emcy_head_];
+    while (emcy_count_ > 0 && !std::holds_alternative<InfoResponse>(transfer_) && out.pending() == 0 &&
+           out.can_commit()) {
+        std::uint8_t msg[Emergency::kSize];
+        emcy_[emcy_head_].pack(msg);
         Reply r(out.reply_buffer());
         r.u16(coe_header(CoeService::Emergency));
-        r.u16(e.error_code);
-        r.u8(e.error_register);
-        r.bytes(ConstBytes(e.data.data(), e.data.size()));
+        r.bytes(msg);
         if (!r.fits()) break;
         out.commit(MailboxType::CoE, r.size());
         emcy_head_ = (emcy_head_ + 1) % kEmergencySlots;
@@ -160,49 +175,49 @@ void SdoServer::sdo_request(ConstBytes p, MailboxReplySink& out) {
         mailbox_error(MailboxError::SizeTooShort, out);
         return;
     }
-    const std::uint8_t cmd = p[2];
-    const std::uint16_t index = ld_le16(p.data() + 3);
-    const std::uint8_t sub = p[5];
-    switch (sdo::ccs(cmd)) {
+    const SdoHeader h = SdoHeader::unpack(p.subspan<kCoeHeaderSize, kSdoHeaderSize>());
+    // A segmented SDO transfer ends with an abort of either side.
+    const auto end_segmented = [&] {
+        if (!std::holds_alternative<InfoResponse>(transfer_)) set_transfer(Idle{});
+    };
+    switch (sdo::ccs(h.command)) {
         case sdo::CcsInitiateDownload:
-            up_.active = false;
-            initiate_download(cmd, index, sub, p, out);
+            initiate_download(h, p, out);
             return;
         case sdo::CcsDownloadSegment:
-            download_segment(cmd, p, out);
+            download_segment(h.command, p, out);
             return;
         case sdo::CcsInitiateUpload:
-            down_.active = false;
-            initiate_upload(cmd, index, sub, out);
+            initiate_upload(h, out);
             return;
         case sdo::CcsUploadSegment:
-            upload_segment(cmd, out);
+            upload_segment(h.command, out);
             return;
         case sdo::CcsAbort:
             // The master aborts a transfer: no answer (CiA 301 7.2.4.3.17).
             ++counters_.sdo_aborts_received;
-            up_.active = down_.active = false;
+            end_segmented();
             return;
         default:
-            up_.active = down_.active = false;
-            abort(index, sub, SdoAbort::UnknownCommand, out);
+            end_segmented();
+            abort(h.index, h.subindex, SdoAbort::UnknownCommand, out);
             return;
     }
 }
 
-void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub, ConstBytes p,
-                                  MailboxReplySink& out) {
-    down_.active = false;
-    const bool complete = cmd & sdo::CompleteAccess;
+void SdoServer::initiate_download(const SdoHeader& h, ConstBytes p, MailboxReplySink& out) {
+    set_transfer(Idle{});
+    const std::uint16_t index = h.index;
+    const std::uint8_t sub = h.subindex;
+    const bool complete = h.command & sdo::CompleteAccess;
     const AlState st = state_();
     auto respond = [&] {
         Reply r(out.reply_buffer());
         r.u16(coe_header(CoeService::SdoResponse));
-        r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateDownload << 5) |
-                                       (complete ? sdo::CompleteAccess : 0)));
-        r.u16(index);
-        r.u8(sub);
-        r.u32(0);
+        std::uint8_t rsp[kSdoHeaderSize];
+        SdoHeader{sdo::command(sdo::ScsInitiateDownload, complete ? sdo::CompleteAccess : 0), index, sub, 0}
+            .pack(rsp);
+        r.bytes(rsp);
         out.commit(MailboxType::CoE, r.size());
     };
     if (complete && sub > 1) {
@@ -218,41 +233,23 @@ void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::ui
         ++counters_.sdo_downloads;
         respond();
     };
-    if (cmd & sdo::Expedited) {
-        std::size_t n = 4;
-        if (cmd & sdo::SizeIndicated) {
-            n = 4 - ((cmd >> 2) & 3);
-        } else if (!complete) {
+    constexpr std::size_t kData = kCoeHeaderSize + 4;  // the data field of the SDO header
+    if (h.command & sdo::Expedited) {
+        std::size_t n = sdo::expedited_length(h.command);
+        if (!(h.command & sdo::SizeIndicated) && !complete) {
             // Size not indicated: the entry's own size, if it fits in four bytes.
             if (const Entry* e = od_.find(index, sub); e && e->capacity() <= 4) n = e->capacity();
         }
-        store(p.subspan(6, n));
+        store(p.subspan(kData, n));
         return;
     }
-    // Normal transfer: complete size in bytes 6..9, the first data from byte 10 on.
-    const std::uint32_t total = ld_le32(p.data() + 6);
-    const ConstBytes first = p.subspan(10);
+    // Normal transfer: the complete size in the data field, the first data after the SDO header.
+    const std::uint32_t total = h.data;
+    const ConstBytes first = p.subspan(kCoeHeaderSize + kSdoHeaderSize);
     // Refuse early what cannot succeed, so that no segment is accepted for it.
-    const Object* o = od_.find(index);
-    if (!o) {
-        abort(index, sub, SdoAbort::ObjectDoesNotExist, out);
+    if (const SdoAbort a = od_.check_download_start(index, sub, complete, st, total); a != SdoAbort::None) {
+        abort(index, sub, a, out);
         return;
-    }
-    if (!complete) {
-        const Entry* e = o->entry(sub);
-        if (!e) {
-            abort(index, sub, SdoAbort::SubindexDoesNotExist, out);
-            return;
-        }
-        if (!e->writable(st)) {
-            abort(index, sub,
-                  (e->access() & device::access::WriteAll) ? SdoAbort::WrongState : SdoAbort::ReadOnly, out);
-            return;
-        }
-        if (total > e->capacity()) {
-            abort(index, sub, SdoAbort::LengthTooHigh, out);
-            return;
-        }
     }
     if (total > buf_.size()) {
         abort(index, sub, SdoAbort::LengthTooHigh, out);
@@ -263,66 +260,82 @@ void SdoServer::initiate_download(std::uint8_t cmd, std::uint16_t index, std::ui
         return;
     }
     std::copy(first.begin(), first.end(), buf_.begin());
-    down_ = {true, complete, index, sub, total, first.size(), 0};
+    set_transfer(Download{complete, index, sub, total, first.size(), 0});
     respond();
 }
 
-// A segment request needs an open transfer (else 0x05040001) and the alternating toggle bit (else the
-// transfer ends with 0x05030000).
-template <class Transfer>
-bool SdoServer::segment_acceptable(Transfer& t, std::uint8_t cmd, MailboxReplySink& out) {
-    if (!t.active) {
+// A segment request needs its transfer open (else 0x05040001, or 0x05040000 when the transfer timed out) and
+// the alternating toggle bit (else the transfer ends with 0x05030000). The transfer, or nullptr after an
+// abort.
+template <class T>
+T* SdoServer::segment_acceptable(std::uint8_t cmd, MailboxReplySink& out) {
+    if (const auto* late = std::get_if<TimedOut>(&transfer_)) {
+        const TimedOut t = *late;
+        set_transfer(Idle{});
+        abort(t.index, t.sub, SdoAbort::Timeout, out);
+        return nullptr;
+    }
+    T* t = std::get_if<T>(&transfer_);
+    if (!t) {
         abort(0, 0, SdoAbort::UnknownCommand, out);
-        return false;
+        return nullptr;
     }
-    if ((cmd & sdo::Toggle) != t.toggle) {
-        t.active = false;
-        abort(t.index, t.sub, SdoAbort::ToggleBit, out);
-        return false;
+    if ((cmd & sdo::Toggle) != t->toggle) {
+        const std::uint16_t index = t->index;
+        const std::uint8_t sub = t->sub;
+        set_transfer(Idle{});
+        abort(index, sub, SdoAbort::ToggleBit, out);
+        return nullptr;
     }
-    return true;
+    quiet_since_ns_ = kNotYet;  // the transfer moves on
+    return t;
 }
 
 void SdoServer::download_segment(std::uint8_t cmd, ConstBytes p, MailboxReplySink& out) {
-    if (!segment_acceptable(down_, cmd, out)) return;
+    Download* d = segment_acceptable<Download>(cmd, out);
+    if (!d) return;
     const std::uint8_t toggle = cmd & sdo::Toggle;
     // Segment data follows the command byte; with a 10-byte mailbox the size field gives the unused bytes.
-    std::size_t n = p.size() - kCoeHeaderSize - 1;
-    if (p.size() == kCoeHeaderSize + kSdoHeaderSize) n = 7 - ((cmd >> 1) & 7);
-    if (down_.received + n > down_.total) {
-        down_.active = false;
-        abort(down_.index, down_.sub, SdoAbort::LengthTooHigh, out);
+    constexpr std::size_t kData = kCoeHeaderSize + sdo::kSegmentHeaderSize;
+    std::size_t n = p.size() - kData;
+    if (p.size() == kCoeHeaderSize + kSdoHeaderSize) n = sdo::segment_length(cmd);
+    if (d->received + n > d->total) {
+        const Download gone = *d;
+        set_transfer(Idle{});
+        abort(gone.index, gone.sub, SdoAbort::LengthTooHigh, out);
         return;
     }
-    std::copy_n(p.begin() + 3, n, buf_.begin() + static_cast<std::ptrdiff_t>(down_.received));
-    down_.received += n;
-    const bool last = cmd & sdo::LastSegment;
-    if (last) {
-        down_.active = false;
-        if (down_.received < down_.total) {
-            abort(down_.index, down_.sub, SdoAbort::LengthTooLow, out);
+    std::copy_n(p.begin() + kData, n, buf_.begin() + static_cast<std::ptrdiff_t>(d->received));
+    d->received += n;
+    if (cmd & sdo::LastSegment) {
+        const Download done = *d;
+        set_transfer(Idle{});
+        if (done.received < done.total) {
+            abort(done.index, done.sub, SdoAbort::LengthTooLow, out);
             return;
         }
-        const SdoAbort a = od_.download(down_.index, down_.sub, down_.complete, state_(),
-                                        ConstBytes(buf_.data(), down_.received));
+        const SdoAbort a = od_.download(done.index, done.sub, done.complete, state_(),
+                                        ConstBytes(buf_.data(), done.received));
         if (a != SdoAbort::None) {
-            abort(down_.index, down_.sub, a, out);
+            abort(done.index, done.sub, a, out);
             return;
         }
         ++counters_.sdo_downloads;
+    } else {
+        d->toggle ^= sdo::Toggle;
     }
     Reply r(out.reply_buffer());
     r.u16(coe_header(CoeService::SdoResponse));
-    r.u8(static_cast<std::uint8_t>((sdo::ScsDownloadSegment << 5) | toggle));
-    r.zeros(7);
+    r.u8(sdo::command(sdo::ScsDownloadSegment, toggle));
+    r.zeros(sdo::kSegmentMin);
     out.commit(MailboxType::CoE, r.size());
-    down_.toggle ^= sdo::Toggle;
 }
 
-void SdoServer::initiate_upload(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub,
-                                MailboxReplySink& out) {
-    up_.active = false;
-    const bool complete = cmd & sdo::CompleteAccess;
+void SdoServer::initiate_upload(const SdoHeader& h, MailboxReplySink& out) {
+    set_transfer(Idle{});
+    const std::uint16_t index = h.index;
+    const std::uint8_t sub = h.subindex;
+    const bool complete = h.command & sdo::CompleteAccess;
     std::size_t len = 0;
     const SdoAbort a = od_.upload(index, sub, complete, state_(), Bytes(buf_.data(), buf_.size()), len);
     if (a != SdoAbort::None) {
@@ -333,42 +346,42 @@ void SdoServer::initiate_upload(std::uint8_t cmd, std::uint16_t index, std::uint
     const std::uint8_t ca = complete ? sdo::CompleteAccess : 0;
     Reply r(out.reply_buffer());
     r.u16(coe_header(CoeService::SdoResponse));
-    if (len >= 1 && len <= 4) {
-        r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateUpload << 5) | ca | ((4 - len) << 2) |
-                                       sdo::Expedited | sdo::SizeIndicated));
+    if (len >= 1 && len <= sdo::kExpeditedMax) {
+        r.u8(sdo::command(sdo::ScsInitiateUpload, ca | sdo::expedited_size(len)));
         r.u16(index);
         r.u8(sub);
         r.bytes(ConstBytes(buf_.data(), len));
-        r.zeros(4 - len);
+        r.zeros(sdo::kExpeditedMax - len);
         out.commit(MailboxType::CoE, r.size());
         return;
     }
-    r.u8(static_cast<std::uint8_t>((sdo::ScsInitiateUpload << 5) | ca | sdo::SizeIndicated));
+    r.u8(sdo::command(sdo::ScsInitiateUpload, ca | sdo::SizeIndicated));
     r.u16(index);
     r.u8(sub);
     r.u32(static_cast<std::uint32_t>(len));
     const std::size_t first = std::min(len, r.room());
     r.bytes(ConstBytes(buf_.data(), first));
     out.commit(MailboxType::CoE, r.size());
-    if (first < len) up_ = {true, index, sub, len, first, 0};
+    if (first < len) set_transfer(Upload{index, sub, len, first, 0});
 }
 
 void SdoServer::upload_segment(std::uint8_t cmd, MailboxReplySink& out) {
-    if (!segment_acceptable(up_, cmd, out)) return;
+    Upload* u = segment_acceptable<Upload>(cmd, out);
+    if (!u) return;
     const std::uint8_t toggle = cmd & sdo::Toggle;
     Reply r(out.reply_buffer());
     r.u16(coe_header(CoeService::SdoResponse));
-    const std::size_t room = r.room() > 1 ? r.room() - 1 : 0;
-    const std::size_t n = std::min(up_.total - up_.offset, room);
-    const bool last = up_.offset + n == up_.total;
-    const std::uint8_t unused = n < 7 ? static_cast<std::uint8_t>(7 - n) : 0;
-    r.u8(static_cast<std::uint8_t>((sdo::ScsUploadSegment << 5) | toggle | (unused << 1) | (last ? 1 : 0)));
-    r.bytes(ConstBytes(buf_.data() + up_.offset, n));
-    r.zeros(unused);  // a segment carries at least 7 bytes
+    const std::size_t room = r.room() > sdo::kSegmentHeaderSize ? r.room() - sdo::kSegmentHeaderSize : 0;
+    const std::size_t n = std::min(u->total - u->offset, room);
+    const bool last = u->offset + n == u->total;
+    r.u8(
+        sdo::command(sdo::ScsUploadSegment, toggle | sdo::segment_unused(n) | (last ? sdo::LastSegment : 0)));
+    r.bytes(ConstBytes(buf_.data() + u->offset, n));
+    r.zeros(n < sdo::kSegmentMin ? sdo::kSegmentMin - n : 0);  // a segment carries at least 7 bytes
     out.commit(MailboxType::CoE, r.size());
-    up_.offset += n;
-    up_.toggle ^= sdo::Toggle;
-    if (last) up_.active = false;
+    u->offset += n;
+    u->toggle ^= sdo::Toggle;
+    if (last) set_transfer(Idle{});
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -391,9 +404,10 @@ void SdoServer::sdo_info(ConstBytes p, MailboxReplySink& out) {
         mailbox_error(MailboxError::SizeTooShort, out);
         return;
     }
-    info_.active = false;  // a new request ends a fragmented response in progress
-    const std::uint8_t opcode = p[2] & 0x7F;
-    const ConstBytes d = p.subspan(6);
+    // A new request ends a fragmented response in progress.
+    if (std::holds_alternative<InfoResponse>(transfer_)) set_transfer(Idle{});
+    const std::uint8_t opcode = p[kCoeHeaderSize] & ~sdo_info::Incomplete;
+    const ConstBytes d = p.subspan(kCoeHeaderSize + kSdoInfoHeaderSize);
     switch (opcode) {
         case sdo_info::GetOdListRequest:
             if (d.size() < 2) break;
@@ -436,27 +450,30 @@ void SdoServer::od_list(std::uint16_t list_type, MailboxReplySink& out) {
         return;
     }
     const std::size_t per_fragment = out.max_payload() - kCoeHeaderSize - kSdoInfoHeaderSize;
-    info_ = {true, sdo_info::GetOdListResponse, std::min(n, info_buf_.size()), 0, 0};
-    info_.fragments_left = static_cast<std::uint16_t>((info_.total + per_fragment - 1) / per_fragment - 1);
+    const std::size_t total = std::min(n, info_buf_.size());
+    set_transfer(InfoResponse{sdo_info::GetOdListResponse, total, 0,
+                              static_cast<std::uint16_t>((total + per_fragment - 1) / per_fragment - 1)});
     send_info_fragment(out);
     poll(out);  // further fragments as far as the reply queue takes them
 }
 
 bool SdoServer::send_info_fragment(MailboxReplySink& out) {
-    if (!info_.active || !out.can_commit()) return false;
+    auto* info = std::get_if<InfoResponse>(&transfer_);
+    if (!info || !out.can_commit()) return false;
     Reply r(out.reply_buffer());
     const std::size_t per_fragment = r.room() - kCoeHeaderSize - kSdoInfoHeaderSize;
-    const std::size_t n = std::min(per_fragment, info_.total - info_.offset);
-    const bool more = info_.offset + n < info_.total;
+    const std::size_t n = std::min(per_fragment, info->total - info->offset);
+    const bool more = info->offset + n < info->total;
     r.u16(coe_header(CoeService::SdoInformation));
-    r.u8(static_cast<std::uint8_t>(info_.opcode | (more ? sdo_info::Incomplete : 0)));
+    r.u8(static_cast<std::uint8_t>(info->opcode | (more ? sdo_info::Incomplete : 0)));
     r.u8(0);
-    r.u16(info_.fragments_left);
-    r.bytes(ConstBytes(info_buf_.data() + info_.offset, n));
+    r.u16(info->fragments_left);
+    r.bytes(ConstBytes(info_buf_.data() + info->offset, n));
     out.commit(MailboxType::CoE, r.size());
-    info_.offset += n;
-    if (info_.fragments_left > 0) --info_.fragments_left;
-    if (!more) info_.active = false;
+    info->offset += n;
+    if (info->fragments_left > 0) --info->fragments_left;
+    quiet_since_ns_ = kNotYet;  // the master read the previous fragment
+    if (!more) set_transfer(Idle{});
     return true;
 }
 

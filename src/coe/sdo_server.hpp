@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <variant>
 #include <vector>
 
 #include "coe/object_dictionary.hpp"
@@ -23,8 +24,18 @@ struct CoeCounters {
     std::uint64_t emergencies_dropped = 0;
 };
 
+// The SDO server of one slave. It serves one transfer at a time, the state below: a segmented upload or
+// download (ETG.1000.6 5.6.2.3-5.6.2.6) or a fragmented SDO information response (5.6.3). A new request
+// ends the transfer in progress. A transfer the master leaves alone for kSdoTimeoutNs is dropped (CiA 301
+// 7.2.4.3: the SDO protocol timeout, abort code 0x05040000); a late segment request is then answered with
+// that abort.
 class SdoServer final : public esc::MailboxProtocol {
   public:
+    // The timeout of a transfer left alone: 1 s, the SDO server timeout real CANopen devices use (the
+    // SDOserverTimeoutTime_ms of CANopenNode's configurations); well above a master's time between two
+    // segments (each is one mailbox round trip, milliseconds), well below a master's own SDO timeout.
+    static constexpr std::uint64_t kSdoTimeoutNs = 1'000'000'000;
+
     // state tells the current AL state (access rights depend on it).
     SdoServer(ObjectDictionary& od, std::function<AlState()> state);
 
@@ -32,23 +43,60 @@ class SdoServer final : public esc::MailboxProtocol {
     void handle(const protocol::MailboxHeader& h, ConstBytes payload, esc::MailboxReplySink& out) override;
     void poll(esc::MailboxReplySink& out) override;
     void reset() override;
+    // The time (ns, the segment's clock): a transfer left alone for kSdoTimeoutNs is dropped.
+    void tick(std::uint64_t now_ns);
 
     // Queues an emergency (sent when the reply mailbox is free). False when the queue is full.
     bool emergency(const protocol::Emergency& e);
     const CoeCounters& counters() const { return counters_; }
-    bool transfer_in_progress() const { return up_.active || down_.active || info_.active; }
+    bool transfer_in_progress() const {
+        return std::holds_alternative<Upload>(transfer_) || std::holds_alternative<Download>(transfer_) ||
+               std::holds_alternative<InfoResponse>(transfer_);
+    }
 
     static constexpr std::size_t kEmergencySlots = 8;
 
   private:
+    struct Idle {};
+    struct Upload {
+        std::uint16_t index = 0;
+        std::uint8_t sub = 0;
+        std::size_t total = 0, offset = 0;
+        std::uint8_t toggle = 0;
+    };
+    struct Download {
+        bool complete = false;
+        std::uint16_t index = 0;
+        std::uint8_t sub = 0;
+        std::size_t total = 0, received = 0;
+        std::uint8_t toggle = 0;
+    };
+    // A fragmented SDO information response being sent (OD lists).
+    struct InfoResponse {
+        std::uint8_t opcode = 0;
+        std::size_t total = 0, offset = 0;
+        std::uint16_t fragments_left = 0;
+    };
+    // A segmented transfer dropped by the timeout: its next segment request is told so.
+    struct TimedOut {
+        std::uint16_t index = 0;
+        std::uint8_t sub = 0;
+    };
+    using Transfer = std::variant<Idle, Upload, Download, InfoResponse, TimedOut>;
+
+    // Every change of the transfer goes through here: it restarts the timeout.
+    void set_transfer(Transfer t) {
+        transfer_ = t;
+        quiet_since_ns_ = kNotYet;
+    }
+
     void sdo_request(ConstBytes p, esc::MailboxReplySink& out);
-    void initiate_download(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub, ConstBytes p,
-                           esc::MailboxReplySink& out);
+    void initiate_download(const protocol::SdoHeader& h, ConstBytes p, esc::MailboxReplySink& out);
     void download_segment(std::uint8_t cmd, ConstBytes p, esc::MailboxReplySink& out);
-    void initiate_upload(std::uint8_t cmd, std::uint16_t index, std::uint8_t sub, esc::MailboxReplySink& out);
+    void initiate_upload(const protocol::SdoHeader& h, esc::MailboxReplySink& out);
     void upload_segment(std::uint8_t cmd, esc::MailboxReplySink& out);
-    template <class Transfer>
-    bool segment_acceptable(Transfer& t, std::uint8_t cmd, esc::MailboxReplySink& out);
+    template <class T>
+    T* segment_acceptable(std::uint8_t cmd, esc::MailboxReplySink& out);
     void abort(std::uint16_t index, std::uint8_t sub, SdoAbort code, esc::MailboxReplySink& out);
 
     void sdo_info(ConstBytes p, esc::MailboxReplySink& out);
@@ -62,30 +110,13 @@ class SdoServer final : public esc::MailboxProtocol {
     ObjectDictionary& od_;
     std::function<AlState()> state_;
     std::vector<std::uint8_t> buf_;  // transfer buffer, sized once from the dictionary
-
-    struct Upload {
-        bool active = false;
-        std::uint16_t index = 0;
-        std::uint8_t sub = 0;
-        std::size_t total = 0, offset = 0;
-        std::uint8_t toggle = 0;
-    } up_;
-    struct Download {
-        bool active = false;
-        bool complete = false;
-        std::uint16_t index = 0;
-        std::uint8_t sub = 0;
-        std::size_t total = 0, received = 0;
-        std::uint8_t toggle = 0;
-    } down_;
-    // A fragmented SDO information response being sent (OD lists).
-    struct Info {
-        bool active = false;
-        std::uint8_t opcode = 0;
-        std::size_t total = 0, offset = 0;
-        std::uint16_t fragments_left = 0;
-    } info_;
     std::vector<std::uint8_t> info_buf_;
+
+    Transfer transfer_ = Idle{};
+    // Since when the transfer has not moved: set by the first tick() after a change (the server has no
+    // clock of its own), so that a transfer is dropped kSdoTimeoutNs after its last request at the latest.
+    static constexpr std::uint64_t kNotYet = ~std::uint64_t{0};
+    std::uint64_t quiet_since_ns_ = kNotYet;
 
     std::array<protocol::Emergency, kEmergencySlots> emcy_{};
     std::size_t emcy_head_ = 0, emcy_count_ = 0;

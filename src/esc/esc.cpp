@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "common/bits.hpp"
 #include "esc/sii_image.hpp"
 #include "protocol/al_status.hpp"
 
@@ -13,6 +14,7 @@ using protocol::AlState;
 using protocol::Command;
 using protocol::DatagramView;
 using protocol::fmmu_addr;
+using protocol::FmmuConfig;
 using protocol::kFmmuSize;
 using protocol::kMaxFmmus;
 using protocol::kMaxSms;
@@ -22,6 +24,7 @@ using protocol::make_write_mask_table;
 using protocol::Reg;
 using protocol::sii_config_crc;
 using protocol::sm_addr;
+using protocol::SmConfig;
 namespace al_event = protocol::al_event;
 namespace dl_status = protocol::dl_status;
 namespace fmmu = protocol::fmmu;
@@ -297,34 +300,20 @@ void Esc::logical(DatagramView d, bool do_read, bool do_write, const FrameTiming
                 const std::size_t np = static_cast<std::size_t>(std::min<std::uint64_t>(p1, 0xFFFF) - p0 + 1);
                 const unsigned pshift = static_cast<unsigned>(pfirst % 8);
                 const std::uint64_t dbit0 = first - dfirst;
+                // The bits that lie inside the physical address space (the bytes np covers).
+                const std::size_t n =
+                    static_cast<std::size_t>(std::min<std::uint64_t>(nbits, np * 8 - pshift));
                 if (writing) {
+                    // Read-modify-write of the covered bytes: the bits outside the mapping keep their value.
                     for (std::size_t k = 0; k < np; ++k) {
                         const std::uint8_t* cur = ecat_write_target(static_cast<std::uint32_t>(p0 + k));
                         scratch_[k] = cur ? *cur : 0;
                     }
-                    for (std::uint64_t j = 0; j < nbits; ++j) {
-                        const std::uint64_t sb = dbit0 + j;
-                        const std::uint64_t db = pshift + j;
-                        if (db / 8 >= np) break;
-                        const bool bit = (data[sb / 8] >> (sb % 8)) & 1u;
-                        auto& byte = scratch_[db / 8];
-                        byte = static_cast<std::uint8_t>(bit ? (byte | (1u << (db % 8)))
-                                                             : (byte & ~(1u << (db % 8))));
-                    }
+                    copy_bits(scratch_.data(), pshift, data, static_cast<std::size_t>(dbit0), n);
                     ok = ecat_write(static_cast<std::uint16_t>(p0), scratch_.data(), np, t);
                 } else {
                     ok = ecat_read(static_cast<std::uint16_t>(p0), scratch_.data(), np, false, t);
-                    if (ok) {
-                        for (std::uint64_t j = 0; j < nbits; ++j) {
-                            const std::uint64_t sb = pshift + j;
-                            const std::uint64_t db = dbit0 + j;
-                            if (sb / 8 >= np) break;
-                            const bool bit = (scratch_[sb / 8] >> (sb % 8)) & 1u;
-                            auto& byte = data[db / 8];
-                            byte = static_cast<std::uint8_t>(bit ? (byte | (1u << (db % 8)))
-                                                                 : (byte & ~(1u << (db % 8))));
-                        }
-                    }
+                    if (ok) copy_bits(data, static_cast<std::size_t>(dbit0), scratch_.data(), pshift, n);
                 }
             }
             (writing ? any_write : any_read) |= ok;
@@ -560,20 +549,18 @@ void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTi
 }
 
 void Esc::update_fmmu(unsigned i) {
-    const std::uint8_t* b = &mem_[fmmu_addr(i)];
+    const FmmuConfig c =
+        FmmuConfig::unpack(std::span<const std::uint8_t, kFmmuSize>(&mem_[fmmu_addr(i)], kFmmuSize));
     FmmuState& f = fmmu_[i];
-    const std::uint32_t lstart = ld_le32(b + fmmu::LogicalStart);
-    const std::uint16_t len = ld_le16(b + fmmu::Length);
-    const std::uint8_t sbit = b[fmmu::LogicalStartBit] & 7;
-    const std::uint8_t ebit = b[fmmu::LogicalStopBit] & 7;
-    f.read = b[fmmu::Type] & 0x01;
-    f.write = b[fmmu::Type] & 0x02;
-    f.log_first_bit = static_cast<std::uint64_t>(lstart) * 8 + sbit;
-    f.log_last_bit = (static_cast<std::uint64_t>(lstart) + (len ? len - 1 : 0)) * 8 + ebit;
-    f.phys_first_bit =
-        static_cast<std::uint32_t>(ld_le16(b + fmmu::PhysicalStart)) * 8 + (b[fmmu::PhysicalStartBit] & 7);
-    f.byte_aligned = sbit == 0 && ebit == 7 && (b[fmmu::PhysicalStartBit] & 7) == 0;
-    f.active = (b[fmmu::Activate] & 1) && (f.read || f.write) && len > 0 && f.log_last_bit >= f.log_first_bit;
+    const std::uint16_t len = c.length;
+    f.read = c.read;
+    f.write = c.write;
+    f.log_first_bit = static_cast<std::uint64_t>(c.logical_start) * 8 + c.logical_start_bit;
+    f.log_last_bit =
+        (static_cast<std::uint64_t>(c.logical_start) + (len ? len - 1 : 0)) * 8 + c.logical_stop_bit;
+    f.phys_first_bit = static_cast<std::uint32_t>(c.physical_start) * 8 + c.physical_start_bit;
+    f.byte_aligned = c.logical_start_bit == 0 && c.logical_stop_bit == 7 && c.physical_start_bit == 0;
+    f.active = c.active && (f.read || f.write) && len > 0 && f.log_last_bit >= f.log_first_bit;
     static_assert(kMaxFmmus <= 32);
     fmmu_read_mask_ = fmmu_write_mask_ = 0;
     fmmu_log_first_bit_ = ~std::uint64_t{0};
@@ -588,35 +575,32 @@ void Esc::update_fmmu(unsigned i) {
     }
 }
 
+protocol::SmConfig Esc::sm_block(unsigned i) const {
+    return SmConfig::unpack(std::span<const std::uint8_t, kSmSize>(&mem_[sm_addr(i)], kSmSize));
+}
+
 Esc::SmConfigView Esc::sm_config(unsigned i) const {
-    const std::uint8_t* b = &mem_[sm_addr(i)];
-    return {ld_le16(b + sm::PhysicalStart),
-            ld_le16(b + sm::Length),
-            b[sm::Control],
-            (b[sm::Activate] & sm::ActEnable) != 0,
-            (b[sm::PdiControl] & sm::PdiDeactivate) != 0,
-            sm_[i].valid};
+    const SmConfig c = sm_block(i);
+    return {c.physical_start, c.length, c.control, c.enabled(), c.pdi_deactivated(), sm_[i].valid};
 }
 
 void Esc::update_sm(unsigned i) {
     if (i >= cfg_.sm_count) return;
-    const std::uint8_t* b = &mem_[sm_addr(i)];
+    const SmConfig c = sm_block(i);
     SmState& s = sm_[i];
-    const std::uint16_t start = ld_le16(b + sm::PhysicalStart);
-    const std::uint16_t length = ld_le16(b + sm::Length);
-    const std::uint8_t control = b[sm::Control];
-    const bool mode_ok = (control & sm::CtrlModeMask) == sm::CtrlModeBuffered ||
-                         (control & sm::CtrlModeMask) == sm::CtrlModeMailbox;
+    const std::uint16_t start = c.physical_start;
+    const std::uint16_t length = c.length;
+    const std::uint8_t control = c.control;
+    const bool mode_ok = (control & sm::CtrlModeMask) == sm::CtrlModeBuffered || c.mailbox();
     const bool dir_ok =
         (control & sm::CtrlDirMask) == sm::CtrlDirRead || (control & sm::CtrlDirMask) == sm::CtrlDirWrite;
-    const bool mailbox = (control & sm::CtrlModeMask) == sm::CtrlModeMailbox;
+    const bool mailbox = c.mailbox();
     const std::size_t span = mailbox ? length : 3u * length;
     const bool valid =
         mode_ok && dir_ok && length > 0 && start >= kRegisterSpaceSize && start + span <= mem_.size();
-    const bool active =
-        (b[sm::Activate] & sm::ActEnable) && !(b[sm::PdiControl] & sm::PdiDeactivate) && valid;
+    const bool active = c.enabled() && !c.pdi_deactivated() && valid;
     const bool changed = active != s.active || start != s.start || length != s.length || control != s.control;
-    const bool repeat = (b[sm::Activate] & sm::ActRepeatRequest) != 0;
+    const bool repeat = c.repeat_request();
     static_assert(kMaxSms <= 32);
     const bool was_repeat = (repeat_bits_ >> i) & 1u;
     s.valid = valid;
@@ -626,7 +610,7 @@ void Esc::update_sm(unsigned i) {
         s.length = length;
         s.control = control;
         s.mailbox = mailbox;
-        s.ecat_writes = (control & sm::CtrlDirMask) == sm::CtrlDirWrite;
+        s.ecat_writes = c.ecat_writes();
         s.mbx_full = false;
         s.ecat_reading = false;
         s.ever_written = false;

@@ -81,6 +81,7 @@ class Esc {
         bool valid;            // the buffers fit the process RAM
     };
     SmConfigView sm_config(unsigned i) const;
+    protocol::SmConfig sm_block(unsigned i) const;  // SyncManager i's register block as written
     void pdi_deactivate_sm(unsigned i, bool deactivate);
     // SM activation register changed by the master (enable or repeat request): cleared by this read.
     bool pdi_take_sm_activation_event();

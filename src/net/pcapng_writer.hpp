@@ -21,7 +21,10 @@ class PcapngWriter {
     PcapngWriter(const PcapngWriter&) = delete;
     PcapngWriter& operator=(const PcapngWriter&) = delete;
 
-    // Timestamp in ns since the Unix epoch; direction: 1 inbound, 2 outbound (epb_flags).
+    // Direction of a frame (the epb_flags option of the Enhanced Packet Block).
+    static constexpr int kInbound = 1;
+    static constexpr int kOutbound = 2;
+    // Timestamp in ns since the Unix epoch; direction: kInbound or kOutbound.
     void write(ConstBytes frame, std::uint64_t unix_ns, int direction);
     void flush();
     std::uint64_t frames() const { return frames_; }

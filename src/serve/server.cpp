@@ -10,17 +10,21 @@ namespace vecat::net {
 
 namespace {
 
+// Every frame to the master side goes out here: sent, counted, captured.
+void send_to_master(RawSocket& sock, const ServeOptions& opt, ConstBytes frame, ServeStats& st) {
+    if (sock.send(frame))
+        ++st.sent;
+    else
+        ++st.send_errors;
+    if (opt.pcap) opt.pcap->write(frame, realtime_ns(), PcapngWriter::kOutbound);
+}
+
 // Sends the replies a fault held back whose time has come; shortens the wait to the next one.
 void send_due_replies(RawSocket& sock, const ServeOptions& opt, std::array<std::uint8_t, 2048>& buf,
                       ServeStats& st, std::int64_t& wait_us) {
     const std::uint64_t t = monotonic_ns();
-    while (const std::size_t n = opt.filter->take_due(t, Bytes(buf.data(), buf.size()))) {
-        if (sock.send(ConstBytes(buf.data(), n)))
-            ++st.sent;
-        else
-            ++st.send_errors;
-        if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), n), realtime_ns(), 2);
-    }
+    while (const std::size_t n = opt.filter->take_due(t, Bytes(buf.data(), buf.size())))
+        send_to_master(sock, opt, ConstBytes(buf.data(), n), st);
     const std::uint64_t due = opt.filter->next_due_ns();
     if (due != ~std::uint64_t{0})
         wait_us = std::min<std::int64_t>(wait_us, due > t ? static_cast<std::int64_t>((due - t) / 1000) : 0);
@@ -100,11 +104,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             std::size_t len = static_cast<std::size_t>(n);
             if (seg.return_frame(Bytes(buf.data(), buf.size()), len, now)) {
                 ++st.returned;
-                if (sock.send(ConstBytes(buf.data(), len)))
-                    ++st.sent;
-                else
-                    ++st.send_errors;
-                if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), 2);
+                send_to_master(sock, opt, ConstBytes(buf.data(), len), st);
             }
         } else if (n > 0) {
             ++st.received;
@@ -119,7 +119,9 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             if (rx_real != 0 && rx_real <= real && real - rx_real < 10'000'000) at = now - (real - rx_real);
             at = std::max(at, last_time);
             last_time = at;
-            if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), rx_real ? rx_real : real, 1);
+            if (opt.pcap)
+                opt.pcap->write(ConstBytes(buf.data(), len), rx_real ? rx_real : real,
+                                PcapngWriter::kInbound);
             const bool reply = opt.filter ? opt.filter->process_frame(Bytes(buf.data(), buf.size()), len, at)
                                           : seg.process_frame(Bytes(buf.data(), buf.size()), len, at);
             if (reply && opt.downstream && seg.frame_goes_downstream()) {
@@ -129,11 +131,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
                 else
                     ++st.send_errors;
             } else if (reply) {
-                if (sock.send(ConstBytes(buf.data(), len)))
-                    ++st.sent;
-                else
-                    ++st.send_errors;
-                if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), 2);
+                send_to_master(sock, opt, ConstBytes(buf.data(), len), st);
             }
             seg.run_deferred_firmware();
             if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);

@@ -332,6 +332,48 @@ TEST_F(Sdo, UploadSegmentToggleErrorAborts) {
     EXPECT_EQ(send(upload_segment_req(0x00), small).bytes, abort_frame(0, 0, 0x05040001));
 }
 
+TEST_F(Sdo, SegmentedTransferLeftAloneTimesOut) {
+    // Given a segmented upload in progress, with the slave's time running (the application's tick),
+    FakeSink small(16);
+    const std::uint64_t t0 = 5'000'000'000;
+    app.tick(t0);
+    send(upload_req(0x1008, 0), small);
+    ASSERT_TRUE(app.sdo_server().transfer_in_progress());
+    // a master that answers within the SDO timeout keeps the transfer going,
+    app.tick(t0 + 1'000'000);
+    app.tick(t0 + SdoServer::kSdoTimeoutNs - 1'000'000);
+    EXPECT_TRUE(app.sdo_server().transfer_in_progress());
+    EXPECT_EQ(send(upload_segment_req(0x00), small).bytes, cat({{0x00, 0x30, 0x00}, text("CiA402 servo ")}));
+    // when it then stays silent for the timeout, the transfer is dropped
+    const std::uint64_t t1 = t0 + SdoServer::kSdoTimeoutNs;
+    app.tick(t1);
+    EXPECT_TRUE(app.sdo_server().transfer_in_progress());  // the timeout counts from the last segment
+    app.tick(t1 + SdoServer::kSdoTimeoutNs);
+    EXPECT_FALSE(app.sdo_server().transfer_in_progress());
+    // and its late segment request hears "SDO protocol timeout" (0x05040000), once.
+    EXPECT_EQ(send(upload_segment_req(0x10), small).bytes, abort_frame(0x1008, 0, 0x05040000));
+    EXPECT_EQ(send(upload_segment_req(0x10), small).bytes, abort_frame(0, 0, 0x05040001));
+}
+
+TEST_F(Sdo, TimedOutDownloadStoresNothingAndANewTransferStartsClean) {
+    // Given a normal download of 0x2010 (a visible string) with the first part sent,
+    app.tick(1'000);
+    const auto value = [&] {
+        const auto v = od().find(0x2010, 0)->value();
+        return Buf(v.begin(), v.end());
+    };
+    const Buf before = value();
+    EXPECT_EQ(send(normal_req(0x2010, 0, 20, text("abc"))), download_ok(0x2010, 0));
+    ASSERT_TRUE(app.sdo_server().transfer_in_progress());
+    // when the master goes silent, the transfer is dropped without writing the entry,
+    app.tick(2'000);
+    app.tick(2'000 + SdoServer::kSdoTimeoutNs);
+    EXPECT_FALSE(app.sdo_server().transfer_in_progress());
+    EXPECT_EQ(value(), before);
+    // and a new request is served as usual.
+    EXPECT_EQ(send(expedited_req(0x6060, 0, {8})), download_ok(0x6060, 0));
+}
+
 TEST_F(Sdo, UploadSegmentToggleMustAlternate) {
     FakeSink small(12);  // 2 data bytes in the initiate reply, 9 per segment
     send(upload_req(0x1008, 0), small);
