@@ -14,7 +14,7 @@ cmake_minimum_required(VERSION 3.22)
 set(LAYER_common "")
 set(LAYER_protocol common)         # wire formats: layouts, codes, SII parse
 set(LAYER_twinsync common)         # TWINsync telegram, mapping, link, parameters: pure
-set(LAYER_device common twinsync)  # device descriptions (the dictionary content, the drive's TWINsync objects)
+set(LAYER_device common protocol twinsync)  # device descriptions (the dictionary content, the drive's TWINsync objects)
 set(LAYER_esc protocol device)     # the emulated ESC, the slave, the segment
 set(LAYER_coe esc device)          # object dictionary, SDO server, PDO mapping
 set(LAYER_motion "")               # profile generator, mechanics, homing, CiA 402 state machine

@@ -8,15 +8,13 @@
 #include <vector>
 
 #include "device/object_description.hpp"
+#include "protocol/sii.hpp"
 
 namespace vecat::device {
 
-struct Identity {
-    std::uint32_t vendor_id = 0;
-    std::uint32_t product_code = 0;
-    std::uint32_t revision = 0;
-    std::uint32_t serial = 0;
-};
+// The identity (vendor, product, revision, serial) and the DC operation modes are the SII's: one type each,
+// declared with the SII layout in protocol/sii.hpp.
+using Identity = protocol::SiiIdentity;
 
 // SII SyncM category type byte (ETG.2010 Table 8).
 enum class SmType : std::uint8_t { Unused = 0, MailboxOut = 1, MailboxIn = 2, Outputs = 3, Inputs = 4 };
@@ -60,16 +58,7 @@ struct Pdo {
 };
 
 // One operation mode of the DC category / ESI Dc element.
-struct DcOpMode {
-    std::string name;
-    std::string description;
-    std::uint16_t assign_activate = 0;
-    std::uint32_t cycle_time0 = 0;
-    std::uint32_t shift_time0 = 0;
-    std::uint32_t shift_time1 = 0;
-    std::int16_t sync0_cycle_factor = 1;
-    std::int16_t sync1_cycle_factor = 0;
-};
+using DcOpMode = protocol::SiiDcMode;
 
 // Mailbox protocols word (SII word 0x1C).
 namespace mbx_proto {

@@ -89,7 +89,8 @@ inline constexpr std::uint16_t MailboxCoE = 0x0004;
 // CRC-8 of the ESC configuration area (polynomial x^8+x^2+x+1, initial value 0xFF) over words 0..6.
 std::uint8_t sii_config_crc(ConstBytes first14bytes);
 
-// What a master learns from an SII image (used by the project's master, the ESI tools and tests).
+// What a master learns from an SII image (used by the project's master, the ESI tools and tests). The
+// identity and the DC modes are also the device description's (device::Identity, device::DcOpMode).
 struct SiiIdentity {
     std::uint32_t vendor_id = 0;
     std::uint32_t product_code = 0;
