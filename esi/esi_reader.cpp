@@ -1,3 +1,6 @@
+// The ESI reader (about 690 lines): one vendor file to one DeviceDescription, element by element of the
+// ETG.2000 schema (identity, SyncManagers, PDOs, Dictionary, Modules/Slots, DC), each with its bad-input
+// messages.
 #include "esi/esi_reader.hpp"
 
 #include <fmt/core.h>

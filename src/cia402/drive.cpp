@@ -1,3 +1,5 @@
+// The CiA 402 drive (about 1,400 lines): still the god file that issue 24 asks to split into a DriveCore,
+// one class per operation mode, the TWINsync coupling and a thin CoE adapter (started on branch `drive`).
 #include "cia402/drive.hpp"
 
 #include <algorithm>

@@ -1,3 +1,5 @@
+// vecat demo (about 880 lines): the table of phases, their steps on the project's master, the status line
+// and the files written at the end. One program; splitting the phases from the status line is left to do.
 #include "cli/demo.hpp"
 
 #include <fmt/core.h>

@@ -1,3 +1,6 @@
+// The ESC silicon as one unit (about 800 lines): a datagram's way through the register space, the FMMUs,
+// the SyncManagers and the SII interface is one piece of logic that each part must see whole; the DC unit
+// (distributed_clock) and the wire layouts (src/protocol) are already apart.
 #include "esc/esc.hpp"
 
 #include <algorithm>

@@ -1,3 +1,6 @@
+// The project's master (about 600 lines): one start-up sequence in the order of the masters' checklist
+// (scan, SII, mailboxes, PDO sizes, FMMUs, DC, state changes) and the cyclic exchange; the CoE side is in
+// coe_client.cpp.
 #include "master/master.hpp"
 
 #include <algorithm>
