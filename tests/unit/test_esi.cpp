@@ -12,10 +12,10 @@
 
 #include "cia402/drive.hpp"
 #include "esc/sii_image.hpp"
-#include "shared_data.hpp"
 #include "esi/esi_check.hpp"
 #include "esi/esi_reader.hpp"
 #include "esi/esi_writer.hpp"
+#include "shared_data.hpp"
 #include "test_support.hpp"
 
 namespace vecat {
