@@ -61,7 +61,7 @@ constexpr std::string_view describe(MailboxError e) noexcept {
     return "Unknown mailbox error";
 }
 
-// The mailbox header (ETG.1000.4 5.6, Table 29): length(2) address(2), channel (bits 0..5) and priority
+// The mailbox header (ETG.1000.4 5.6): length(2) address(2), channel (bits 0..5) and priority
 // (bits 6..7), type (bits 0..3) and counter (bits 4..6).
 struct MailboxHeader {
     static constexpr std::size_t kSize = kMailboxHeaderSize;
