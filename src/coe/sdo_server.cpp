@@ -14,6 +14,9 @@ using protocol::kSdoInfoHeaderSize;
 using protocol::MailboxError;
 using protocol::MailboxType;
 using protocol::SdoHeader;
+using protocol::SdoInfoEntry;
+using protocol::SdoInfoHeader;
+using protocol::SdoInfoObject;
 namespace sdo = protocol::sdo;
 namespace sdo_info = protocol::sdo_info;
 
@@ -71,6 +74,14 @@ void type_limit(const Entry& e, bool max, Reply& r) {
         if (e.type() == DataType::Boolean) b = max ? 0x01 : 0x00;
         r.u8(b);
     }
+}
+
+// The CoE header of an SDO information message and the SDO information header.
+void info_header(Reply& r, const SdoInfoHeader& h) {
+    r.u16(coe_header(CoeService::SdoInformation));
+    std::uint8_t b[SdoInfoHeader::kSize];
+    h.pack(b);
+    r.bytes(b);
 }
 
 void value_field(const std::vector<std::uint8_t>& v, const Entry& e, Reply& r) {
@@ -389,10 +400,7 @@ void SdoServer::upload_segment(std::uint8_t cmd, MailboxReplySink& out) {
 
 void SdoServer::info_error(SdoAbort code, MailboxReplySink& out) {
     Reply r(out.reply_buffer());
-    r.u16(coe_header(CoeService::SdoInformation));
-    r.u8(sdo_info::InfoErrorRequest);
-    r.u8(0);
-    r.u16(0);
+    info_header(r, {sdo_info::InfoErrorRequest});
     r.u32(static_cast<std::uint32_t>(code));
     out.commit(MailboxType::CoE, r.size());
     ++counters_.sdo_aborts_sent;
@@ -406,7 +414,7 @@ void SdoServer::sdo_info(ConstBytes p, MailboxReplySink& out) {
     }
     // A new request ends a fragmented response in progress.
     if (std::holds_alternative<InfoResponse>(transfer_)) set_transfer(Idle{});
-    const std::uint8_t opcode = p[kCoeHeaderSize] & ~sdo_info::Incomplete;
+    const std::uint8_t opcode = SdoInfoHeader::unpack(p.subspan<kCoeHeaderSize, kSdoInfoHeaderSize>()).opcode;
     const ConstBytes d = p.subspan(kCoeHeaderSize + kSdoInfoHeaderSize);
     switch (opcode) {
         case sdo_info::GetOdListRequest:
@@ -464,10 +472,7 @@ bool SdoServer::send_info_fragment(MailboxReplySink& out) {
     const std::size_t per_fragment = r.room() - kCoeHeaderSize - kSdoInfoHeaderSize;
     const std::size_t n = std::min(per_fragment, info->total - info->offset);
     const bool more = info->offset + n < info->total;
-    r.u16(coe_header(CoeService::SdoInformation));
-    r.u8(static_cast<std::uint8_t>(info->opcode | (more ? sdo_info::Incomplete : 0)));
-    r.u8(0);
-    r.u16(info->fragments_left);
+    info_header(r, {info->opcode, more, info->fragments_left});
     r.bytes(ConstBytes(info_buf_.data() + info->offset, n));
     out.commit(MailboxType::CoE, r.size());
     info->offset += n;
@@ -484,14 +489,12 @@ void SdoServer::object_description(std::uint16_t index, MailboxReplySink& out) {
         return;
     }
     Reply r(out.reply_buffer());
-    r.u16(coe_header(CoeService::SdoInformation));
-    r.u8(sdo_info::GetObjectDescriptionResponse);
-    r.u8(0);
-    r.u16(0);
-    r.u16(index);
-    r.u16(static_cast<std::uint16_t>(o->type()));
-    r.u8(o->max_subindex());
-    r.u8(static_cast<std::uint8_t>(o->code()));
+    info_header(r, {sdo_info::GetObjectDescriptionResponse});
+    std::uint8_t fixed[SdoInfoObject::kSize];
+    SdoInfoObject{index, static_cast<std::uint16_t>(o->type()), o->max_subindex(),
+                  static_cast<std::uint8_t>(o->code())}
+        .pack(fixed);
+    r.bytes(fixed);
     const auto& name = o->name();
     const std::size_t k = std::min(name.size(), r.room());
     r.bytes(ConstBytes(reinterpret_cast<const std::uint8_t*>(name.data()), k));
@@ -513,16 +516,16 @@ void SdoServer::entry_description(std::uint16_t index, std::uint8_t sub, std::ui
     // Units are not modelled: the unit type bit is cleared in the answer, so no field is expected for it.
     const auto vi = static_cast<std::uint8_t>(value_info & ~sdo_info::ValueUnitType);
     Reply r(out.reply_buffer());
-    r.u16(coe_header(CoeService::SdoInformation));
-    r.u8(sdo_info::GetEntryDescriptionResponse);
-    r.u8(0);
-    r.u16(0);
-    r.u16(index);
-    r.u8(sub);
-    r.u8(vi);
-    r.u16(static_cast<std::uint16_t>(e->type()));
-    r.u16(static_cast<std::uint16_t>(e->bit_length()));
-    r.u16(e->access());
+    info_header(r, {sdo_info::GetEntryDescriptionResponse});
+    std::uint8_t fixed[SdoInfoEntry::kSize];
+    SdoInfoEntry{index,
+                 sub,
+                 vi,
+                 static_cast<std::uint16_t>(e->type()),
+                 static_cast<std::uint16_t>(e->bit_length()),
+                 e->access()}
+        .pack(fixed);
+    r.bytes(fixed);
     const auto& d = e->desc();
     if (vi & sdo_info::ValueDefault) value_field(d.default_value, *e, r);
     if (vi & sdo_info::ValueMinimum) {

@@ -110,6 +110,14 @@ bool is_abort(const MailboxMessage& m) {
     return m.payload.size() >= kSdoMessage && sdo_header(m).command == sdo::AbortCommand;
 }
 
+// SDO information: the data after the CoE and SDO information headers.
+constexpr std::size_t kInfoData = kCoeHeaderSize + kSdoInfoHeaderSize;
+
+// The SDO information header of a message at least kInfoData long.
+SdoInfoHeader info_header(const MailboxMessage& m) {
+    return SdoInfoHeader::unpack(std::span(m.payload).subspan<kCoeHeaderSize, kSdoInfoHeaderSize>());
+}
+
 SdoAbort abort_code(const MailboxMessage& m) {
     return static_cast<SdoAbort>(sdo_header(m).data);
 }
@@ -227,13 +235,14 @@ std::optional<std::vector<std::uint16_t>> CoeClient::od_list(std::uint16_t list_
     std::uint8_t arg[2];
     st_le16(arg, list_type);
     last_fragments_ = 0;
-    auto rsp = info_request(sdo_info::GetOdListRequest, arg, 6);
+    auto rsp = info_request(sdo_info::GetOdListRequest, arg, kInfoData);
     std::vector<std::uint8_t> data;
     // Fragments follow while the incomplete bit is set; only the first carries the list type.
-    while (rsp && rsp->payload.size() >= 6 && (rsp->payload[2] & 0x7F) == sdo_info::GetOdListResponse) {
+    while (rsp && rsp->payload.size() >= kInfoData &&
+           info_header(*rsp).opcode == sdo_info::GetOdListResponse) {
         ++last_fragments_;
-        data.insert(data.end(), rsp->payload.begin() + 6, rsp->payload.end());
-        if (!(rsp->payload[2] & sdo_info::Incomplete)) break;
+        data.insert(data.end(), rsp->payload.begin() + kInfoData, rsp->payload.end());
+        if (!info_header(*rsp).incomplete) break;
         rsp = receive();
     }
     if (!rsp) return std::nullopt;
@@ -248,17 +257,19 @@ std::optional<std::vector<std::uint16_t>> CoeClient::od_list(std::uint16_t list_
 // least min_len bytes long. An SDO info error sets last_abort().
 std::optional<MailboxMessage> CoeClient::info_request(std::uint8_t opcode, ConstBytes args,
                                                       std::size_t min_len) {
-    std::vector<std::uint8_t> req(6, 0);
+    std::vector<std::uint8_t> req(kInfoData, 0);
     st_le16(req.data(), coe_header(CoeService::SdoInformation));
-    req[2] = opcode;
+    SdoInfoHeader{opcode}.pack(std::span(req).subspan<kCoeHeaderSize, kSdoInfoHeaderSize>());
     req.insert(req.end(), args.begin(), args.end());
     last_abort_ = SdoAbort::None;
     auto rsp = request(MailboxType::CoE, req);
-    if (!rsp || rsp->payload.size() < 6) return std::nullopt;
-    const std::uint8_t op = rsp->payload[2] & 0x7F;
+    if (!rsp || rsp->payload.size() < kInfoData) return std::nullopt;
+    const std::uint8_t op = info_header(*rsp).opcode;
     if (op == sdo_info::InfoErrorRequest) {
-        last_abort_ = rsp->payload.size() >= 10 ? static_cast<SdoAbort>(ld_le32(rsp->payload.data() + 6))
-                                                : SdoAbort::GeneralError;
+        // The error's abort code follows the header.
+        last_abort_ = rsp->payload.size() >= kInfoData + 4
+                          ? static_cast<SdoAbort>(ld_le32(rsp->payload.data() + kInfoData))
+                          : SdoAbort::GeneralError;
         return std::nullopt;
     }
     if (op != opcode + 1 || rsp->payload.size() < min_len) return std::nullopt;
@@ -268,14 +279,16 @@ std::optional<MailboxMessage> CoeClient::info_request(std::uint8_t opcode, Const
 std::optional<ObjectInfo> CoeClient::object_description(std::uint16_t index) {
     std::uint8_t arg[2];
     st_le16(arg, index);
-    auto rsp = info_request(sdo_info::GetObjectDescriptionRequest, arg, 12);
+    constexpr std::size_t kName = kInfoData + SdoInfoObject::kSize;
+    auto rsp = info_request(sdo_info::GetObjectDescriptionRequest, arg, kName);
     if (!rsp) return std::nullopt;
+    const auto h = SdoInfoObject::unpack(std::span(rsp->payload).subspan<kInfoData, SdoInfoObject::kSize>());
     ObjectInfo o;
-    o.index = ld_le16(rsp->payload.data() + 6);
-    o.data_type = ld_le16(rsp->payload.data() + 8);
-    o.max_subindex = rsp->payload[10];
-    o.object_code = rsp->payload[11];
-    o.name.assign(rsp->payload.begin() + 12, rsp->payload.end());
+    o.index = h.index;
+    o.data_type = h.data_type;
+    o.max_subindex = h.max_subindex;
+    o.object_code = h.object_code;
+    o.name.assign(rsp->payload.begin() + kName, rsp->payload.end());
     return o;
 }
 
@@ -283,17 +296,19 @@ std::optional<EntryInfo> CoeClient::entry_description(std::uint16_t index, std::
                                                       std::uint8_t value_info) {
     std::uint8_t arg[4] = {0, 0, sub, value_info};
     st_le16(arg, index);
-    auto rsp = info_request(sdo_info::GetEntryDescriptionRequest, arg, 16);
+    constexpr std::size_t kValues = kInfoData + SdoInfoEntry::kSize;
+    auto rsp = info_request(sdo_info::GetEntryDescriptionRequest, arg, kValues);
     if (!rsp) return std::nullopt;
-    EntryInfo e;
     const auto& p = rsp->payload;
-    e.index = ld_le16(p.data() + 6);
-    e.subindex = p[8];
-    e.value_info = p[9];
-    e.data_type = ld_le16(p.data() + 10);
-    e.bit_length = ld_le16(p.data() + 12);
-    e.access = ld_le16(p.data() + 14);
-    std::size_t off = 16;
+    const auto h = SdoInfoEntry::unpack(std::span(p).subspan<kInfoData, SdoInfoEntry::kSize>());
+    EntryInfo e;
+    e.index = h.index;
+    e.subindex = h.subindex;
+    e.value_info = h.value_info;
+    e.data_type = h.data_type;
+    e.bit_length = h.bit_length;
+    e.access = h.access;
+    std::size_t off = kValues;
     const std::size_t vbytes = (e.bit_length + 7u) / 8u;
     for (std::uint8_t bit : {sdo_info::ValueDefault, sdo_info::ValueMinimum, sdo_info::ValueMaximum}) {
         if (!(e.value_info & bit)) continue;

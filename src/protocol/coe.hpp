@@ -88,50 +88,6 @@ constexpr std::size_t segment_length(std::uint8_t cmd) {
 }
 }  // namespace sdo
 
-// The SDO header after the CoE header (ETG.1000.6 5.6.2): command byte, index, subindex, and four bytes of
-// data (the expedited value, the complete size of a normal transfer, or an abort code).
-struct SdoHeader {
-    static constexpr std::size_t kSize = kSdoHeaderSize;
-    std::uint8_t command = 0;
-    std::uint16_t index = 0;
-    std::uint8_t subindex = 0;
-    std::uint32_t data = 0;
-
-    void pack(std::span<std::uint8_t, kSize> out) const noexcept {
-        out[0] = command;
-        st_le16(out.data() + 1, index);
-        out[3] = subindex;
-        st_le32(out.data() + 4, data);
-    }
-    static SdoHeader unpack(std::span<const std::uint8_t, kSize> in) noexcept {
-        return {in[0], ld_le16(in.data() + 1), in[3], ld_le32(in.data() + 4)};
-    }
-    friend bool operator==(const SdoHeader&, const SdoHeader&) = default;
-};
-
-// An emergency message after the CoE header (ETG.1000.6 5.6.4, CiA 301 7.2.7): the error code, the error
-// register (0x1001) and five bytes of manufacturer-specific data.
-struct Emergency {
-    static constexpr std::size_t kSize = kEmergencySize;
-    std::uint16_t error_code = 0;
-    std::uint8_t error_register = 0;
-    std::array<std::uint8_t, 5> data{};
-
-    void pack(std::span<std::uint8_t, kSize> out) const noexcept {
-        st_le16(out.data(), error_code);
-        out[2] = error_register;
-        std::copy(data.begin(), data.end(), out.begin() + 3);
-    }
-    static Emergency unpack(std::span<const std::uint8_t, kSize> in) noexcept {
-        Emergency e;
-        e.error_code = ld_le16(in.data());
-        e.error_register = in[2];
-        std::copy_n(in.begin() + 3, e.data.size(), e.data.begin());
-        return e;
-    }
-    friend bool operator==(const Emergency&, const Emergency&) = default;
-};
-
 // SDO information opcodes (ETG.1000.6 5.6.3.2).
 namespace sdo_info {
 inline constexpr std::uint8_t GetOdListRequest = 0x01;
@@ -157,5 +113,116 @@ inline constexpr std::uint8_t ValueDefault = 0x10;
 inline constexpr std::uint8_t ValueMinimum = 0x20;
 inline constexpr std::uint8_t ValueMaximum = 0x40;
 }  // namespace sdo_info
+
+// The SDO header after the CoE header (ETG.1000.6 5.6.2): command byte, index, subindex, and four bytes of
+// data (the expedited value, the complete size of a normal transfer, or an abort code).
+struct SdoHeader {
+    static constexpr std::size_t kSize = kSdoHeaderSize;
+    std::uint8_t command = 0;
+    std::uint16_t index = 0;
+    std::uint8_t subindex = 0;
+    std::uint32_t data = 0;
+
+    void pack(std::span<std::uint8_t, kSize> out) const noexcept {
+        out[0] = command;
+        st_le16(out.data() + 1, index);
+        out[3] = subindex;
+        st_le32(out.data() + 4, data);
+    }
+    static SdoHeader unpack(std::span<const std::uint8_t, kSize> in) noexcept {
+        return {in[0], ld_le16(in.data() + 1), in[3], ld_le32(in.data() + 4)};
+    }
+    friend bool operator==(const SdoHeader&, const SdoHeader&) = default;
+};
+
+// The SDO information header after the CoE header (ETG.1000.6 5.6.3.2): opcode (bits 0..6), incomplete
+// (bit 7: more fragments follow), a reserved byte, fragments left (u16).
+struct SdoInfoHeader {
+    static constexpr std::size_t kSize = kSdoInfoHeaderSize;
+    std::uint8_t opcode = 0;
+    bool incomplete = false;
+    std::uint16_t fragments_left = 0;
+
+    void pack(std::span<std::uint8_t, kSize> out) const noexcept {
+        out[0] = static_cast<std::uint8_t>((opcode & ~sdo_info::Incomplete) |
+                                           (incomplete ? sdo_info::Incomplete : 0));
+        out[1] = 0;
+        st_le16(out.data() + 2, fragments_left);
+    }
+    static SdoInfoHeader unpack(std::span<const std::uint8_t, kSize> in) noexcept {
+        return {static_cast<std::uint8_t>(in[0] & ~sdo_info::Incomplete), (in[0] & sdo_info::Incomplete) != 0,
+                ld_le16(in.data() + 2)};
+    }
+    friend bool operator==(const SdoInfoHeader&, const SdoInfoHeader&) = default;
+};
+
+// The fixed part of a Get Object Description response (ETG.1000.6 5.6.3.5); the object's name follows.
+struct SdoInfoObject {
+    static constexpr std::size_t kSize = 6;
+    std::uint16_t index = 0;
+    std::uint16_t data_type = 0;
+    std::uint8_t max_subindex = 0;
+    std::uint8_t object_code = 0;
+
+    void pack(std::span<std::uint8_t, kSize> out) const noexcept {
+        st_le16(out.data(), index);
+        st_le16(out.data() + 2, data_type);
+        out[4] = max_subindex;
+        out[5] = object_code;
+    }
+    static SdoInfoObject unpack(std::span<const std::uint8_t, kSize> in) noexcept {
+        return {ld_le16(in.data()), ld_le16(in.data() + 2), in[4], in[5]};
+    }
+    friend bool operator==(const SdoInfoObject&, const SdoInfoObject&) = default;
+};
+
+// The fixed part of a Get Entry Description response (ETG.1000.6 5.6.3.6); the values asked for by
+// value_info (default, minimum, maximum, each of the entry's size) and the name follow.
+struct SdoInfoEntry {
+    static constexpr std::size_t kSize = 10;
+    std::uint16_t index = 0;
+    std::uint8_t subindex = 0;
+    std::uint8_t value_info = 0;
+    std::uint16_t data_type = 0;
+    std::uint16_t bit_length = 0;
+    std::uint16_t access = 0;
+
+    void pack(std::span<std::uint8_t, kSize> out) const noexcept {
+        st_le16(out.data(), index);
+        out[2] = subindex;
+        out[3] = value_info;
+        st_le16(out.data() + 4, data_type);
+        st_le16(out.data() + 6, bit_length);
+        st_le16(out.data() + 8, access);
+    }
+    static SdoInfoEntry unpack(std::span<const std::uint8_t, kSize> in) noexcept {
+        return {ld_le16(in.data()),    in[2], in[3], ld_le16(in.data() + 4), ld_le16(in.data() + 6),
+                ld_le16(in.data() + 8)};
+    }
+    friend bool operator==(const SdoInfoEntry&, const SdoInfoEntry&) = default;
+};
+
+// An emergency message after the CoE header (ETG.1000.6 5.6.4, CiA 301 7.2.7): the error code, the error
+// register (0x1001) and five bytes of manufacturer-specific data.
+struct Emergency {
+    static constexpr std::size_t kSize = kEmergencySize;
+    std::uint16_t error_code = 0;
+    std::uint8_t error_register = 0;
+    std::array<std::uint8_t, 5> data{};
+
+    void pack(std::span<std::uint8_t, kSize> out) const noexcept {
+        st_le16(out.data(), error_code);
+        out[2] = error_register;
+        std::copy(data.begin(), data.end(), out.begin() + 3);
+    }
+    static Emergency unpack(std::span<const std::uint8_t, kSize> in) noexcept {
+        Emergency e;
+        e.error_code = ld_le16(in.data());
+        e.error_register = in[2];
+        std::copy_n(in.begin() + 3, e.data.size(), e.data.begin());
+        return e;
+    }
+    friend bool operator==(const Emergency&, const Emergency&) = default;
+};
 
 }  // namespace vecat::protocol

@@ -239,6 +239,33 @@ TEST(ProtocolCoe, CommandBytesOfCiA301) {
     EXPECT_EQ(sdo::segment_unused(100), 0);
 }
 
+TEST(ProtocolCoe, SdoInformationHeaders) {
+    // An OD list response fragment with more to come, 3 fragments left: opcode 0x02 | 0x80.
+    const Raw<4> spec = {0x82, 0x00, 0x03, 0x00};
+    const auto h = SdoInfoHeader::unpack(spec);
+    EXPECT_EQ(h, (SdoInfoHeader{sdo_info::GetOdListResponse, true, 3}));
+    Raw<4> b{};
+    h.pack(b);
+    EXPECT_EQ(b, spec);
+
+    // Object description of 0x1018: RECORD (object code 9) of type 0x0023 (identity), 4 subindexes.
+    const Raw<6> object = {0x18, 0x10, 0x23, 0x00, 0x04, 0x09};
+    const auto o = SdoInfoObject::unpack(object);
+    EXPECT_EQ(o, (SdoInfoObject{0x1018, 0x0023, 4, 9}));
+    Raw<6> ob{};
+    o.pack(ob);
+    EXPECT_EQ(ob, object);
+
+    // Entry description of 0x6041:00: UNSIGNED16 (0x0006), 16 bits, read in every state (0x0007), default
+    // value asked for.
+    const Raw<10> entry = {0x41, 0x60, 0x00, 0x10, 0x06, 0x00, 0x10, 0x00, 0x07, 0x00};
+    const auto e = SdoInfoEntry::unpack(entry);
+    EXPECT_EQ(e, (SdoInfoEntry{0x6041, 0, sdo_info::ValueDefault, 0x0006, 16, 0x0007}));
+    Raw<10> eb{};
+    e.pack(eb);
+    EXPECT_EQ(eb, entry);
+}
+
 TEST(ProtocolCoe, EmergencyFromSpecificationBytes) {
     // Following error 0x8611, error register 0x80 (manufacturer), data 01 02 03 04 05.
     const Raw<8> spec = {0x11, 0x86, 0x80, 0x01, 0x02, 0x03, 0x04, 0x05};
