@@ -85,11 +85,13 @@ class Drive : public coe::CoeApplication {
     // esc::Application
     void tick(std::uint64_t now_ns) override;
 
+    // The dictionary entries the drive uses, bound once (drive.cpp).
+    struct Objects;
+
   protected:
     void cycle(std::uint64_t now_ns, bool outputs_applied) override;
 
   private:
-    struct Objects;
     void advance(std::uint64_t now_ns);
     void step_to(std::uint64_t t_ns);
     void servo_step();
