@@ -82,12 +82,14 @@ double pow10_of(std::int8_t index) {
     return table[static_cast<std::size_t>(index + 128)];
 }
 
-constexpr std::uint16_t kNewSetpoint = 1u << 4;
-constexpr std::uint16_t kChangeImmediately = 1u << 5;
-constexpr std::uint16_t kRelative = 1u << 6;
-constexpr std::uint16_t kHalt = 1u << 8;
-constexpr std::uint16_t kChangeOnSetpoint = 1u << 9;
-constexpr std::uint16_t kHomingStart = 1u << 4;
+// Controlword bits of the modes (protocol/cia402.hpp).
+namespace cw = protocol::cia402::cw;
+constexpr std::uint16_t kNewSetpoint = cw::NewSetpoint;
+constexpr std::uint16_t kChangeImmediately = cw::ChangeSetImmediately;
+constexpr std::uint16_t kRelative = cw::Relative;
+constexpr std::uint16_t kHalt = cw::Halt;
+constexpr std::uint16_t kChangeOnSetpoint = cw::ChangeOnSetpoint;
+constexpr std::uint16_t kHomingStart = cw::HomingStart;
 
 }  // namespace
 
@@ -568,7 +570,7 @@ void Drive::servo_step() {
         twin_->partner().mode == twinsync::Role::Slave && !twin_->partner_enabled() &&
         !(o_->tw_config.get_or(0) & twinsync::kConfigNoSlaveStateCheck) &&
         sm_.state() != State::OperationEnabled)
-        controlword_ = static_cast<std::uint16_t>(controlword_ & ~0x0008u);
+        controlword_ = static_cast<std::uint16_t>(controlword_ & ~cw::EnableOperation);
 
     update_inputs();
     check_faults(dt);
