@@ -14,7 +14,7 @@
 #include "cia402/profile_generator.hpp"
 #include "cia402/state_machine.hpp"
 #include "coe/coe_application.hpp"
-#include "twinsync/port.hpp"
+#include "cia402/twinsync_port.hpp"
 #include "twinsync/status.hpp"
 
 namespace vecat::cia402 {
