@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "cia402/homing.hpp"
+#include "cia402/touch_probe.hpp"
 #include "device/drive_objects.hpp"
 #include "protocol/cia402_objects.hpp"
 
@@ -1206,61 +1207,19 @@ void Drive::run_homing(double dt) {
 }
 
 void Drive::run_touch_probe(double previous_inc, double machine_inc) {
-    const std::uint16_t fn = o_->probe_function.get_or(0);
+    TouchProbe::Period p;
+    p.function = o_->probe_function.get_or(0);
+    p.inputs = probe_inputs_;
+    p.previous_inc = previous_inc;
+    p.machine_inc = machine_inc;
+    p.index_offset = o_->index_pulse_offset.get_or(0);
+    const TouchProbe::Latched l = probe_.step(p, ratios_, home_shift_);
     coe::Value<std::int32_t>* values[2][2] = {{&o_->probe1_positive, &o_->probe1_negative},
                                               {&o_->probe2_positive, &o_->probe2_negative}};
-    for (int n = 0; n < 2; ++n) {
-        const unsigned shift = 8u * static_cast<unsigned>(n);
-        const std::uint16_t f = static_cast<std::uint16_t>(fn >> shift);
-        const std::uint16_t pf = static_cast<std::uint16_t>(previous_probe_function_ >> shift);
-        std::uint16_t st = static_cast<std::uint16_t>(probe_status_ >> shift) & 0xFF;
-        if (!(f & 0x01)) {
-            st = 0;  // disabled: status cleared
-        } else {
-            st |= 0x01;
-            // Arming: enabling the probe or an edge enable bit rising clears the stored flags.
-            if (!(pf & 0x01)) st = 0x01;
-            if ((f & 0x10) && !(pf & 0x10)) st &= static_cast<std::uint16_t>(~0x02);
-            if ((f & 0x20) && !(pf & 0x20)) st &= static_cast<std::uint16_t>(~0x04);
-            const bool continuous = f & 0x02;
-            const unsigned source = (f >> 2) & 0x03;  // 0: touch probe input, 1: zero impulse (index)
-            bool rise = false, fall = false;
-            double at_inc = machine_inc;
-            if (source == 0) {
-                const bool now = probe_inputs_ & (1u << n);
-                const bool before = previous_probe_inputs_ & (1u << n);
-                rise = now && !before;
-                fall = !now && before;
-            } else if (source == 1) {
-                // Index pulse once per motor revolution at the configured offset: the exact crossing.
-                const double period = ratios_.per_revolution;
-                const double offset = o_->index_pulse_offset.get_or(0);
-                const double lo = std::min(previous_inc, machine_inc),
-                             hi = std::max(previous_inc, machine_inc);
-                const double k = std::ceil((lo - offset) / period);
-                const double crossing = k * period + offset;
-                if (crossing <= hi && hi > lo && crossing > lo) {
-                    rise = fall = true;
-                    at_inc = crossing;
-                }
-            }
-            const double user =
-                static_cast<double>(ratios_.increments_to_user(floor64(at_inc))) + home_shift_;
-            const std::int32_t latched = wrap32(floor64(user));
-            if (rise && (f & 0x10) && (continuous || !(st & 0x02))) {
-                values[n][0]->set(latched);
-                st |= 0x02;
-            }
-            if (fall && (f & 0x20) && (continuous || !(st & 0x04))) {
-                values[n][1]->set(latched);
-                st |= 0x04;
-            }
-        }
-        probe_status_ = static_cast<std::uint16_t>((probe_status_ & ~(0xFFu << shift)) | (st << shift));
-    }
-    previous_probe_function_ = fn;
-    previous_probe_inputs_ = probe_inputs_;
-    o_->probe_status.set(probe_status_);
+    for (int n = 0; n < 2; ++n)
+        for (int edge = 0; edge < 2; ++edge)
+            if (l.set[n][edge]) values[n][edge]->set(l.value[n][edge]);
+    o_->probe_status.set(probe_.status());
 }
 
 void Drive::write_feedback() {
@@ -1355,82 +1314,6 @@ void Drive::write_feedback() {
     const double i_rel = mech_->current() / rated_a;
     temperature_ += (350.0 + 300.0 * i_rel * i_rel - temperature_) * dt / 60.0;
     o_->temperature.set(sat16(temperature_));
-}
-
-std::shared_ptr<twinsync::Channel> connect_twinsync(Drive& a, Drive& b, double ppm_a, double ppm_b) {
-    auto ch = std::make_shared<twinsync::Channel>();
-    ch->set_oscillator_ppm(0, ppm_a);
-    ch->set_oscillator_ppm(1, ppm_b);
-    a.twinsync_port().connect(ch, 0);
-    b.twinsync_port().connect(ch, 1);
-    a.twin_partner_ = &b;
-    b.twin_partner_ = &a;
-    return ch;
-}
-
-namespace {
-
-void set_parameter(Drive& d, std::uint16_t parameter, std::uint8_t sub, std::int64_t value) {
-    if (Entry* e = d.dictionary().find(twinsync::object_index(parameter), sub)) {
-        std::array<std::uint8_t, 8> v{};
-        st_le64(v.data(), static_cast<std::uint64_t>(value));
-        e->assign(ConstBytes(v.data(), std::min<std::size_t>(e->capacity(), 8)));
-    }
-}
-
-}  // namespace
-
-void apply_twinsync_preset(Drive& master, Drive& slave, TwinsyncPreset preset) {
-    using namespace twinsync;
-    if (preset == TwinsyncPreset::None) return;
-    const Setting ms = preset == TwinsyncPreset::Gantry     ? Setting::PconGantryMaster
-                       : preset == TwinsyncPreset::Position ? Setting::PconMaster
-                                                            : Setting::SconMaster;
-    const Setting ss = preset == TwinsyncPreset::Gantry     ? Setting::PconGantrySlave
-                       : preset == TwinsyncPreset::Position ? Setting::PconSlave
-                                                            : Setting::SconSlave;
-    set_parameter(master, p::Mode, 0, static_cast<std::int64_t>(Role::Master));
-    set_parameter(master, p::Setting, 0, static_cast<std::int64_t>(ms));
-    set_parameter(slave, p::Mode, 0, static_cast<std::int64_t>(Role::Slave));
-    set_parameter(slave, p::Setting, 0, static_cast<std::int64_t>(ss));
-    set_parameter(slave, p::ControlSelector, 0, kControlByTwinsync);
-    set_parameter(slave, p::SetpointSelector, 0, kSetpointByTwinsync);
-    set_parameter(slave, p::SyncSel, 0, static_cast<std::int64_t>(SyncSelection::SlaveByTwin));
-    master.twinsync_port().reconfigure();
-    slave.twinsync_port().reconfigure();
-}
-
-std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
-                                                 const esc::EscConfig& cfg, TwinsyncPreset preset) {
-    return make_drive_segment(esc::DeviceModel::of(d), n, cfg, preset);
-}
-
-std::unique_ptr<esc::Segment> make_drive_segment(const esc::DeviceModel& m, std::size_t n,
-                                                 const esc::EscConfig& cfg, TwinsyncPreset preset) {
-    // The factory also rebuilds a restarted slave, of the same model.
-    auto seg = esc::make_segment(
-        m, n, cfg,
-        [objects = m.dictionary](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
-            return std::make_unique<Drive>(dd, objects);
-        });
-    if (n >= 2) {
-        auto* a = dynamic_cast<Drive*>(&seg->slave(0).app());
-        auto* b = dynamic_cast<Drive*>(&seg->slave(1).app());
-        if (a && b) {
-            connect_twinsync(*a, *b);
-            apply_twinsync_preset(*a, *b, preset);
-        }
-    }
-    return seg;
-}
-
-}  // namespace vecat::cia402
-
-namespace vecat::cia402 {
-
-std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
-                                                 const esc::EscConfig& cfg) {
-    return make_drive_segment(d, n, cfg, TwinsyncPreset::None);
 }
 
 }  // namespace vecat::cia402

@@ -13,8 +13,9 @@
 #include "cia402/mechanics.hpp"
 #include "cia402/profile_generator.hpp"
 #include "cia402/state_machine.hpp"
-#include "coe/coe_application.hpp"
+#include "cia402/touch_probe.hpp"
 #include "cia402/twinsync_port.hpp"
+#include "coe/coe_application.hpp"
 #include "twinsync/status.hpp"
 
 namespace vecat::cia402 {
@@ -181,10 +182,9 @@ class Drive : public coe::CoeApplication {
 
     // Switches, index pulse and touch probe.
     bool negative_limit_ = false, positive_limit_ = false, home_switch_ = false;
-    std::uint8_t probe_inputs_ = 0, previous_probe_inputs_ = 0;
+    std::uint8_t probe_inputs_ = 0;
     double previous_machine_inc_ = 0;
-    std::uint16_t previous_probe_function_ = 0;
-    std::uint16_t probe_status_ = 0;
+    TouchProbe probe_;
 
     // Faults.
     std::uint16_t active_fault_ = 0;

@@ -1,9 +1,9 @@
 // The TWINsync option card of one drive, bound to the drive's dictionary (so it lives above coe, next to
-// the drive; the pure parts, telegram, mapping, link and parameters, are src/twinsync): it reads its configuration from the drive's dictionary (the
-// parameters of src/device/twinsync_objects.cpp), checks it when it is written (refusing what cannot work,
-// with the reason in 0x2102), builds the telegram from the send mapping once per control cycle, checks the
-// received one (length, CRC) and copies its process data into the mapped parameters, runs the
-// synchronisation controller of a slave and the monitoring of chapter 7.
+// the drive; the pure parts, telegram, mapping, link and parameters, are src/twinsync): it reads its
+// configuration from the drive's dictionary (the parameters of src/device/twinsync_objects.cpp), checks it
+// when it is written (refusing what cannot work, with the reason in 0x2102), builds the telegram from the
+// send mapping once per control cycle, checks the received one (length, CRC) and copies its process data into
+// the mapped parameters, runs the synchronisation controller of a slave and the monitoring of chapter 7.
 //
 // The drive calls receive() at the start of its control cycle and transmit() at its end. The port tells
 // the drive the control word received from the master drive, whether the partner is enabled, and the
@@ -17,14 +17,13 @@
 #include <vector>
 
 #include "coe/object_dictionary.hpp"
+#include "twinsync/errors.hpp"
 #include "twinsync/link.hpp"
 #include "twinsync/mapping.hpp"
-#include "twinsync/errors.hpp"
 #include "twinsync/status.hpp"
 #include "twinsync/telegram.hpp"
 
 namespace vecat::twinsync {
-
 
 // What the drive tells the port about itself every cycle.
 struct LocalState {
