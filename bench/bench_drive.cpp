@@ -3,27 +3,31 @@
 #include <benchmark/benchmark.h>
 
 #include "cia402/drive.hpp"
+#include "protocol/cia402.hpp"
+#include "protocol/cia402_objects.hpp"
 
 namespace {
 
 using vecat::cia402::Drive;
+namespace obj = vecat::protocol::obj;
+namespace cmd = vecat::protocol::cia402::cmd;
 
 void BM_DriveServoPeriod(benchmark::State& state) {
     Drive d(vecat::device::default_drive());
     auto& od = d.dictionary();
-    od.find(0x6060, 0)->set(static_cast<std::int8_t>(state.range(0)));
-    od.find(0x60FF, 0)->set(std::int32_t{200'000});
+    od.find(obj::modes_of_operation)->set(static_cast<std::int8_t>(state.range(0)));
+    od.find(obj::target_velocity)->set(std::int32_t{200'000});
     std::uint64_t now = 1'000'000'000;
     d.tick(now);
-    for (int cw : {0x06, 0x07, 0x0F}) {
-        od.find(0x6040, 0)->set(static_cast<std::uint16_t>(cw));
+    for (std::uint16_t cw : {cmd::Shutdown, cmd::SwitchOn, cmd::EnableOperation}) {
+        od.find(obj::controlword)->set(cw);
         now += 1'000'000;
         d.tick(now);
     }
     std::int32_t target = 0;
     for (auto _ : state) {
         target += 100;
-        od.find(0x607A, 0)->set(target);
+        od.find(obj::target_position)->set(target);
         now += Drive::kServoPeriodNs;
         d.tick(now);
     }

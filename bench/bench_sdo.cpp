@@ -8,10 +8,12 @@
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "serve/in_process_link.hpp"
+#include "protocol/cia402_objects.hpp"
 
 namespace {
 
 using namespace vecat;
+namespace obj = protocol::obj;
 
 struct PreOpDrive {
     std::unique_ptr<esc::Segment> seg = cia402::make_drive_segment(device::default_drive(), 1);
@@ -28,7 +30,7 @@ void BM_SdoUploadExpedited(benchmark::State& state) {
     PreOpDrive d;
     master::CoeClient c(d.m, d.m.slaves()[0].station);
     for (auto _ : state) {
-        auto r = c.upload(0x6041, 0);
+        auto r = c.upload(obj::statusword.index, 0);
         if (!r.ok()) state.SkipWithError("upload failed");
         benchmark::DoNotOptimize(r.data.data());
     }
@@ -41,7 +43,7 @@ void BM_SdoDownloadExpedited(benchmark::State& state) {
     master::CoeClient c(d.m, d.m.slaves()[0].station);
     std::uint32_t v = 1000;
     for (auto _ : state) {
-        auto r = c.download_value(0x6081, 0, v++);
+        auto r = c.download_value(obj::profile_velocity.index, 0, v++);
         if (!r.ok()) state.SkipWithError("download failed");
     }
 }

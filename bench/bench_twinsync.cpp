@@ -4,7 +4,7 @@
 
 #include "cia402/drive.hpp"
 #include "device/device_description.hpp"
-#include "twinsync/port.hpp"
+#include "cia402/twinsync_port.hpp"
 #include "twinsync/telegram.hpp"
 
 namespace {

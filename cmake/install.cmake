@@ -4,7 +4,7 @@
 # package through CPack (cpack -G DEB in the build directory).
 include(CMakePackageConfigHelpers)
 
-set(VECAT_INSTALL_LIBS vecat_common vecat_protocol vecat_device vecat_esc vecat_coe vecat_twinsync vecat_motion vecat_cia402
+set(VECAT_INSTALL_LIBS vecat_common vecat_protocol vecat_device vecat_esc vecat_coe vecat_twinsync_parameters vecat_twinsync vecat_motion vecat_cia402
                        vecat_net vecat_serve vecat_faults vecat_master vecat_telemetry vecat_testing vecat_esi)
 if(VECAT_TELEMETRY)
   list(APPEND VECAT_INSTALL_LIBS vecat_telemetry_idl)

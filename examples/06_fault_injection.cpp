@@ -2,6 +2,7 @@
 // a cable break on the EtherCAT line (link_down), then a broken TWINsync cable between two gantry drives.
 #include <cstdio>
 
+#include "protocol/cia402.hpp"
 #include "testing/virtual_segment.hpp"
 
 using namespace vecat;
@@ -31,7 +32,8 @@ int main() {
     bool faulted = false;
     for (int k = 0; k < 200 && !faulted; ++k) {
         vs.cycle();
-        faulted = (vs.statusword(0) & 0x08) && (vs.statusword(1) & 0x08);
+        faulted = (vs.statusword(0) & protocol::cia402::sw::Fault) &&
+                  (vs.statusword(1) & protocol::cia402::sw::Fault);
     }
     std::printf("statuswords 0x%04X 0x%04X: %s\n", vs.statusword(0), vs.statusword(1),
                 faulted ? "both drives in FAULT" : "no fault seen");

@@ -16,6 +16,9 @@
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "serve/in_process_link.hpp"
+#include "protocol/cia402_objects.hpp"
+
+namespace obj = vecat::protocol::obj;
 
 using namespace vecat;
 namespace fs = std::filesystem;
@@ -154,7 +157,7 @@ int main(int argc, char** argv) {
         [&] { coe.upload(0x5555, 0); },
         [&] { coe.upload(0x1C12, 0, true); },
         [&] { coe.upload(0x1A00, 0, true); },
-        [&] { coe.download_value<std::int8_t>(0x6060, 0, 8); },
+        [&] { coe.download_value<std::int8_t>(obj::modes_of_operation.index, 0, 8); },
         [&] {
             const std::uint8_t v[4] = {1, 2, 3, 4};
             coe.download(0x2000, 1, ConstBytes(v, 4), false, master::CoeClient::Transfer::Normal);
@@ -170,7 +173,7 @@ int main(int argc, char** argv) {
         [&] { coe.od_list(protocol::sdo_info::ListAll); },
         [&] { coe.od_list(protocol::sdo_info::ListLengths); },
         [&] { coe.object_description(0x1018); },
-        [&] { coe.entry_description(0x6040, 0, 0x78); },
+        [&] { coe.entry_description(obj::controlword.index, 0, 0x78); },
         [&] { coe.entry_description(0x1018, 9, 0x78); },
     };
     for (const auto& x : exchanges) {

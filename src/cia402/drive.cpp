@@ -9,6 +9,9 @@
 #include <numbers>
 
 #include "cia402/homing.hpp"
+#include "cia402/touch_probe.hpp"
+#include "device/drive_objects.hpp"
+#include "protocol/cia402_objects.hpp"
 
 namespace vecat::cia402 {
 
@@ -34,16 +37,8 @@ bool fault::injectable(std::uint16_t code) noexcept {
 namespace {
 
 using coe::Entry;
-
-template <class T>
-T rd(const Entry* e, T fallback = T{}) {
-    return e ? e->get<T>() : fallback;
-}
-
-template <class T>
-void wr(Entry* e, T v) {
-    if (e) e->set(v);
-}
+namespace obj = protocol::obj;
+namespace mfr = device::mfr;
 
 std::int32_t wrap32(std::int64_t v) {
     return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
@@ -90,167 +85,189 @@ double pow10_of(std::int8_t index) {
     return table[static_cast<std::size_t>(index + 128)];
 }
 
-constexpr std::uint16_t kNewSetpoint = 1u << 4;
-constexpr std::uint16_t kChangeImmediately = 1u << 5;
-constexpr std::uint16_t kRelative = 1u << 6;
-constexpr std::uint16_t kHalt = 1u << 8;
-constexpr std::uint16_t kChangeOnSetpoint = 1u << 9;
-constexpr std::uint16_t kHomingStart = 1u << 4;
+// Controlword bits of the modes (protocol/cia402.hpp).
+namespace cw = protocol::cia402::cw;
+constexpr std::uint16_t kNewSetpoint = cw::NewSetpoint;
+constexpr std::uint16_t kChangeImmediately = cw::ChangeSetImmediately;
+constexpr std::uint16_t kRelative = cw::Relative;
+constexpr std::uint16_t kHalt = cw::Halt;
+constexpr std::uint16_t kChangeOnSetpoint = cw::ChangeOnSetpoint;
+constexpr std::uint16_t kHomingStart = cw::HomingStart;
 
 }  // namespace
 
-// The dictionary entries the drive reads and writes, looked up once. A missing object (a vendor ESI
-// without it) reads as its fallback and is not written.
+// The dictionary entries the drive reads and writes, bound once by name (protocol/cia402_objects.hpp,
+// device/drive_objects.hpp) as typed handles: an entry of another type than the catalogue's refuses to
+// bind. A missing object (a vendor ESI without it) reads as its fallback and is not written.
 struct Drive::Objects {
-    explicit Objects(coe::ObjectDictionary& d) : od(d) {
-        for (std::uint8_t s = 1; s <= 7; ++s) {
-            motor[s] = at(0x2000, s);
-            machine[s] = at(0x2100, s);
-        }
-        for (std::uint8_t s = 1; s <= 4; ++s)
-            gains[s] = at(0x2003, s);
+    template <class T>
+    using V = coe::Value<T>;
+    explicit Objects(coe::ObjectDictionary& d) : od(d) {}
+    // The drive also runs on vendors' dictionaries (ESI files), some of which declare a profile object
+    // with another integer type (DINT digital inputs, USINT for a UDINT): such an entry is converted as
+    // Entry::get/set do (coe::Match::Convert). Reals and strings must match.
+    template <protocol::DataType T>
+    V<protocol::value_type_t<T>> bind(protocol::ObjectId<T> id) {
+        return coe::bind(od, id, coe::Match::Convert);
     }
-    Entry* at(std::uint16_t index, std::uint8_t sub = 0) { return od.find(index, sub); }
 
     coe::ObjectDictionary& od;
-    Entry* controlword = at(0x6040);
-    Entry* statusword = at(0x6041);
-    Entry* quick_stop_option = at(0x605A);
-    Entry* shutdown_option = at(0x605B);
-    Entry* disable_operation_option = at(0x605C);
-    Entry* halt_option = at(0x605D);
-    Entry* fault_reaction_option = at(0x605E);
-    Entry* modes = at(0x6060);
-    Entry* modes_display = at(0x6061);
-    Entry* position_demand = at(0x6062);
-    Entry* position_internal = at(0x6063);
-    Entry* position_actual = at(0x6064);
-    Entry* following_error_window = at(0x6065);
-    Entry* following_error_timeout = at(0x6066);
-    Entry* position_window = at(0x6067);
-    Entry* position_window_time = at(0x6068);
-    Entry* velocity_demand = at(0x606B);
-    Entry* velocity_actual = at(0x606C);
-    Entry* velocity_window = at(0x606D);
-    Entry* velocity_window_time = at(0x606E);
-    Entry* velocity_threshold = at(0x606F);
-    Entry* velocity_threshold_time = at(0x6070);
-    Entry* target_torque = at(0x6071);
-    Entry* max_torque = at(0x6072);
-    Entry* torque_demand = at(0x6074);
-    Entry* rated_current = at(0x6075);
-    Entry* rated_torque = at(0x6076);
-    Entry* torque_actual = at(0x6077);
-    Entry* current_actual = at(0x6078);
-    Entry* target_position = at(0x607A);
-    Entry* home_offset = at(0x607C);
-    Entry* software_limit_min = at(0x607D, 1);
-    Entry* software_limit_max = at(0x607D, 2);
-    Entry* max_profile_velocity = at(0x607F);
-    Entry* max_motor_speed = at(0x6080);
-    Entry* profile_velocity = at(0x6081);
-    Entry* profile_acceleration = at(0x6083);
-    Entry* profile_deceleration = at(0x6084);
-    Entry* quick_stop_deceleration = at(0x6085);
-    Entry* motion_profile_type = at(0x6086);
-    Entry* torque_slope = at(0x6087);
-    Entry* encoder_increments = at(0x608F, 1);
-    Entry* encoder_revolutions = at(0x608F, 2);
-    Entry* gear_motor = at(0x6091, 1);
-    Entry* gear_shaft = at(0x6091, 2);
-    Entry* feed = at(0x6092, 1);
-    Entry* feed_shaft = at(0x6092, 2);
-    Entry* homing_method = at(0x6098);
-    Entry* homing_speed_switch = at(0x6099, 1);
-    Entry* homing_speed_zero = at(0x6099, 2);
-    Entry* homing_acceleration = at(0x609A);
-    Entry* profile_jerk = at(0x60A4, 1);
-    Entry* position_offset = at(0x60B0);
-    Entry* velocity_offset = at(0x60B1);
-    Entry* torque_offset = at(0x60B2);
-    Entry* probe_function = at(0x60B8);
-    Entry* probe_status = at(0x60B9);
-    Entry* probe1_positive = at(0x60BA);
-    Entry* probe1_negative = at(0x60BB);
-    Entry* probe2_positive = at(0x60BC);
-    Entry* probe2_negative = at(0x60BD);
-    Entry* interpolation_value = at(0x60C2, 1);
-    Entry* interpolation_index = at(0x60C2, 2);
-    Entry* max_acceleration = at(0x60C5);
-    Entry* max_deceleration = at(0x60C6);
-    Entry* positive_torque_limit = at(0x60E0);
-    Entry* negative_torque_limit = at(0x60E1);
-    Entry* following_error_actual = at(0x60F4);
-    Entry* position_demand_internal = at(0x60FC);
-    Entry* digital_inputs = at(0x60FD);
-    Entry* target_velocity = at(0x60FF);
-    Entry* temperature = at(0x2001);
-    Entry* bus_voltage = at(0x2002);
-    Entry* simulated_fault = at(0x2101);
-    Entry* velocity_override = at(0x2110);
-    Entry* compensation_distance = at(0x2111, 1);
-    Entry* compensation_length = at(0x2111, 2);
-    Entry* compensation_start = at(0x2111, 3);
-    // TWINsync: the local values the drive provides and the remote values it uses.
-    Entry* tw(std::uint16_t parameter, std::uint8_t sub = 0) {
-        return at(twinsync::object_index(parameter), sub);
+    V<std::uint16_t> controlword = bind(obj::controlword);
+    V<std::uint16_t> statusword = bind(obj::statusword);
+    V<std::int16_t> quick_stop_option = bind(obj::quick_stop_option_code);
+    V<std::int16_t> shutdown_option = bind(obj::shutdown_option_code);
+    V<std::int16_t> disable_operation_option = bind(obj::disable_operation_option_code);
+    V<std::int16_t> halt_option = bind(obj::halt_option_code);
+    V<std::int16_t> fault_reaction_option = bind(obj::fault_reaction_option_code);
+    V<std::int8_t> modes = bind(obj::modes_of_operation);
+    V<std::int8_t> modes_display = bind(obj::modes_of_operation_display);
+    V<std::int32_t> position_demand = bind(obj::position_demand_value);
+    V<std::int32_t> position_internal = bind(obj::position_actual_internal_value);
+    V<std::int32_t> position_actual = bind(obj::position_actual_value);
+    V<std::uint32_t> following_error_window = bind(obj::following_error_window);
+    V<std::uint16_t> following_error_timeout = bind(obj::following_error_time_out);
+    V<std::uint32_t> position_window = bind(obj::position_window);
+    V<std::uint16_t> position_window_time = bind(obj::position_window_time);
+    V<std::int32_t> velocity_demand = bind(obj::velocity_demand_value);
+    V<std::int32_t> velocity_actual = bind(obj::velocity_actual_value);
+    V<std::uint16_t> velocity_window = bind(obj::velocity_window);
+    V<std::uint16_t> velocity_window_time = bind(obj::velocity_window_time);
+    V<std::uint16_t> velocity_threshold = bind(obj::velocity_threshold);
+    V<std::uint16_t> velocity_threshold_time = bind(obj::velocity_threshold_time);
+    V<std::int16_t> target_torque = bind(obj::target_torque);
+    V<std::uint16_t> max_torque = bind(obj::max_torque);
+    V<std::int16_t> torque_demand = bind(obj::torque_demand);
+    V<std::uint32_t> rated_current = bind(obj::motor_rated_current);
+    V<std::uint32_t> rated_torque = bind(obj::motor_rated_torque);
+    V<std::int16_t> torque_actual = bind(obj::torque_actual_value);
+    V<std::int16_t> current_actual = bind(obj::current_actual_value);
+    V<std::int32_t> target_position = bind(obj::target_position);
+    V<std::int32_t> home_offset = bind(obj::home_offset);
+    V<std::int32_t> software_limit_min = bind(obj::software_position_limit::min);
+    V<std::int32_t> software_limit_max = bind(obj::software_position_limit::max);
+    V<std::uint32_t> max_profile_velocity = bind(obj::max_profile_velocity);
+    V<std::uint32_t> max_motor_speed = bind(obj::max_motor_speed);
+    V<std::uint32_t> profile_velocity = bind(obj::profile_velocity);
+    V<std::uint32_t> profile_acceleration = bind(obj::profile_acceleration);
+    V<std::uint32_t> profile_deceleration = bind(obj::profile_deceleration);
+    V<std::uint32_t> quick_stop_deceleration = bind(obj::quick_stop_deceleration);
+    V<std::int16_t> motion_profile_type = bind(obj::motion_profile_type);
+    V<std::uint32_t> torque_slope = bind(obj::torque_slope);
+    V<std::uint32_t> encoder_increments = bind(obj::position_encoder_resolution::encoder_increments);
+    V<std::uint32_t> encoder_revolutions = bind(obj::position_encoder_resolution::motor_revolutions);
+    V<std::uint32_t> gear_motor = bind(obj::gear_ratio::motor_revolutions);
+    V<std::uint32_t> gear_shaft = bind(obj::gear_ratio::shaft_revolutions);
+    V<std::uint32_t> feed = bind(obj::feed_constant::feed);
+    V<std::uint32_t> feed_shaft = bind(obj::feed_constant::shaft_revolutions);
+    V<std::int8_t> homing_method = bind(obj::homing_method);
+    V<std::uint32_t> homing_speed_switch = bind(obj::homing_speeds::search_for_switch);
+    V<std::uint32_t> homing_speed_zero = bind(obj::homing_speeds::search_for_zero);
+    V<std::uint32_t> homing_acceleration = bind(obj::homing_acceleration);
+    V<std::uint32_t> profile_jerk = bind(obj::profile_jerk::jerk_1);
+    V<std::int32_t> position_offset = bind(obj::position_offset);
+    V<std::int32_t> velocity_offset = bind(obj::velocity_offset);
+    V<std::int16_t> torque_offset = bind(obj::torque_offset);
+    V<std::uint16_t> probe_function = bind(obj::touch_probe_function);
+    V<std::uint16_t> probe_status = bind(obj::touch_probe_status);
+    V<std::int32_t> probe1_positive = bind(obj::touch_probe_1_positive_value);
+    V<std::int32_t> probe1_negative = bind(obj::touch_probe_1_negative_value);
+    V<std::int32_t> probe2_positive = bind(obj::touch_probe_2_positive_value);
+    V<std::int32_t> probe2_negative = bind(obj::touch_probe_2_negative_value);
+    V<std::uint8_t> interpolation_value = bind(obj::interpolation_time_period::value);
+    V<std::int8_t> interpolation_index = bind(obj::interpolation_time_period::time_index);
+    V<std::uint32_t> max_acceleration = bind(obj::max_acceleration);
+    V<std::uint32_t> max_deceleration = bind(obj::max_deceleration);
+    V<std::uint16_t> positive_torque_limit = bind(obj::positive_torque_limit_value);
+    V<std::uint16_t> negative_torque_limit = bind(obj::negative_torque_limit_value);
+    V<std::int32_t> following_error_actual = bind(obj::following_error_actual_value);
+    V<std::int32_t> position_demand_internal = bind(obj::position_demand_internal_value);
+    V<std::uint32_t> digital_inputs = bind(obj::digital_inputs);
+    V<std::int32_t> target_velocity = bind(obj::target_velocity);
+    // The manufacturer objects of the vecat drive.
+    V<std::int16_t> temperature = bind(mfr::drive_temperature);
+    V<std::uint16_t> simulated_fault = bind(mfr::simulated_fault);
+    V<std::uint32_t> velocity_override = bind(mfr::velocity_override);
+    V<std::int32_t> compensation_distance = bind(mfr::position_compensation::distance);
+    V<std::uint32_t> compensation_length = bind(mfr::position_compensation::length);
+    V<std::uint8_t> compensation_start = bind(mfr::position_compensation::start);
+    V<std::uint32_t> motor_rotor_inertia = bind(mfr::motor::rotor_inertia);
+    V<std::uint32_t> motor_torque_constant = bind(mfr::motor::torque_constant);
+    V<std::uint32_t> motor_load_inertia = bind(mfr::motor::load_inertia);
+    V<std::uint32_t> motor_viscous_friction = bind(mfr::motor::viscous_friction);
+    V<std::uint32_t> motor_coulomb_friction = bind(mfr::motor::coulomb_friction);
+    V<std::uint32_t> motor_peak_current = bind(mfr::motor::peak_current);
+    V<std::uint32_t> gain_position_kp = bind(mfr::gains::position_kp);
+    V<std::uint32_t> gain_velocity_kp = bind(mfr::gains::velocity_kp);
+    V<std::uint32_t> gain_velocity_ti = bind(mfr::gains::velocity_ti);
+    V<std::uint32_t> gain_current_bandwidth = bind(mfr::gains::current_bandwidth);
+    V<std::int32_t> negative_limit_switch = bind(mfr::machine::negative_limit_switch);
+    V<std::int32_t> positive_limit_switch = bind(mfr::machine::positive_limit_switch);
+    V<std::int32_t> home_switch = bind(mfr::machine::home_switch);
+    V<std::int32_t> index_pulse_offset = bind(mfr::machine::index_pulse_offset);
+    V<std::int16_t> load_torque = bind(mfr::machine::load_torque);
+    V<std::uint8_t> probe_inputs = bind(mfr::machine::touch_probe_inputs);
+    V<std::uint8_t> limit_switch_reaction = bind(mfr::machine::limit_switch_reaction);
+    // TWINsync: the local values the drive provides and the remote values it uses (MSD parameters
+    // Pnnnn as objects 0x2000 + nnnn, twinsync/parameters.hpp).
+    template <class T>
+    V<T> tw(std::uint16_t parameter, std::uint8_t sub = 0) {
+        return coe::bind<T>(od, twinsync::object_index(parameter), sub, coe::Match::Convert);
     }
-    Entry* tw_control_selector = tw(twinsync::p::ControlSelector);
-    Entry* tw_control_mode = tw(twinsync::p::ControlMode);
-    Entry* tw_config = tw(twinsync::p::Config);
-    Entry* tw_inverted = tw(twinsync::p::SlaveInverted);
-    Entry* tw_speed_up = tw(twinsync::p::SpeedUp);
-    Entry* tw_speed_up_min = tw(twinsync::p::SpeedUpMinimum);
-    Entry* tw_act_speed_master = tw(twinsync::p::ActSpeedMaster);
-    Entry* tw_local_ref_torque = tw(twinsync::p::LocalRefTorque);
-    Entry* tw_local_act_torque = tw(twinsync::p::LocalActTorque);
-    Entry* tw_local_ref_speed = tw(twinsync::p::LocalRefSpeed);
-    Entry* tw_local_act_speed = tw(twinsync::p::LocalActSpeed);
-    Entry* tw_local_ref_pos = tw(twinsync::p::LocalRefPos);
-    Entry* tw_local_act_pos = tw(twinsync::p::LocalActPos);
-    Entry* tw_local_torque_ref = tw(twinsync::p::LocalScaling, 1);
-    Entry* tw_local_speed_ref = tw(twinsync::p::LocalScaling, 2);
-    Entry* tw_remote_ref_torque = tw(twinsync::p::RemoteRefTorque);
-    Entry* tw_remote_act_torque = tw(twinsync::p::RemoteActTorque);
-    Entry* tw_remote_ref_speed = tw(twinsync::p::RemoteRefSpeed);
-    Entry* tw_remote_act_speed = tw(twinsync::p::RemoteActSpeed);
-    Entry* tw_remote_ref_pos = tw(twinsync::p::RemoteRefPos);
-    Entry* tw_remote_act_pos = tw(twinsync::p::RemoteActPos);
-    Entry* tw_remote_torque_ref = tw(twinsync::p::RemoteScaling, 1);
-    Entry* tw_remote_speed_ref = tw(twinsync::p::RemoteScaling, 2);
-    Entry* tw_local_resolution = tw(twinsync::p::LocalResolution);
-    Entry* tw_remote_resolution = tw(twinsync::p::RemoteResolution);
-    Entry* tw_gear_numerator = tw(twinsync::p::GearNumerator);
-    Entry* tw_gear_denominator = tw(twinsync::p::GearDenominator);
-    Entry* tw_speed_actual_rpm = tw(twinsync::p::SpeedActualRpm);
-    Entry* tw_speed_setpoint_rpm = tw(twinsync::p::SpeedSetpointRpm);
-    Entry* tw_position_actual = tw(twinsync::p::PositionActual);
-    Entry* tw_torque_actual_scaled = tw(twinsync::p::TorqueActualScaled);
-    Entry* tw_local_ff_speed = tw(twinsync::p::LocalRefFFSpeed);
-    Entry* tw_local_eps = tw(twinsync::p::LocalActEps);
-    Entry* tw_error_number = tw(twinsync::p::CurrentError, 1);
-    Entry* tw_error_location = tw(twinsync::p::CurrentError, 2);
-    Entry* motor[8] = {};    // 0x2000:1-7
-    Entry* gains[5] = {};    // 0x2003:1-4
-    Entry* machine[8] = {};  // 0x2100:1-7
+    V<std::uint16_t> tw_control_mode = tw<std::uint16_t>(twinsync::p::ControlMode);
+    V<std::uint32_t> tw_config = tw<std::uint32_t>(twinsync::p::Config);
+    V<std::int16_t> tw_inverted = tw<std::int16_t>(twinsync::p::SlaveInverted);
+    V<float> tw_speed_up = tw<float>(twinsync::p::SpeedUp);
+    V<float> tw_speed_up_min = tw<float>(twinsync::p::SpeedUpMinimum);
+    V<float> tw_act_speed_master = tw<float>(twinsync::p::ActSpeedMaster);
+    V<std::int16_t> tw_local_ref_torque = tw<std::int16_t>(twinsync::p::LocalRefTorque);
+    V<std::int16_t> tw_local_act_torque = tw<std::int16_t>(twinsync::p::LocalActTorque);
+    V<std::int16_t> tw_local_ref_speed = tw<std::int16_t>(twinsync::p::LocalRefSpeed);
+    V<std::int16_t> tw_local_act_speed = tw<std::int16_t>(twinsync::p::LocalActSpeed);
+    V<std::int32_t> tw_local_ref_pos = tw<std::int32_t>(twinsync::p::LocalRefPos);
+    V<std::int32_t> tw_local_act_pos = tw<std::int32_t>(twinsync::p::LocalActPos);
+    V<float> tw_local_torque_ref = tw<float>(twinsync::p::LocalScaling, 1);
+    V<float> tw_local_speed_ref = tw<float>(twinsync::p::LocalScaling, 2);
+    V<std::int16_t> tw_remote_ref_torque = tw<std::int16_t>(twinsync::p::RemoteRefTorque);
+    V<std::int16_t> tw_remote_act_torque = tw<std::int16_t>(twinsync::p::RemoteActTorque);
+    V<std::int16_t> tw_remote_ref_speed = tw<std::int16_t>(twinsync::p::RemoteRefSpeed);
+    V<std::int16_t> tw_remote_act_speed = tw<std::int16_t>(twinsync::p::RemoteActSpeed);
+    V<std::int32_t> tw_remote_ref_pos = tw<std::int32_t>(twinsync::p::RemoteRefPos);
+    V<std::int32_t> tw_remote_act_pos = tw<std::int32_t>(twinsync::p::RemoteActPos);
+    V<float> tw_remote_torque_ref = tw<float>(twinsync::p::RemoteScaling, 1);
+    V<float> tw_remote_speed_ref = tw<float>(twinsync::p::RemoteScaling, 2);
+    V<std::uint32_t> tw_local_resolution = tw<std::uint32_t>(twinsync::p::LocalResolution);
+    V<std::uint32_t> tw_remote_resolution = tw<std::uint32_t>(twinsync::p::RemoteResolution);
+    V<std::int32_t> tw_gear_numerator = tw<std::int32_t>(twinsync::p::GearNumerator);
+    V<std::int32_t> tw_gear_denominator = tw<std::int32_t>(twinsync::p::GearDenominator);
+    V<float> tw_speed_actual_rpm = tw<float>(twinsync::p::SpeedActualRpm);
+    V<float> tw_speed_setpoint_rpm = tw<float>(twinsync::p::SpeedSetpointRpm);
+    V<std::int32_t> tw_position_actual = tw<std::int32_t>(twinsync::p::PositionActual);
+    V<std::int16_t> tw_torque_actual_scaled = tw<std::int16_t>(twinsync::p::TorqueActualScaled);
+    V<std::int16_t> tw_local_ff_speed = tw<std::int16_t>(twinsync::p::LocalRefFFSpeed);
+    V<std::uint16_t> tw_local_eps = tw<std::uint16_t>(twinsync::p::LocalActEps);
+    V<std::uint16_t> tw_error_number = tw<std::uint16_t>(twinsync::p::CurrentError, 1);
+    V<std::uint16_t> tw_error_location = tw<std::uint16_t>(twinsync::p::CurrentError, 2);
 };
 
 namespace {
 
-MotorParameters motor_from(const Entry* const* m, const Entry* rated_current) {
+MotorParameters motor_from(const Drive::Objects& o) {
     MotorParameters p;
-    auto u = [&](int s, double scale, double fallback) {
-        const double v = m[s] ? static_cast<double>(m[s]->get<std::uint32_t>()) * scale : 0.0;
-        return v > 0 ? v : fallback;
+    // A parameter of 0 (or a missing object) keeps the model's default where 0 would be meaningless.
+    auto u = [](const coe::Value<std::uint32_t>& v, double scale, double fallback) {
+        const double x = static_cast<double>(v.get_or(0)) * scale;
+        return x > 0 ? x : fallback;
     };
-    p.rotor_inertia = u(2, 1e-7, p.rotor_inertia);
-    p.torque_constant = u(3, 1e-3, p.torque_constant);
-    p.load_inertia = m[4] ? static_cast<double>(m[4]->get<std::uint32_t>()) * 1e-7 : p.load_inertia;
-    p.viscous_friction = m[5] ? static_cast<double>(m[5]->get<std::uint32_t>()) * 1e-6 : p.viscous_friction;
-    p.coulomb_friction = m[6] ? static_cast<double>(m[6]->get<std::uint32_t>()) * 1e-3 : p.coulomb_friction;
-    p.peak_current = u(7, 1e-3, p.peak_current);
-    if (rated_current && rated_current->get<std::uint32_t>() > 0)
-        p.rated_current = rated_current->get<std::uint32_t>() * 1e-3;
+    auto any = [](const coe::Value<std::uint32_t>& v, double scale, double fallback) {
+        return v.bound() ? static_cast<double>(v.get()) * scale : fallback;
+    };
+    p.rotor_inertia = u(o.motor_rotor_inertia, 1e-7, p.rotor_inertia);
+    p.torque_constant = u(o.motor_torque_constant, 1e-3, p.torque_constant);
+    p.load_inertia = any(o.motor_load_inertia, 1e-7, p.load_inertia);
+    p.viscous_friction = any(o.motor_viscous_friction, 1e-6, p.viscous_friction);
+    p.coulomb_friction = any(o.motor_coulomb_friction, 1e-3, p.coulomb_friction);
+    p.peak_current = u(o.motor_peak_current, 1e-3, p.peak_current);
+    if (o.rated_current.get_or(0) > 0) p.rated_current = o.rated_current.get() * 1e-3;
     return p;
 }
 
@@ -260,25 +277,25 @@ Drive::Drive(const device::DeviceDescription& d,
              std::shared_ptr<const std::vector<device::ObjectDescription>> objects)
     : CoeApplication(d, std::move(objects)), o_(std::make_unique<Objects>(dictionary())) {
     read_configuration();
-    const MotorParameters mp = motor_from(o_->motor, o_->rated_current);
+    const MotorParameters mp = motor_from(*o_);
     mech_ = std::make_unique<Mechanics>(mp, ControlGains{});
     inertia_ = mp.rotor_inertia + mp.load_inertia;
     homing_ = std::make_unique<Homing>();
     twin_ = std::make_unique<twinsync::Port>(dictionary(), kServoPeriodNs);
     // Fault injection is refused for codes the drive does not simulate.
-    if (o_->simulated_fault)
-        o_->simulated_fault->hooks().on_download = [](const Entry&, ConstBytes v) {
+    if (o_->simulated_fault.bound())
+        o_->simulated_fault.entry()->hooks().on_download = [](const Entry&, ConstBytes v) {
             const std::uint16_t code = v.size() >= 2 ? ld_le16(v.data()) : 0;
             return (code == 0 || fault::injectable(code)) ? protocol::SdoAbort::None
                                                           : protocol::SdoAbort::ValueRange;
         };
-    if (o_->compensation_start)
-        o_->compensation_start->hooks().after_download = [this](Entry& e) {
+    if (o_->compensation_start.bound())
+        o_->compensation_start.entry()->hooks().after_download = [this](Entry& e) {
             if (e.get<std::uint8_t>() == 0) return;
             e.set(std::uint8_t{0});
             // The move now ends at its target plus the achievable part of the compensation.
-            if (profile_.compensate(static_cast<double>(rd<std::int32_t>(o_->compensation_distance)),
-                                    static_cast<double>(rd<std::uint32_t>(o_->compensation_length))) &&
+            if (profile_.compensate(static_cast<double>(o_->compensation_distance.get_or(0)),
+                                    static_cast<double>(o_->compensation_length.get_or(0))) &&
                 pp_moving_)
                 pp_target_ = profile_.target();
         };
@@ -342,27 +359,27 @@ void Drive::step_to(std::uint64_t t_ns) {
 void Drive::apply_gains() {
     // 0x2003: a non-zero entry replaces the gain tuned from the motor parameters.
     ControlGains g = Mechanics::tuned_for(mech_->parameters());
-    auto u = [&](int s) { return static_cast<double>(rd<std::uint32_t>(o_->gains[s], 0)); };
-    if (u(1) > 0) g.position_kp = u(1) * 0.01;
-    if (u(2) > 0) g.velocity_kp = u(2) * 1e-6;
-    if (u(3) > 0) g.velocity_ti = u(3) * 1e-6;
-    if (u(4) > 0) g.current_bandwidth = u(4);
+    auto u = [](const coe::Value<std::uint32_t>& v) { return static_cast<double>(v.get_or(0)); };
+    if (u(o_->gain_position_kp) > 0) g.position_kp = u(o_->gain_position_kp) * 0.01;
+    if (u(o_->gain_velocity_kp) > 0) g.velocity_kp = u(o_->gain_velocity_kp) * 1e-6;
+    if (u(o_->gain_velocity_ti) > 0) g.velocity_ti = u(o_->gain_velocity_ti) * 1e-6;
+    if (u(o_->gain_current_bandwidth) > 0) g.current_bandwidth = u(o_->gain_current_bandwidth);
     mech_->set_gains(g);
 }
 
 void Drive::read_configuration() {
-    options_.quick_stop = rd<std::int16_t>(o_->quick_stop_option, 2);
-    options_.shutdown = rd<std::int16_t>(o_->shutdown_option, 0);
-    options_.disable_operation = rd<std::int16_t>(o_->disable_operation_option, 1);
-    options_.halt = rd<std::int16_t>(o_->halt_option, 1);
-    options_.fault_reaction = rd<std::int16_t>(o_->fault_reaction_option, 2);
+    options_.quick_stop = o_->quick_stop_option.get_or(2);
+    options_.shutdown = o_->shutdown_option.get_or(0);
+    options_.disable_operation = o_->disable_operation_option.get_or(1);
+    options_.halt = o_->halt_option.get_or(1);
+    options_.fault_reaction = o_->fault_reaction_option.get_or(2);
     FactorGroup f;
-    f.encoder_increments = rd<std::uint32_t>(o_->encoder_increments, f.encoder_increments);
-    f.motor_revolutions = rd<std::uint32_t>(o_->encoder_revolutions, 1);
-    f.gear_motor_revolutions = rd<std::uint32_t>(o_->gear_motor, 1);
-    f.gear_shaft_revolutions = rd<std::uint32_t>(o_->gear_shaft, 1);
-    f.feed = rd<std::uint32_t>(o_->feed, f.feed);
-    f.feed_shaft_revolutions = rd<std::uint32_t>(o_->feed_shaft, 1);
+    f.encoder_increments = o_->encoder_increments.get_or(f.encoder_increments);
+    f.motor_revolutions = o_->encoder_revolutions.get_or(1);
+    f.gear_motor_revolutions = o_->gear_motor.get_or(1);
+    f.gear_shaft_revolutions = o_->gear_shaft.get_or(1);
+    f.feed = o_->feed.get_or(f.feed);
+    f.feed_shaft_revolutions = o_->feed_shaft.get_or(1);
     // factors_ only ever holds a valid group, so an unchanged one needs no check.
     const bool same = f.encoder_increments == factors_.encoder_increments &&
                       f.motor_revolutions == factors_.motor_revolutions &&
@@ -373,53 +390,51 @@ void Drive::read_configuration() {
         factors_ = f;
         ratios_ = f.ratios();
     }
-    const double rated = static_cast<double>(rd<std::uint32_t>(o_->rated_torque, 1000)) * 1e-3;  // Nm
+    const double rated = static_cast<double>(o_->rated_torque.get_or(1000)) * 1e-3;  // Nm
     nm_per_permille_ = rated / 1000.0;
     // Velocity threshold 0x606F, at least one unit per second.
-    standstill_velocity_ = std::max<double>(rd<std::uint16_t>(o_->velocity_threshold, 10), 1.0);
+    standstill_velocity_ = std::max<double>(o_->velocity_threshold.get_or(10), 1.0);
 }
 
 double Drive::max_velocity() const {
-    double v = static_cast<double>(rd<std::uint32_t>(o_->max_profile_velocity, 0xFFFFFFFFu));
+    double v = static_cast<double>(o_->max_profile_velocity.get_or(0xFFFFFFFFu));
     // Max motor speed 0x6080 (rpm) converted to user units/s.
-    const double rpm = static_cast<double>(rd<std::uint32_t>(o_->max_motor_speed, 0));
+    const double rpm = static_cast<double>(o_->max_motor_speed.get_or(0));
     if (rpm > 0) v = std::min(v, ratios_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi));
     return std::max(v, 1.0);
 }
 
 ProfileLimits Drive::profile_limits() const {
     ProfileLimits l;
-    l.velocity = std::min(static_cast<double>(rd<std::uint32_t>(o_->profile_velocity, 1)), max_velocity());
-    l.acceleration = static_cast<double>(rd<std::uint32_t>(o_->profile_acceleration, 1));
-    l.deceleration = static_cast<double>(rd<std::uint32_t>(o_->profile_deceleration, 1));
-    if (o_->max_acceleration && o_->max_acceleration->get<std::uint32_t>() > 0)
-        l.acceleration =
-            std::min(l.acceleration, static_cast<double>(o_->max_acceleration->get<std::uint32_t>()));
-    if (o_->max_deceleration && o_->max_deceleration->get<std::uint32_t>() > 0)
-        l.deceleration =
-            std::min(l.deceleration, static_cast<double>(o_->max_deceleration->get<std::uint32_t>()));
-    const std::int16_t type = rd<std::int16_t>(o_->motion_profile_type, 0);
-    l.jerk = type == 0 ? 0.0 : static_cast<double>(rd<std::uint32_t>(o_->profile_jerk, 0));
+    l.velocity = std::min(static_cast<double>(o_->profile_velocity.get_or(1)), max_velocity());
+    l.acceleration = static_cast<double>(o_->profile_acceleration.get_or(1));
+    l.deceleration = static_cast<double>(o_->profile_deceleration.get_or(1));
+    if (o_->max_acceleration.get_or(0) > 0)
+        l.acceleration = std::min(l.acceleration, static_cast<double>(o_->max_acceleration.get()));
+    if (o_->max_deceleration.get_or(0) > 0)
+        l.deceleration = std::min(l.deceleration, static_cast<double>(o_->max_deceleration.get()));
+    const std::int16_t type = o_->motion_profile_type.get_or(0);
+    l.jerk = type == 0 ? 0.0 : static_cast<double>(o_->profile_jerk.get_or(0));
     return l;
 }
 
 double Drive::interpolation_period() const {
-    const double value = rd<std::uint8_t>(o_->interpolation_value, 1);
-    const std::int8_t index = rd<std::int8_t>(o_->interpolation_index, -3);
+    const double value = o_->interpolation_value.get_or(1);
+    const std::int8_t index = o_->interpolation_index.get_or(-3);
     const double t = value * pow10_of(index);
     return t > 0 ? std::max(t, kServoPeriodNs * 1e-9) : 1e-3;
 }
 
 bool Drive::software_limits_enabled() const {
-    const auto lo = rd<std::int32_t>(o_->software_limit_min, std::numeric_limits<std::int32_t>::min());
-    const auto hi = rd<std::int32_t>(o_->software_limit_max, std::numeric_limits<std::int32_t>::max());
+    const auto lo = o_->software_limit_min.get_or(std::numeric_limits<std::int32_t>::min());
+    const auto hi = o_->software_limit_max.get_or(std::numeric_limits<std::int32_t>::max());
     return lo < hi;
 }
 
 double Drive::clamp_to_software_limits(double p) const {
     if (!software_limits_enabled()) return p;
-    const double lo = rd<std::int32_t>(o_->software_limit_min);
-    const double hi = rd<std::int32_t>(o_->software_limit_max);
+    const double lo = o_->software_limit_min.get_or(0);
+    const double hi = o_->software_limit_max.get_or(0);
     return std::clamp(p, lo, hi);
 }
 
@@ -430,18 +445,17 @@ double Drive::machine_increments() const {
 void Drive::update_inputs() {
     // Machine position in increments (homing does not move it).
     const double inc = machine_increments();
-    auto m = [&](int s, std::int32_t fallback) { return rd<std::int32_t>(o_->machine[s], fallback); };
-    negative_limit_ = inc <= m(1, std::numeric_limits<std::int32_t>::min());
-    positive_limit_ = inc >= m(2, std::numeric_limits<std::int32_t>::max());
-    home_switch_ = inc >= m(3, std::numeric_limits<std::int32_t>::max());
-    probe_inputs_ = rd<std::uint8_t>(o_->machine[6], 0);
+    negative_limit_ = inc <= o_->negative_limit_switch.get_or(std::numeric_limits<std::int32_t>::min());
+    positive_limit_ = inc >= o_->positive_limit_switch.get_or(std::numeric_limits<std::int32_t>::max());
+    home_switch_ = inc >= o_->home_switch.get_or(std::numeric_limits<std::int32_t>::max());
+    probe_inputs_ = o_->probe_inputs.get_or(0);
     std::uint32_t di = 0;
     if (negative_limit_) di |= 1u << 0;
     if (positive_limit_) di |= 1u << 1;
     if (home_switch_) di |= 1u << 2;
     if (probe_inputs_ & 1) di |= 1u << 16;  // manufacturer bits: touch probe inputs 1 and 2
     if (probe_inputs_ & 2) di |= 1u << 17;
-    wr(o_->digital_inputs, di);
+    o_->digital_inputs.set(di);
 }
 
 void Drive::enter_fault(std::uint16_t code, std::uint8_t bits) {
@@ -451,7 +465,7 @@ void Drive::enter_fault(std::uint16_t code, std::uint8_t bits) {
 }
 
 void Drive::check_faults(double dt) {
-    const std::uint16_t injected = rd<std::uint16_t>(o_->simulated_fault, 0);
+    const std::uint16_t injected = o_->simulated_fault.get_or(0);
     // Encoder and over-current faults are injected into the mechanics, which the drive then monitors
     // (the encoder freezes; the power stage reports over-current, also from its I2t protection).
     mech_->inject_encoder_fault(injected == fault::Encoder);
@@ -464,8 +478,8 @@ void Drive::check_faults(double dt) {
         enter_fault(fault::ReferenceLimit, coe::error_register::DeviceProfile);
 
     // Following error (position loop): window 0xFFFFFFFF switches the monitoring off.
-    const std::uint32_t window = rd<std::uint32_t>(o_->following_error_window, 0xFFFFFFFFu);
-    const double timeout = rd<std::uint16_t>(o_->following_error_timeout, 0) * 1e-3;
+    const std::uint32_t window = o_->following_error_window.get_or(0xFFFFFFFFu);
+    const double timeout = o_->following_error_timeout.get_or(0) * 1e-3;
     if (loop_ == LoopMode::Position && window != 0xFFFFFFFFu && std::abs(following_error_) > window) {
         following_error_time_ += dt;
         if (following_error_time_ > timeout)
@@ -474,7 +488,7 @@ void Drive::check_faults(double dt) {
         following_error_time_ = 0;
     }
     // Limit switch with reaction "fault".
-    if (rd<std::uint8_t>(o_->machine[7], 0) == 1 && sm_.drive_enabled() && mode_ != Mode::Homing &&
+    if (o_->limit_switch_reaction.get_or(0) == 1 && sm_.drive_enabled() && mode_ != Mode::Homing &&
         (negative_limit_ || positive_limit_))
         enter_fault(fault::ReferenceLimit, coe::error_register::DeviceProfile);
 }
@@ -525,8 +539,8 @@ void Drive::run_stop(StopKind k, double dt) {
         return;
     }
     const double dec =
-        static_cast<double>(k == StopKind::QuickStopRamp ? rd<std::uint32_t>(o_->quick_stop_deceleration, 1)
-                                                         : rd<std::uint32_t>(o_->profile_deceleration, 1));
+        static_cast<double>(k == StopKind::QuickStopRamp ? o_->quick_stop_deceleration.get_or(1)
+                                                         : o_->profile_deceleration.get_or(1));
     if (stopping_ != k) {
         // Starts from the current demand in position modes, from the actual motion otherwise. A slave that
         // followed TWINsync has a demand the profile never made: it brakes from its actual motion too
@@ -544,7 +558,7 @@ void Drive::run_stop(StopKind k, double dt) {
 void Drive::servo_step() {
     const double dt = kServoPeriodNs * 1e-9;
     ++steps_;
-    const std::uint16_t own_controlword = rd<std::uint16_t>(o_->controlword, 0);
+    const std::uint16_t own_controlword = o_->controlword.get_or(0);
     controlword_ = own_controlword;
 
     // TWINsync: the telegram of the partner drive's last cycle. A slave controlled through TWINsync obeys
@@ -558,9 +572,9 @@ void Drive::servo_step() {
     // A master drive switches on its control once its slave is in state Control (unless P2651 bit 2).
     if (twin_->active() && twin_->role() == twinsync::Role::Master && twin_->link_ok() &&
         twin_->partner().mode == twinsync::Role::Slave && !twin_->partner_enabled() &&
-        !(rd<std::uint32_t>(o_->tw_config, 0) & twinsync::kConfigNoSlaveStateCheck) &&
+        !(o_->tw_config.get_or(0) & twinsync::kConfigNoSlaveStateCheck) &&
         sm_.state() != State::OperationEnabled)
-        controlword_ = static_cast<std::uint16_t>(controlword_ & ~0x0008u);
+        controlword_ = static_cast<std::uint16_t>(controlword_ & ~cw::EnableOperation);
 
     update_inputs();
     check_faults(dt);
@@ -571,7 +585,7 @@ void Drive::servo_step() {
     const State before = sm_.state();
     const bool twin_cause = twin_error_ && twin_->pending_error() == twin_error_;
     const bool fault_present =
-        active_fault_ != 0 && (rd<std::uint16_t>(o_->simulated_fault, 0) != 0 || mech_->overcurrent() ||
+        active_fault_ != 0 && (o_->simulated_fault.get_or(0) != 0 || mech_->overcurrent() ||
                                !mech_->encoder_ok() || twin_cause || sm_.state() != State::Fault);
     const bool at_rest =
         std::abs(velocity_user_) <= standstill_velocity() && (loop_ != LoopMode::Position || profile_.done());
@@ -592,15 +606,14 @@ void Drive::servo_step() {
     if (sm_.stop() == StopKind::None) stopping_ = StopKind::None;
 
     // Velocity override (TwinCAT NC PTP online change) of the profile modes, in ppm of 100 %.
-    const std::uint32_t ov =
-        std::min<std::uint32_t>(rd<std::uint32_t>(o_->velocity_override, 1'000'000), 1'000'000);
+    const std::uint32_t ov = std::min<std::uint32_t>(o_->velocity_override.get_or(1'000'000), 1'000'000);
     if (ov != override_ppm_) {
         override_ppm_ = ov;
         profile_.set_override(ov * 1e-6);
     }
 
     // Modes of operation: a supported mode takes effect at once; 0x6061 shows it.
-    const auto requested = static_cast<Mode>(rd<std::int8_t>(o_->modes, 0));
+    const auto requested = static_cast<Mode>(o_->modes.get_or(0));
     if (requested != mode_ && supported(requested)) {
         mode_ = requested;
         on_mode_change();
@@ -615,8 +628,8 @@ void Drive::servo_step() {
             continuing_ = true;
             continue_halting_ = false;
             continue_velocity_ = demand_.v;
-            continue_target_position_ = rd<std::int32_t>(o_->target_position);
-            continue_target_velocity_ = rd<std::int32_t>(o_->target_velocity);
+            continue_target_position_ = o_->target_position.get_or(0);
+            continue_target_velocity_ = o_->target_velocity.get_or(0);
         }
     }
     if (!sm_.drive_enabled()) {
@@ -635,14 +648,12 @@ void Drive::servo_step() {
     if (mode_ == Mode::Homing && (homing_bits_ & sw::Bit12) && !(homing_bits_ & sw::Bit13)) homed_ = true;
 
     // The loops and the mechanics.
-    const double torque_limit_pos = std::min(rd<std::uint16_t>(o_->max_torque, 3000),
-                                             rd<std::uint16_t>(o_->positive_torque_limit, 3000)) *
-                                    nm_per_permille();
-    const double torque_limit_neg = std::min(rd<std::uint16_t>(o_->max_torque, 3000),
-                                             rd<std::uint16_t>(o_->negative_torque_limit, 3000)) *
-                                    nm_per_permille();
+    const double torque_limit_pos =
+        std::min(o_->max_torque.get_or(3000), o_->positive_torque_limit.get_or(3000)) * nm_per_permille();
+    const double torque_limit_neg =
+        std::min(o_->max_torque.get_or(3000), o_->negative_torque_limit.get_or(3000)) * nm_per_permille();
     mech_->set_torque_limits(torque_limit_pos, torque_limit_neg);
-    mech_->set_load_torque(rd<std::int16_t>(o_->machine[5], 0) * nm_per_permille());
+    mech_->set_load_torque(o_->load_torque.get_or(0) * nm_per_permille());
     const double inertia = inertia_;
     switch (loop_) {
         case LoopMode::Off:
@@ -715,7 +726,7 @@ twinsync::LocalState Drive::twinsync_local() const {
     l.fault = sm_.state() == State::Fault || sm_.state() == State::FaultReactionActive;
     l.homed = homed_;
     l.transition = sm_.stop() != StopKind::None;
-    l.controlword = rd<std::uint16_t>(o_->controlword, 0);
+    l.controlword = o_->controlword.get_or(0);
     l.homing_mode = mode_ == Mode::Homing;
     l.fieldbus_synchronised = sync_mode() == coe::SyncMode::DcSync0 || sync_mode() == coe::SyncMode::DcSync1;
     l.position = actual_user_;
@@ -726,29 +737,29 @@ twinsync::LocalState Drive::twinsync_local() const {
 }
 
 void Drive::write_twinsync_values() {
-    const double torque_ref = static_cast<double>(rd<float>(o_->tw_local_torque_ref, 1.0f));
-    const double speed_ref = static_cast<double>(rd<float>(o_->tw_local_speed_ref, 1.0f));
+    const double torque_ref = static_cast<double>(o_->tw_local_torque_ref.get_or(1.0f));
+    const double speed_ref = static_cast<double>(o_->tw_local_speed_ref.get_or(1.0f));
     const double act_rpm = rpm_of_rad(mech_->velocity());
     const double demand_v = loop_ == LoopMode::Velocity ? velocity_cmd_ : demand_.v;
     const double ref_rpm = rpm_of_rad(user_velocity_to_rad(demand_v));
     const double ref_torque = loop_ == LoopMode::Torque ? torque_cmd_ * nm_per_permille() : mech_->torque();
-    wr(o_->tw_local_ref_torque, scaled16(ref_torque, torque_ref));
-    wr(o_->tw_local_act_torque, scaled16(mech_->torque(), torque_ref));
-    wr(o_->tw_torque_actual_scaled, scaled16(mech_->torque(), torque_ref));
-    wr(o_->tw_local_ref_speed, scaled16(ref_rpm, speed_ref));
-    wr(o_->tw_local_ff_speed, scaled16(ref_rpm, speed_ref));
-    wr(o_->tw_local_act_speed, scaled16(act_rpm, speed_ref));
-    wr(o_->tw_speed_actual_rpm, static_cast<float>(act_rpm));
-    wr(o_->tw_speed_setpoint_rpm, static_cast<float>(ref_rpm));
-    wr(o_->tw_local_ref_pos, wrap32(static_cast<std::int64_t>(std::llround(demand_.p))));
+    o_->tw_local_ref_torque.set(scaled16(ref_torque, torque_ref));
+    o_->tw_local_act_torque.set(scaled16(mech_->torque(), torque_ref));
+    o_->tw_torque_actual_scaled.set(scaled16(mech_->torque(), torque_ref));
+    o_->tw_local_ref_speed.set(scaled16(ref_rpm, speed_ref));
+    o_->tw_local_ff_speed.set(scaled16(ref_rpm, speed_ref));
+    o_->tw_local_act_speed.set(scaled16(act_rpm, speed_ref));
+    o_->tw_speed_actual_rpm.set(static_cast<float>(act_rpm));
+    o_->tw_speed_setpoint_rpm.set(static_cast<float>(ref_rpm));
+    o_->tw_local_ref_pos.set(wrap32(static_cast<std::int64_t>(std::llround(demand_.p))));
     const std::int32_t act = wrap32(static_cast<std::int64_t>(std::floor(actual_user_)));
-    wr(o_->tw_local_act_pos, act);
-    wr(o_->tw_position_actual, act);
+    o_->tw_local_act_pos.set(act);
+    o_->tw_position_actual.set(act);
     // Single-turn angle of the motor, 16 bit (the virtual encoder's raw value).
     const double per_rev = ratios_.per_revolution;
     const double turn = std::fmod(machine_increments(), per_rev) / per_rev;
-    wr(o_->tw_local_eps,
-       static_cast<std::uint16_t>(std::llround((turn < 0 ? turn + 1.0 : turn) * 65536.0) & 0xFFFF));
+    o_->tw_local_eps.set(
+        static_cast<std::uint16_t>(std::llround((turn < 0 ? turn + 1.0 : turn) * 65536.0) & 0xFFFF));
     // P2650: the drive's own current error, unless the receive mapping brings the slave's (TWD, SCON,
     // PCON, VE masters: "interpreted as the error of the slave drive").
     if (!twin_->receives(twinsync::p::CurrentError)) {
@@ -760,8 +771,8 @@ void Drive::write_twinsync_values() {
             number = static_cast<std::uint16_t>(active_fault_ >> 8);
             location = static_cast<std::uint16_t>(active_fault_ & 0xFF);
         }
-        wr(o_->tw_error_number, number);
-        wr(o_->tw_error_location, location);
+        o_->tw_error_number.set(number);
+        o_->tw_error_location.set(location);
     }
 }
 
@@ -798,15 +809,16 @@ void Drive::run_twinsync(double dt) {
     const auto* m = twin_->mode();
     Follow f = m->follow;
     if (f == Follow::ByControlMode) {
-        const auto cm = rd<std::uint16_t>(o_->tw_control_mode, 3);
+        const auto cm = o_->tw_control_mode.get_or(3);
         f = cm == 1 ? Follow::Torque : cm == 2 ? Follow::Speed : Follow::PositionAbsolute;
     }
     const bool user = m->follow == Follow::ByControlMode;
-    const double inv = rd<std::int16_t>(o_->tw_inverted, 1) < 0 ? -1.0 : 1.0;
-    const double remote_speed_ref = static_cast<double>(rd<float>(o_->tw_remote_speed_ref, 1.0f));
-    const double remote_torque_ref = static_cast<double>(rd<float>(o_->tw_remote_torque_ref, 1.0f));
-    auto speed = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_speed_ref; };    // rpm
-    auto torque = [&](const Entry* e) { return rd<std::int16_t>(e) / 32768.0 * remote_torque_ref; };  // Nm
+    const double inv = o_->tw_inverted.get_or(1) < 0 ? -1.0 : 1.0;
+    const double remote_speed_ref = static_cast<double>(o_->tw_remote_speed_ref.get_or(1.0f));
+    const double remote_torque_ref = static_cast<double>(o_->tw_remote_torque_ref.get_or(1.0f));
+    using I16 = coe::Value<std::int16_t>;
+    auto speed = [&](const I16& e) { return e.get_or(0) / 32768.0 * remote_speed_ref; };    // rpm
+    auto torque = [&](const I16& e) { return e.get_or(0) / 32768.0 * remote_torque_ref; };  // Nm
     auto rpm_to_user = [&](double rpm) {
         return ratios_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi);
     };
@@ -821,9 +833,9 @@ void Drive::run_twinsync(double dt) {
         case Follow::PositionAbsolute: {
             // IP: the master's actual position; REFPOS and GANTRY (and USER/EXT_MAP): its set-point.
             const bool ip = m->setting == Setting::PconIpSlave;
-            const double master = rd<std::int32_t>(ip ? o_->tw_remote_act_pos : o_->tw_remote_ref_pos);
+            const double master = (ip ? o_->tw_remote_act_pos : o_->tw_remote_ref_pos).get_or(0);
             const double ff_rpm = m->setting == Setting::PconGantrySlave
-                                      ? static_cast<double>(rd<float>(o_->tw_act_speed_master))
+                                      ? static_cast<double>(o_->tw_act_speed_master.get_or(0))
                                       : speed(ip ? o_->tw_remote_act_speed : o_->tw_remote_ref_speed);
             const double v = inv * rpm_to_user(ff_rpm);
             if (!coupled_) {
@@ -841,11 +853,11 @@ void Drive::run_twinsync(double dt) {
         case Follow::PositionDelta: {
             // PCON: increments of the master's actual position, corrected by the resolution factors
             // (P0270/P2652), geared (P2653/P2654), reversed by P2583, integrated onto the coupling position.
-            const std::int32_t master = rd<std::int32_t>(o_->tw_remote_act_pos);
-            const double k = inv * static_cast<double>(rd<std::uint32_t>(o_->tw_local_resolution, 1)) /
-                             std::max<double>(rd<std::uint32_t>(o_->tw_remote_resolution, 1), 1.0) *
-                             static_cast<double>(rd<std::int32_t>(o_->tw_gear_numerator, 1)) /
-                             std::max<double>(rd<std::int32_t>(o_->tw_gear_denominator, 1), 1.0);
+            const std::int32_t master = o_->tw_remote_act_pos.get_or(0);
+            const double k = inv * static_cast<double>(o_->tw_local_resolution.get_or(1)) /
+                             std::max<double>(o_->tw_remote_resolution.get_or(1), 1.0) *
+                             static_cast<double>(o_->tw_gear_numerator.get_or(1)) /
+                             std::max<double>(o_->tw_gear_denominator.get_or(1), 1.0);
             const double v = k * rpm_to_user(speed(o_->tw_remote_act_speed));
             if (!coupled_) {
                 if (std::abs(v) > still_remote || std::abs(velocity_user_) > still)
@@ -871,8 +883,8 @@ void Drive::run_twinsync(double dt) {
             if (m->setting == Setting::TwdSlaveV1) {
                 // Speed-up: P2584 % of the main set-point, at least P2585, signed as the master's torque.
                 const double master_torque = torque(o_->tw_remote_act_torque);
-                double add = std::abs(rpm) * static_cast<double>(rd<float>(o_->tw_speed_up)) / 100.0;
-                add = std::max(add, static_cast<double>(rd<float>(o_->tw_speed_up_min)));
+                double add = std::abs(rpm) * static_cast<double>(o_->tw_speed_up.get_or(0)) / 100.0;
+                add = std::max(add, static_cast<double>(o_->tw_speed_up_min.get_or(0)));
                 if (master_torque != 0) rpm += master_torque > 0 ? add : -add;
             }
             velocity_cmd_ = std::clamp(rpm_to_user(rpm), -max_velocity(), max_velocity());
@@ -897,8 +909,8 @@ void Drive::run_twinsync(double dt) {
 void Drive::run_decoupled(double dt) {
     // A new set-point, a new target or a new mode ends the decoupled motion; halt stops it.
     const bool new_setpoint = (controlword_ & kNewSetpoint) && !(previous_controlword_ & kNewSetpoint);
-    if (new_setpoint || rd<std::int32_t>(o_->target_position) != continue_target_position_ ||
-        rd<std::int32_t>(o_->target_velocity) != continue_target_velocity_) {
+    if (new_setpoint || o_->target_position.get_or(0) != continue_target_position_ ||
+        o_->target_velocity.get_or(0) != continue_target_velocity_) {
         continuing_ = false;
         on_mode_change();
         run_mode(dt);
@@ -909,8 +921,7 @@ void Drive::run_decoupled(double dt) {
     if (controlword_ & kHalt) {
         if (!continue_halting_) {
             profile_.reset(demand_);
-            profile_.stop(std::max<double>(rd<std::uint32_t>(o_->profile_deceleration, 1), 1.0),
-                          profile_limits().jerk);
+            profile_.stop(std::max<double>(o_->profile_deceleration.get_or(1), 1.0), profile_limits().jerk);
             continue_halting_ = true;
         }
         demand_ = profile_.step(dt);
@@ -966,7 +977,7 @@ void Drive::start_move(double target) {
 void Drive::run_profile_position(double dt) {
     const bool edge = (controlword_ & kNewSetpoint) && !(previous_controlword_ & kNewSetpoint);
     if (edge && !pending_target_) {
-        double target = static_cast<double>(rd<std::int32_t>(o_->target_position));
+        double target = static_cast<double>(o_->target_position.get_or(0));
         if (controlword_ & kRelative) target += pp_target_;
         const double clamped = clamp_to_software_limits(target);
         if (clamped != target) internal_limit_ = true;
@@ -997,8 +1008,7 @@ void Drive::run_profile_position(double dt) {
     }
     // A hardware limit switch in the direction of travel stops the move.
     if (pp_moving_ && blocked(demand_.v) && stopping_ == StopKind::None) {
-        profile_.stop(static_cast<double>(
-                          std::max<std::uint32_t>(rd<std::uint32_t>(o_->quick_stop_deceleration, 1), 1)),
+        profile_.stop(static_cast<double>(std::max<std::uint32_t>(o_->quick_stop_deceleration.get_or(1), 1)),
                       profile_limits().jerk);
         pp_target_ = profile_.target();
         pp_moving_ = false;
@@ -1015,13 +1025,13 @@ void Drive::run_profile_position(double dt) {
         }
     }
     if (positive_limit_ || negative_limit_) internal_limit_ = true;
-    if (software_limits_enabled() && (actual_user_ <= rd<std::int32_t>(o_->software_limit_min) ||
-                                      actual_user_ >= rd<std::int32_t>(o_->software_limit_max)))
+    if (software_limits_enabled() && (actual_user_ <= o_->software_limit_min.get_or(0) ||
+                                      actual_user_ >= o_->software_limit_max.get_or(0)))
         internal_limit_ = true;
 }
 
 void Drive::run_profile_velocity(double dt) {
-    double target = static_cast<double>(rd<std::int32_t>(o_->target_velocity));
+    double target = static_cast<double>(o_->target_velocity.get_or(0));
     target = std::clamp(target, -max_velocity(), max_velocity());
     if (halted_) {
         run_stop(stop_for(StopOption::Halt, options_), dt);
@@ -1051,9 +1061,9 @@ void Drive::run_profile_velocity(double dt) {
 }
 
 void Drive::run_torque(double dt, bool profile) {
-    double target = rd<std::int16_t>(o_->target_torque, 0);
-    if (!profile) target += rd<std::int16_t>(o_->torque_offset, 0);
-    const double max = rd<std::uint16_t>(o_->max_torque, 3000);
+    double target = o_->target_torque.get_or(0);
+    if (!profile) target += o_->torque_offset.get_or(0);
+    const double max = o_->max_torque.get_or(3000);
     target = std::clamp(target, -max, max);
     if (blocked(target)) {
         internal_limit_ = true;
@@ -1061,7 +1071,7 @@ void Drive::run_torque(double dt, bool profile) {
     }
     if (profile) {
         // Profile torque: the demand moves to the target at the torque slope (per mille per second).
-        const double slope = std::max<double>(rd<std::uint32_t>(o_->torque_slope, 0), 1.0);
+        const double slope = std::max<double>(o_->torque_slope.get_or(0), 1.0);
         const double step = slope * dt;
         torque_cmd_ += std::clamp(target - torque_cmd_, -step, step);
     } else {
@@ -1079,8 +1089,8 @@ void Drive::run_torque(double dt, bool profile) {
 }
 
 void Drive::run_cyclic_position(double dt) {
-    const std::int32_t raw = rd<std::int32_t>(o_->target_position);
-    const double offset = rd<std::int32_t>(o_->position_offset);
+    const std::int32_t raw = o_->target_position.get_or(0);
+    const double offset = o_->position_offset.get_or(0);
     if (!csp_valid_ || raw != csp_raw_) {
         csp_from_ = csp_valid_ ? demand_.p : actual_user_;
         csp_to_ = static_cast<double>(raw) + offset;
@@ -1114,9 +1124,9 @@ void Drive::run_cyclic_position(double dt) {
     cyclic_following_ = !internal_limit_;
     const double a = (v - demand_.v) / dt;
     demand_ = {p, v, std::abs(a) < 1e12 ? a : 0.0};
-    demand_.v += rd<std::int32_t>(o_->velocity_offset);
+    demand_.v += o_->velocity_offset.get_or(0);
     loop_ = LoopMode::Position;
-    torque_ff_ = rd<std::int16_t>(o_->torque_offset);
+    torque_ff_ = o_->torque_offset.get_or(0);
 }
 
 void Drive::run_cyclic_velocity(double dt) {
@@ -1130,8 +1140,7 @@ void Drive::run_cyclic_velocity(double dt) {
         return;
     }
     stopping_ = StopKind::None;
-    double v =
-        static_cast<double>(rd<std::int32_t>(o_->target_velocity)) + rd<std::int32_t>(o_->velocity_offset);
+    double v = static_cast<double>(o_->target_velocity.get_or(0)) + o_->velocity_offset.get_or(0);
     v = std::clamp(v, -max_velocity(), max_velocity());
     if (blocked(v)) {
         internal_limit_ = true;
@@ -1140,7 +1149,7 @@ void Drive::run_cyclic_velocity(double dt) {
     cyclic_following_ = !internal_limit_;
     loop_ = LoopMode::Velocity;
     velocity_cmd_ = v;
-    torque_ff_ = rd<std::int16_t>(o_->torque_offset);
+    torque_ff_ = o_->torque_offset.get_or(0);
 }
 
 void Drive::run_homing(double dt) {
@@ -1149,14 +1158,14 @@ void Drive::run_homing(double dt) {
     if (edge) {
         const double ipu = ratios_.per_user;
         HomingParameters hp;
-        hp.speed_switch = rd<std::uint32_t>(o_->homing_speed_switch, 0);
-        hp.speed_zero = rd<std::uint32_t>(o_->homing_speed_zero, 0);
-        hp.acceleration = rd<std::uint32_t>(o_->homing_acceleration, 0);
-        hp.home_offset = rd<std::int32_t>(o_->home_offset, 0);
+        hp.speed_switch = o_->homing_speed_switch.get_or(0);
+        hp.speed_zero = o_->homing_speed_zero.get_or(0);
+        hp.acceleration = o_->homing_acceleration.get_or(0);
+        hp.home_offset = o_->home_offset.get_or(0);
         hp.index_period = ratios_.per_revolution / ipu;
-        hp.index_phase = rd<std::int32_t>(o_->machine[4], 0) / ipu + home_shift_;
+        hp.index_phase = o_->index_pulse_offset.get_or(0) / ipu + home_shift_;
         hp.standstill_velocity = standstill_velocity();
-        homing_active_ = homing_->start(rd<std::int8_t>(o_->homing_method, 0), hp, actual_user_);
+        homing_active_ = homing_->start(o_->homing_method.get_or(0), hp, actual_user_);
         homing_error_ = !homing_active_;
         homing_velocity_ = 0;
     }
@@ -1186,7 +1195,7 @@ void Drive::run_homing(double dt) {
         const double v = homing_active_ ? out.velocity : 0.0;
         const double acc = (homing_active_ && out.acceleration > 0)
                                ? out.acceleration
-                               : std::max<double>(rd<std::uint32_t>(o_->homing_acceleration, 1), 1.0);
+                               : std::max<double>(o_->homing_acceleration.get_or(1), 1.0);
         if (!(v == homing_velocity_)) {
             ProfileLimits l{std::max(std::abs(v), 1.0), acc, acc, 0.0};
             profile_.run_at(v, l);
@@ -1201,61 +1210,19 @@ void Drive::run_homing(double dt) {
 }
 
 void Drive::run_touch_probe(double previous_inc, double machine_inc) {
-    const std::uint16_t fn = rd<std::uint16_t>(o_->probe_function, 0);
-    Entry* values[2][2] = {{o_->probe1_positive, o_->probe1_negative},
-                           {o_->probe2_positive, o_->probe2_negative}};
-    for (int n = 0; n < 2; ++n) {
-        const unsigned shift = 8u * static_cast<unsigned>(n);
-        const std::uint16_t f = static_cast<std::uint16_t>(fn >> shift);
-        const std::uint16_t pf = static_cast<std::uint16_t>(previous_probe_function_ >> shift);
-        std::uint16_t st = static_cast<std::uint16_t>(probe_status_ >> shift) & 0xFF;
-        if (!(f & 0x01)) {
-            st = 0;  // disabled: status cleared
-        } else {
-            st |= 0x01;
-            // Arming: enabling the probe or an edge enable bit rising clears the stored flags.
-            if (!(pf & 0x01)) st = 0x01;
-            if ((f & 0x10) && !(pf & 0x10)) st &= static_cast<std::uint16_t>(~0x02);
-            if ((f & 0x20) && !(pf & 0x20)) st &= static_cast<std::uint16_t>(~0x04);
-            const bool continuous = f & 0x02;
-            const unsigned source = (f >> 2) & 0x03;  // 0: touch probe input, 1: zero impulse (index)
-            bool rise = false, fall = false;
-            double at_inc = machine_inc;
-            if (source == 0) {
-                const bool now = probe_inputs_ & (1u << n);
-                const bool before = previous_probe_inputs_ & (1u << n);
-                rise = now && !before;
-                fall = !now && before;
-            } else if (source == 1) {
-                // Index pulse once per motor revolution at the configured offset: the exact crossing.
-                const double period = ratios_.per_revolution;
-                const double offset = rd<std::int32_t>(o_->machine[4], 0);
-                const double lo = std::min(previous_inc, machine_inc),
-                             hi = std::max(previous_inc, machine_inc);
-                const double k = std::ceil((lo - offset) / period);
-                const double crossing = k * period + offset;
-                if (crossing <= hi && hi > lo && crossing > lo) {
-                    rise = fall = true;
-                    at_inc = crossing;
-                }
-            }
-            const double user =
-                static_cast<double>(ratios_.increments_to_user(floor64(at_inc))) + home_shift_;
-            const std::int32_t latched = wrap32(floor64(user));
-            if (rise && (f & 0x10) && (continuous || !(st & 0x02))) {
-                wr(values[n][0], latched);
-                st |= 0x02;
-            }
-            if (fall && (f & 0x20) && (continuous || !(st & 0x04))) {
-                wr(values[n][1], latched);
-                st |= 0x04;
-            }
-        }
-        probe_status_ = static_cast<std::uint16_t>((probe_status_ & ~(0xFFu << shift)) | (st << shift));
-    }
-    previous_probe_function_ = fn;
-    previous_probe_inputs_ = probe_inputs_;
-    wr(o_->probe_status, probe_status_);
+    TouchProbe::Period p;
+    p.function = o_->probe_function.get_or(0);
+    p.inputs = probe_inputs_;
+    p.previous_inc = previous_inc;
+    p.machine_inc = machine_inc;
+    p.index_offset = o_->index_pulse_offset.get_or(0);
+    const TouchProbe::Latched l = probe_.step(p, ratios_, home_shift_);
+    coe::Value<std::int32_t>* values[2][2] = {{&o_->probe1_positive, &o_->probe1_negative},
+                                              {&o_->probe2_positive, &o_->probe2_negative}};
+    for (int n = 0; n < 2; ++n)
+        for (int edge = 0; edge < 2; ++edge)
+            if (l.set[n][edge]) values[n][edge]->set(l.value[n][edge]);
+    o_->probe_status.set(probe_.status());
 }
 
 void Drive::write_feedback() {
@@ -1270,37 +1237,33 @@ void Drive::write_feedback() {
     const double threshold = standstill_velocity();
     const bool standing = std::abs(velocity_user_) <= threshold;
     speed_zero_time_ = standing ? speed_zero_time_ + dt : 0.0;
-    const std::uint32_t fe_window = rd<std::uint32_t>(o_->following_error_window, 0xFFFFFFFFu);
+    const std::uint32_t fe_window = o_->following_error_window.get_or(0xFFFFFFFFu);
     const bool fe_exceeded = fe_window != 0xFFFFFFFFu && std::abs(following_error_) > fe_window &&
-                             following_error_time_ > rd<std::uint16_t>(o_->following_error_timeout, 0) * 1e-3;
+                             following_error_time_ > o_->following_error_timeout.get_or(0) * 1e-3;
     if (enabled) {
         switch (mode_) {
             case Mode::ProfilePosition: {
-                const bool in_window =
-                    std::abs(pp_target_ - actual_user_) <= rd<std::uint32_t>(o_->position_window, 0);
+                const bool in_window = std::abs(pp_target_ - actual_user_) <= o_->position_window.get_or(0);
                 position_window_time_ =
                     (in_window && !pp_moving_ && profile_.done()) ? position_window_time_ + dt : 0.0;
                 reached = halted_ ? (standing && profile_.done())
                                   : !pp_moving_ && !pending_target_ &&
-                                        position_window_time_ >=
-                                            rd<std::uint16_t>(o_->position_window_time, 0) * 1e-3;
+                                        position_window_time_ >= o_->position_window_time.get_or(0) * 1e-3;
                 bit12 = setpoint_ack_;
                 bit13 = fe_exceeded;
                 break;
             }
             case Mode::ProfileVelocity: {
-                const double target = rd<std::int32_t>(o_->target_velocity);
-                const bool in_window =
-                    std::abs(target - velocity_user_) <= rd<std::uint16_t>(o_->velocity_window, 0);
+                const double target = o_->target_velocity.get_or(0);
+                const bool in_window = std::abs(target - velocity_user_) <= o_->velocity_window.get_or(0);
                 velocity_window_time_ = in_window ? velocity_window_time_ + dt : 0.0;
                 reached =
-                    halted_ ? standing
-                            : velocity_window_time_ >= rd<std::uint16_t>(o_->velocity_window_time, 0) * 1e-3;
-                bit12 = speed_zero_time_ >= rd<std::uint16_t>(o_->velocity_threshold_time, 0) * 1e-3;
+                    halted_ ? standing : velocity_window_time_ >= o_->velocity_window_time.get_or(0) * 1e-3;
+                bit12 = speed_zero_time_ >= o_->velocity_threshold_time.get_or(0) * 1e-3;
                 break;
             }
             case Mode::ProfileTorque:
-                reached = std::abs(torque_cmd_ - rd<std::int16_t>(o_->target_torque)) < 0.5;
+                reached = std::abs(torque_cmd_ - o_->target_torque.get_or(0)) < 0.5;
                 break;
             case Mode::Homing: {
                 const std::uint16_t hb = homing_bits_;
@@ -1310,7 +1273,7 @@ void Drive::write_feedback() {
                 break;
             }
             case Mode::CyclicPosition:
-                reached = std::abs(csp_to_ - actual_user_) <= rd<std::uint32_t>(o_->position_window, 0);
+                reached = std::abs(csp_to_ - actual_user_) <= o_->position_window.get_or(0);
                 bit12 = cyclic_following_ && !halted_;
                 bit13 = fe_exceeded;
                 break;
@@ -1335,101 +1298,25 @@ void Drive::write_feedback() {
     if (internal_limit_ || positive_limit_ || negative_limit_) status |= sw::InternalLimit;
     if (positive_limit_ || negative_limit_ || (enabled && mech_->torque_limited())) status |= sw::Warning;
 
-    wr(o_->statusword, status);
-    wr(o_->modes_display, static_cast<std::int8_t>(mode_));
-    wr(o_->position_demand, sat32(demand_.p));
-    wr(o_->position_demand_internal,
-       wrap32(ratios_.user_to_increments(static_cast<std::int64_t>(std::llround(demand_.p - home_shift_)))));
-    wr(o_->position_internal, wrap32(increments_));
-    wr(o_->position_actual, wrap32(floor64(actual_user_)));
-    wr(o_->following_error_actual, sat32(following_error_));
-    wr(o_->velocity_demand, sat32(loop_ == LoopMode::Velocity ? velocity_cmd_ : demand_.v));
-    wr(o_->velocity_actual, sat32(velocity_user_));
+    o_->statusword.set(status);
+    o_->modes_display.set(static_cast<std::int8_t>(mode_));
+    o_->position_demand.set(sat32(demand_.p));
+    o_->position_demand_internal.set(
+        wrap32(ratios_.user_to_increments(static_cast<std::int64_t>(std::llround(demand_.p - home_shift_)))));
+    o_->position_internal.set(wrap32(increments_));
+    o_->position_actual.set(wrap32(floor64(actual_user_)));
+    o_->following_error_actual.set(sat32(following_error_));
+    o_->velocity_demand.set(sat32(loop_ == LoopMode::Velocity ? velocity_cmd_ : demand_.v));
+    o_->velocity_actual.set(sat32(velocity_user_));
     const double per = nm_per_permille();
-    wr(o_->torque_demand, sat16(loop_ == LoopMode::Torque ? torque_cmd_ : mech_->torque() / per));
-    wr(o_->torque_actual, sat16(mech_->torque() / per));
-    const double rated_a = std::max<double>(rd<std::uint32_t>(o_->rated_current, 3000), 1.0) * 1e-3;
-    wr(o_->current_actual, sat16(mech_->current() / rated_a * 1000.0));
+    o_->torque_demand.set(sat16(loop_ == LoopMode::Torque ? torque_cmd_ : mech_->torque() / per));
+    o_->torque_actual.set(sat16(mech_->torque() / per));
+    const double rated_a = std::max<double>(o_->rated_current.get_or(3000), 1.0) * 1e-3;
+    o_->current_actual.set(sat16(mech_->current() / rated_a * 1000.0));
     // Drive temperature: 35 C plus a rise with the square of the current.
     const double i_rel = mech_->current() / rated_a;
     temperature_ += (350.0 + 300.0 * i_rel * i_rel - temperature_) * dt / 60.0;
-    wr(o_->temperature, sat16(temperature_));
-}
-
-std::shared_ptr<twinsync::Channel> connect_twinsync(Drive& a, Drive& b, double ppm_a, double ppm_b) {
-    auto ch = std::make_shared<twinsync::Channel>();
-    ch->set_oscillator_ppm(0, ppm_a);
-    ch->set_oscillator_ppm(1, ppm_b);
-    a.twinsync_port().connect(ch, 0);
-    b.twinsync_port().connect(ch, 1);
-    a.twin_partner_ = &b;
-    b.twin_partner_ = &a;
-    return ch;
-}
-
-namespace {
-
-void set_parameter(Drive& d, std::uint16_t parameter, std::uint8_t sub, std::int64_t value) {
-    if (Entry* e = d.dictionary().find(twinsync::object_index(parameter), sub)) {
-        std::array<std::uint8_t, 8> v{};
-        st_le64(v.data(), static_cast<std::uint64_t>(value));
-        e->assign(ConstBytes(v.data(), std::min<std::size_t>(e->capacity(), 8)));
-    }
-}
-
-}  // namespace
-
-void apply_twinsync_preset(Drive& master, Drive& slave, TwinsyncPreset preset) {
-    using namespace twinsync;
-    if (preset == TwinsyncPreset::None) return;
-    const Setting ms = preset == TwinsyncPreset::Gantry     ? Setting::PconGantryMaster
-                       : preset == TwinsyncPreset::Position ? Setting::PconMaster
-                                                            : Setting::SconMaster;
-    const Setting ss = preset == TwinsyncPreset::Gantry     ? Setting::PconGantrySlave
-                       : preset == TwinsyncPreset::Position ? Setting::PconSlave
-                                                            : Setting::SconSlave;
-    set_parameter(master, p::Mode, 0, static_cast<std::int64_t>(Role::Master));
-    set_parameter(master, p::Setting, 0, static_cast<std::int64_t>(ms));
-    set_parameter(slave, p::Mode, 0, static_cast<std::int64_t>(Role::Slave));
-    set_parameter(slave, p::Setting, 0, static_cast<std::int64_t>(ss));
-    set_parameter(slave, p::ControlSelector, 0, kControlByTwinsync);
-    set_parameter(slave, p::SetpointSelector, 0, kSetpointByTwinsync);
-    set_parameter(slave, p::SyncSel, 0, static_cast<std::int64_t>(SyncSelection::SlaveByTwin));
-    master.twinsync_port().reconfigure();
-    slave.twinsync_port().reconfigure();
-}
-
-std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
-                                                 const esc::EscConfig& cfg, TwinsyncPreset preset) {
-    return make_drive_segment(esc::DeviceModel::of(d), n, cfg, preset);
-}
-
-std::unique_ptr<esc::Segment> make_drive_segment(const esc::DeviceModel& m, std::size_t n,
-                                                 const esc::EscConfig& cfg, TwinsyncPreset preset) {
-    // The factory also rebuilds a restarted slave, of the same model.
-    auto seg = esc::make_segment(
-        m, n, cfg,
-        [objects = m.dictionary](const device::DeviceDescription& dd) -> std::unique_ptr<esc::Application> {
-            return std::make_unique<Drive>(dd, objects);
-        });
-    if (n >= 2) {
-        auto* a = dynamic_cast<Drive*>(&seg->slave(0).app());
-        auto* b = dynamic_cast<Drive*>(&seg->slave(1).app());
-        if (a && b) {
-            connect_twinsync(*a, *b);
-            apply_twinsync_preset(*a, *b, preset);
-        }
-    }
-    return seg;
-}
-
-}  // namespace vecat::cia402
-
-namespace vecat::cia402 {
-
-std::unique_ptr<esc::Segment> make_drive_segment(const device::DeviceDescription& d, std::size_t n,
-                                                 const esc::EscConfig& cfg) {
-    return make_drive_segment(d, n, cfg, TwinsyncPreset::None);
+    o_->temperature.set(sat16(temperature_));
 }
 
 }  // namespace vecat::cia402

@@ -13,25 +13,17 @@
 #include "cia402/mechanics.hpp"
 #include "cia402/profile_generator.hpp"
 #include "cia402/state_machine.hpp"
+#include "cia402/touch_probe.hpp"
+#include "cia402/twinsync_port.hpp"
 #include "coe/coe_application.hpp"
-#include "twinsync/port.hpp"
 #include "twinsync/status.hpp"
 
 namespace vecat::cia402 {
 
 class Homing;
 
-// Modes of operation (0x6060/0x6061).
-enum class Mode : std::int8_t {
-    None = 0,
-    ProfilePosition = 1,
-    ProfileVelocity = 3,
-    ProfileTorque = 4,
-    Homing = 6,
-    CyclicPosition = 8,
-    CyclicVelocity = 9,
-    CyclicTorque = 10,
-};
+// Modes of operation (0x6060/0x6061), protocol/cia402.hpp.
+using protocol::cia402::Mode;
 bool supported(Mode m) noexcept;
 
 // 0x603F error codes the drive raises (IEC 61800-7-201 / CiA 402 error code table).
@@ -43,16 +35,8 @@ inline constexpr std::uint16_t ReferenceLimit = 0x8612;  // reference limit (lim
 bool injectable(std::uint16_t code) noexcept;
 }  // namespace fault
 
-// Statusword bits besides the state (CiA 402 6.3.3).
-namespace sw {
-inline constexpr std::uint16_t Warning = 1u << 7;
-inline constexpr std::uint16_t Remote = 1u << 9;
-inline constexpr std::uint16_t TargetReached = 1u << 10;
-inline constexpr std::uint16_t InternalLimit = 1u << 11;
-inline constexpr std::uint16_t Bit12 = 1u << 12;  // PP set-point acknowledge, PV speed zero, HM attained,
-                                                  // CSx drive follows the command value
-inline constexpr std::uint16_t Bit13 = 1u << 13;  // PP/CSP following error, HM homing error
-}  // namespace sw
+// Statusword bits (CiA 402 6.3.3), protocol/cia402.hpp.
+namespace sw = protocol::cia402::sw;
 
 class Drive : public coe::CoeApplication {
     friend std::shared_ptr<twinsync::Channel> connect_twinsync(Drive&, Drive&, double, double);
@@ -85,11 +69,13 @@ class Drive : public coe::CoeApplication {
     // esc::Application
     void tick(std::uint64_t now_ns) override;
 
+    // The dictionary entries the drive uses, bound once (drive.cpp).
+    struct Objects;
+
   protected:
     void cycle(std::uint64_t now_ns, bool outputs_applied) override;
 
   private:
-    struct Objects;
     void advance(std::uint64_t now_ns);
     void step_to(std::uint64_t t_ns);
     void servo_step();
@@ -196,10 +182,9 @@ class Drive : public coe::CoeApplication {
 
     // Switches, index pulse and touch probe.
     bool negative_limit_ = false, positive_limit_ = false, home_switch_ = false;
-    std::uint8_t probe_inputs_ = 0, previous_probe_inputs_ = 0;
+    std::uint8_t probe_inputs_ = 0;
     double previous_machine_inc_ = 0;
-    std::uint16_t previous_probe_function_ = 0;
-    std::uint16_t probe_status_ = 0;
+    TouchProbe probe_;
 
     // Faults.
     std::uint16_t active_fault_ = 0;

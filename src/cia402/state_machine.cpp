@@ -4,34 +4,13 @@
 
 namespace vecat::cia402 {
 
-const char* to_string(State s) noexcept {
-    switch (s) {
-        case State::NotReadyToSwitchOn:
-            return "NOT READY TO SWITCH ON";
-        case State::SwitchOnDisabled:
-            return "SWITCH ON DISABLED";
-        case State::ReadyToSwitchOn:
-            return "READY TO SWITCH ON";
-        case State::SwitchedOn:
-            return "SWITCHED ON";
-        case State::OperationEnabled:
-            return "OPERATION ENABLED";
-        case State::QuickStopActive:
-            return "QUICK STOP ACTIVE";
-        case State::FaultReactionActive:
-            return "FAULT REACTION ACTIVE";
-        case State::Fault:
-            return "FAULT";
-    }
-    return "?";
-}
-
 Command decode_command(std::uint16_t cw, std::uint16_t previous) noexcept {
-    if ((cw & 0x80) && !(previous & 0x80)) return Command::FaultReset;
-    if (!(cw & 0x02)) return Command::DisableVoltage;
-    if (!(cw & 0x04)) return Command::QuickStop;
-    if (!(cw & 0x01)) return Command::Shutdown;
-    return (cw & 0x08) ? Command::EnableOperation : Command::SwitchOn;
+    namespace b = protocol::cia402::cw;
+    if ((cw & b::FaultReset) && !(previous & b::FaultReset)) return Command::FaultReset;
+    if (!(cw & b::EnableVoltage)) return Command::DisableVoltage;
+    if (!(cw & b::QuickStop)) return Command::QuickStop;
+    if (!(cw & b::SwitchOn)) return Command::Shutdown;
+    return (cw & b::EnableOperation) ? Command::EnableOperation : Command::SwitchOn;
 }
 
 namespace {
@@ -236,24 +215,27 @@ bool StateMachine::drive_enabled() const {
 }
 
 std::uint16_t StateMachine::statusword_bits() const {
-    constexpr std::uint16_t kVoltageEnabled = 0x0010;
+    // Table 30. Voltage enabled (bit 4) is always set: the DC bus is up. protocol::cia402::decode_state
+    // reads these patterns back (tested for every state).
+    namespace b = protocol::cia402::sw;
+    constexpr std::uint16_t kOn = b::ReadyToSwitchOn | b::SwitchedOn | b::OperationEnabled;
     switch (state_) {
         case State::NotReadyToSwitchOn:
             return 0x0000;
         case State::SwitchOnDisabled:
-            return 0x0040 | kVoltageEnabled;
+            return b::SwitchOnDisabled | b::VoltageEnabled;
         case State::ReadyToSwitchOn:
-            return 0x0021 | kVoltageEnabled;
+            return b::QuickStop | b::ReadyToSwitchOn | b::VoltageEnabled;
         case State::SwitchedOn:
-            return 0x0023 | kVoltageEnabled;
+            return b::QuickStop | b::ReadyToSwitchOn | b::SwitchedOn | b::VoltageEnabled;
         case State::OperationEnabled:
-            return 0x0027 | kVoltageEnabled;
+            return b::QuickStop | kOn | b::VoltageEnabled;
         case State::QuickStopActive:
-            return 0x0007 | kVoltageEnabled;
+            return kOn | b::VoltageEnabled;  // quick stop bit 0: active
         case State::FaultReactionActive:
-            return 0x000F | kVoltageEnabled;
+            return kOn | b::Fault | b::VoltageEnabled;
         case State::Fault:
-            return 0x0028 | kVoltageEnabled;
+            return b::QuickStop | b::Fault | b::VoltageEnabled;
     }
     return 0;
 }

@@ -6,19 +6,13 @@
 #include <cstdint>
 #include <span>
 
+#include "protocol/cia402.hpp"
+
 namespace vecat::cia402 {
 
-enum class State : std::uint8_t {
-    NotReadyToSwitchOn,
-    SwitchOnDisabled,
-    ReadyToSwitchOn,
-    SwitchedOn,
-    OperationEnabled,
-    QuickStopActive,
-    FaultReactionActive,
-    Fault,
-};
-const char* to_string(State s) noexcept;
+// The states, their names and the controlword/statusword bits are the protocol's (protocol/cia402.hpp).
+using protocol::cia402::State;
+using protocol::cia402::to_string;
 
 // Device control commands of the controlword (bits 0-3 and 7).
 enum class Command : std::uint8_t {

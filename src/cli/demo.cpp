@@ -21,6 +21,7 @@
 #include "cli/telemetry_commands.hpp"
 #include "common/bytes.hpp"
 #include "device/device_description.hpp"
+#include "device/drive_objects.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
 #include "esi/esi_writer.hpp"
@@ -31,6 +32,8 @@
 #include "net/pcapng_writer.hpp"
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
+#include "protocol/cia402.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "protocol/coe.hpp"
 #include "serve/server.hpp"
 
@@ -38,6 +41,9 @@ namespace vecat::cli {
 namespace {
 
 using protocol::AlState;
+namespace cia = protocol::cia402;
+namespace obj = protocol::obj;
+namespace mfr = device::mfr;
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
@@ -66,12 +72,18 @@ struct PdoEntry {
     std::uint8_t bits;
     const char* name;
 };
-constexpr PdoEntry kRxPdo[] = {
-    {0x6040, 16, "controlword"}, {0x6060, 8, "mode"}, {0x0000, 8, "gap"}, {0x607A, 32, "target position"}};
-constexpr PdoEntry kTxPdo[] = {{0x6041, 16, "statusword"}, {0x6061, 8, "mode display"},
-                               {0x0000, 8, "gap"},         {0x6064, 32, "position"},
-                               {0x606C, 32, "velocity"},   {0x60F4, 32, "following error"},
-                               {0x603F, 16, "error code"}, {0x0000, 16, "gap"}};
+constexpr PdoEntry kRxPdo[] = {{obj::controlword.index, 16, "controlword"},
+                               {obj::modes_of_operation.index, 8, "mode"},
+                               {0x0000, 8, "gap"},
+                               {obj::target_position.index, 32, "target position"}};
+constexpr PdoEntry kTxPdo[] = {{obj::statusword.index, 16, "statusword"},
+                               {obj::modes_of_operation_display.index, 8, "mode display"},
+                               {0x0000, 8, "gap"},
+                               {obj::position_actual_value.index, 32, "position"},
+                               {obj::velocity_actual_value.index, 32, "velocity"},
+                               {obj::following_error_actual_value.index, 32, "following error"},
+                               {obj::error_code.index, 16, "error code"},
+                               {0x0000, 16, "gap"}};
 namespace rx {
 constexpr std::size_t kControlword = 0, kMode = 2, kTarget = 4, kSize = 8;
 }
@@ -80,28 +92,24 @@ constexpr std::size_t kStatusword = 0, kMode = 2, kPosition = 4, kVelocity = 8, 
                       kErrorCode = 16, kSize = 20;
 }
 
-// Controlword values (CiA 402).
-constexpr std::uint16_t kShutdown = 0x06, kSwitchOn = 0x07, kEnable = 0x0F, kFaultReset = 0x80;
-constexpr std::uint16_t kHomingStart = 0x10;
-constexpr std::int8_t kCsp = 8, kHoming = 6;
-// Statusword bits.
-constexpr std::uint16_t kSwFault = 1u << 3, kSwTargetReached = 1u << 10, kSwHomingAttained = 1u << 12,
-                        kSwHomingError = 1u << 13;
+// Controlword commands and bits, statusword bits (protocol/cia402.hpp).
+constexpr std::uint16_t kShutdown = cia::cmd::Shutdown, kSwitchOn = cia::cmd::SwitchOn,
+                        kEnable = cia::cmd::EnableOperation, kFaultReset = cia::cmd::FaultReset;
+constexpr std::uint16_t kHomingStart = cia::cw::HomingStart;
+constexpr auto kCsp = static_cast<std::int8_t>(cia::Mode::CyclicPosition);
+constexpr auto kHoming = static_cast<std::int8_t>(cia::Mode::Homing);
+constexpr std::uint16_t kSwFault = cia::sw::Fault, kSwTargetReached = cia::sw::TargetReached,
+                        kSwHomingAttained = cia::sw::Bit12, kSwHomingError = cia::sw::Bit13;
 
-enum class DriveState { NotReady, Disabled, Ready, SwitchedOn, Enabled, QuickStop, FaultReaction, Fault };
+using DriveState = cia::State;
 
+// The state a statusword shows; a pattern CiA 402 does not give reads as a fault.
 DriveState drive_state(std::uint16_t sw) {
-    if ((sw & 0x4F) == 0x00) return DriveState::NotReady;
-    if ((sw & 0x4F) == 0x40) return DriveState::Disabled;
-    if ((sw & 0x6F) == 0x21) return DriveState::Ready;
-    if ((sw & 0x6F) == 0x23) return DriveState::SwitchedOn;
-    if ((sw & 0x6F) == 0x27) return DriveState::Enabled;
-    if ((sw & 0x6F) == 0x07) return DriveState::QuickStop;
-    if ((sw & 0x4F) == 0x0F) return DriveState::FaultReaction;
-    return DriveState::Fault;
+    return cia::decode_state(sw).value_or(DriveState::Fault);
 }
 
-const char* to_string(DriveState s) {
+// The demo's short names, in the order of the states.
+const char* short_name(DriveState s) {
     static const char* const kNames[] = {"not ready", "disabled",  "ready",          "switched on",
                                          "enabled",   "quickstop", "fault reaction", "FAULT"};
     return kNames[static_cast<int>(s)];
@@ -194,7 +202,7 @@ class Demo {
     }
     std::string left_enabled() const {
         return fmt::format("drive 1 left OPERATION ENABLED: statusword 0x{:04X} ({}), error code 0x{:04X}",
-                           axes_[0].statusword, to_string(axes_[0].state()), axes_[0].error_code);
+                           axes_[0].statusword, short_name(axes_[0].state()), axes_[0].error_code);
     }
     bool interrupted() const { return g_signal.load() != 0; }
     void set_al(AlState s) { al_ = s; }
@@ -271,7 +279,7 @@ void Demo::status_line(bool force) {
     last_status_ = now;
     std::string s = fmt::format("  [{}] {}", phase_, protocol::to_string(al_));
     for (std::size_t i = 0; i < axes_.size() && i < 2; ++i)
-        s += fmt::format(" | d{} {} {}", i + 1, to_string(axes_[i].state()), axes_[i].position);
+        s += fmt::format(" | d{} {} {}", i + 1, short_name(axes_[i].state()), axes_[i].position);
     if (axes_.size() > 2) s += fmt::format(" | +{} drives", axes_.size() - 2);
     s += fmt::format(" | {} cycles, {} misses | rtt {:.0f}/{:.0f} us", stats_.cycles, stats_.misses,
                      stats_.rtt_mean_us(), stats_.rtt_max_us);
@@ -390,18 +398,22 @@ bool Demo::preop() {
     if (!master_.request_state(AlState::PreOp)) return fail("the slaves refused PREOP");
     set_al(AlState::PreOp);
     // Drive 1's machine has its home switch at kHomeSwitch; the homing phase searches it.
-    if (!sdo(0, 0x2100, 3, static_cast<std::uint32_t>(kHomeSwitch), 4) ||
-        !sdo(0, 0x6098, 0, static_cast<std::uint8_t>(kHomingMethod), 1) ||
-        !sdo(0, 0x6099, 1, static_cast<std::uint32_t>(kRev / 2), 4) ||   // search the switch at 0.5 rev/s
-        !sdo(0, 0x6099, 2, static_cast<std::uint32_t>(kRev / 16), 4) ||  // the edge at 1/16 rev/s
-        !sdo(0, 0x609A, 0, static_cast<std::uint32_t>(4 * kRev), 4) ||
-        !sdo(0, 0x607C, 0, static_cast<std::uint32_t>(kHomeSwitch), 4))
+    if (!sdo(0, mfr::machine::home_switch.index, mfr::machine::home_switch.subindex,
+             static_cast<std::uint32_t>(kHomeSwitch), 4) ||
+        !sdo(0, obj::homing_method.index, 0, static_cast<std::uint8_t>(kHomingMethod), 1) ||
+        !sdo(0, obj::homing_speeds::index, obj::homing_speeds::search_for_switch.subindex,
+             static_cast<std::uint32_t>(kRev / 2), 4) ||  // search the switch at 0.5 rev/s
+        !sdo(0, obj::homing_speeds::index, obj::homing_speeds::search_for_zero.subindex,
+             static_cast<std::uint32_t>(kRev / 16), 4) ||  // the edge at 1/16 rev/s
+        !sdo(0, obj::homing_acceleration.index, 0, static_cast<std::uint32_t>(4 * kRev), 4) ||
+        !sdo(0, obj::home_offset.index, 0, static_cast<std::uint32_t>(kHomeSwitch), 4))
         return false;
     note(
-        "       drive 1: home switch 0x2100:03 = {}, method 0x6098 = {}, speeds 0x6099 = {} / {}, home "
-        "offset "
-        "0x607C = {}",
-        kHomeSwitch, kHomingMethod, kRev / 2, kRev / 16, kHomeSwitch);
+        "       drive 1: home switch 0x{:04X}:{:02X} = {}, method 0x{:04X} = {}, speeds 0x{:04X} = {} / {}, "
+        "home offset 0x{:04X} = {}",
+        mfr::machine::home_switch.index, mfr::machine::home_switch.subindex, kHomeSwitch,
+        obj::homing_method.index, kHomingMethod, obj::homing_speeds::index, kRev / 2, kRev / 16,
+        obj::home_offset.index, kHomeSwitch);
     return true;
 }
 
@@ -512,14 +524,15 @@ bool Demo::enable_drives() {
             return std::all_of(axes_.begin(), axes_.end(), [s](const Axis& a) { return a.state() == s; });
         };
     };
-    const std::pair<std::uint16_t, DriveState> steps[] = {
-        {kShutdown, DriveState::Ready}, {kSwitchOn, DriveState::SwitchedOn}, {kEnable, DriveState::Enabled}};
+    const std::pair<std::uint16_t, DriveState> steps[] = {{kShutdown, DriveState::ReadyToSwitchOn},
+                                                          {kSwitchOn, DriveState::SwitchedOn},
+                                                          {kEnable, DriveState::OperationEnabled}};
     for (const auto& [cw, state] : steps) {
         for (std::size_t i = 0; i < axes_.size(); ++i)
             axes_[i].controlword = cw;
         if (!cycle_until(all(state), 500))
             return fail(
-                fmt::format("drives did not reach \"{}\" (controlword 0x{:02X})", to_string(state), cw));
+                fmt::format("drives did not reach \"{}\" (controlword 0x{:02X})", short_name(state), cw));
     }
     for (auto& a : axes_)
         a.target = a.position;
@@ -548,7 +561,7 @@ bool Demo::move_to(std::int32_t target, double limit_rev_s) {
             if (!follows_twinsync(i))
                 axes_[i].target = start[i] + static_cast<std::int32_t>(std::lround(p - from));
         cycle();
-        if (axes_[0].state() != DriveState::Enabled) return fail(left_enabled());
+        if (axes_[0].state() != DriveState::OperationEnabled) return fail(left_enabled());
     }
     // Settle: drive 1 within 1/1000 revolution of the target.
     cycle_until([&] { return std::abs(axes_[0].position - target) < kRev / 1000; }, 500);
@@ -582,7 +595,7 @@ bool Demo::csp_move() {
         }
         cycle();
         worst_ferr = std::max(worst_ferr, std::abs(static_cast<double>(axes_[0].following_error)));
-        if (axes_[0].state() != DriveState::Enabled) return fail(left_enabled());
+        if (axes_[0].state() != DriveState::OperationEnabled) return fail(left_enabled());
         if (done && c >= opt_.cycles) break;
         if (c > opt_.cycles + 20000) return fail("the move did not end");
     }
@@ -634,9 +647,10 @@ bool Demo::homing() {
         return fail("drive 1 did not return to CSP");
     note(
         "       homing attained (statusword 0x{:04X}) after {:.0f} ms: the switch edge now reads {} "
-        "(0x607C); drive 1 "
+        "(0x{:04X}); drive 1 "
         "stopped at {}, {} beyond it (it started at {})",
-        d1.statusword, ms, kHomeSwitch, d1.position, kHomeSwitch - d1.position, before);
+        d1.statusword, ms, kHomeSwitch, obj::home_offset.index, d1.position, kHomeSwitch - d1.position,
+        before);
     if (gantry_)
         note(
             "       drive 2 followed the search over TWINsync and is at {} (difference {}); the home offset "
@@ -661,12 +675,12 @@ bool Demo::fault() {
     cycle_until(
         [&] {
             return std::none_of(axes_.begin(), axes_.end(),
-                                [](const Axis& a) { return a.state() == DriveState::FaultReaction; });
+                                [](const Axis& a) { return a.state() == DriveState::FaultReactionActive; });
         },
         2000);
     for (std::size_t i = 0; i < axes_.size() && i < 2; ++i)
-        note("       drive {}: statusword 0x{:04X} ({}), error code 0x603F = 0x{:04X}{}", i + 1,
-             axes_[i].statusword, to_string(axes_[i].state()), axes_[i].error_code,
+        note("       drive {}: statusword 0x{:04X} ({}), error code 0x{:04X} = 0x{:04X}{}", i + 1,
+             axes_[i].statusword, short_name(axes_[i].state()), obj::error_code.index, axes_[i].error_code,
              i == 0 ? fmt::format(", seen {} cycles after the injection", seen_after) : "");
     for (std::size_t i = 0; i < axes_.size() && i < 2; ++i) {
         master::CoeClient c(master_, master_.slaves()[i].station);
@@ -723,7 +737,7 @@ bool Demo::disable() {
     const bool ready = cycle_until(
         [&] {
             return std::all_of(axes_.begin(), axes_.end(),
-                               [](const Axis& a) { return a.state() == DriveState::Ready; });
+                               [](const Axis& a) { return a.state() == DriveState::ReadyToSwitchOn; });
         },
         500);
     if (!ready) return fail(interrupted() ? "interrupted" : "drives did not reach \"ready\"");

@@ -1,5 +1,7 @@
 #include "coe/coe_application.hpp"
 
+#include "protocol/cia402_objects.hpp"
+
 namespace vecat::coe {
 
 CoeApplication::CoeApplication(const device::DeviceDescription& d,
@@ -11,7 +13,7 @@ CoeApplication::CoeApplication(const device::DeviceDescription& d,
     sync_ = std::make_unique<SyncParameters>(od_, d);
     pending_outputs_.reserve(1536);  // a whole frame's worth: no allocation in the cycle
     error_register_ = od_.find(0x1001, 0);
-    error_code_ = od_.find(0x603F, 0);
+    error_code_ = od_.find(protocol::obj::error_code);
     // An object mapped into the active RxPDOs is written by the master's outputs in SAFEOP and OP.
     od_.download_guard = [this](const Entry& e, AlState st) {
         if ((st == AlState::SafeOp || st == AlState::Op) && map_->is_rx_mapped(e))

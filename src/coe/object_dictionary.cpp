@@ -294,6 +294,9 @@ Entry* ObjectDictionary::find(std::uint16_t index, std::uint8_t sub) {
     Object* o = find(index);
     return o ? o->entry(sub) : nullptr;
 }
+const Entry* ObjectDictionary::find(std::uint16_t index, std::uint8_t sub) const {
+    return const_cast<ObjectDictionary*>(this)->find(index, sub);
+}
 
 SdoAbort ObjectDictionary::upload(std::uint16_t index, std::uint8_t sub, bool complete, AlState state,
                                   Bytes out, std::size_t& len) {

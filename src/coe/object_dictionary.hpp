@@ -9,12 +9,15 @@
 #include <functional>
 #include <memory>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <vector>
 
 #include "common/bytes.hpp"
 #include "device/object_description.hpp"
 #include "protocol/al_status.hpp"
+#include "protocol/objects.hpp"
 #include "protocol/sdo_abort.hpp"
 
 namespace vecat::coe {
@@ -72,7 +75,8 @@ class Entry {
     void assign(ConstBytes v);
     void reset_to_default();
 
-    // Typed access for integers and reals of the entry's size (the device's own code).
+    // Untyped access: any integer or real, cut or zero-extended to the entry's size (tests and tools; the
+    // device's own code reads its objects through typed handles, coe::Value below).
     template <class T>
     T get() const {
         static_assert(std::is_arithmetic_v<T>);
@@ -182,6 +186,10 @@ class ObjectDictionary {
     Object* find(std::uint16_t index);
     const Object* find(std::uint16_t index) const;
     Entry* find(std::uint16_t index, std::uint8_t sub);
+    const Entry* find(std::uint16_t index, std::uint8_t sub) const;
+    // A catalogue entry (protocol/objects.hpp) by its index and subindex.
+    Entry* find(protocol::ObjectRef r) { return find(r.index, r.subindex); }
+    const Entry* find(protocol::ObjectRef r) const { return find(r.index, r.subindex); }
     std::vector<Object>& objects() { return objects_; }
     const std::vector<Object>& objects() const { return objects_; }
     // Largest value an upload can produce (complete access included): the size of transfer buffers.
@@ -215,6 +223,99 @@ class ObjectDictionary {
     std::size_t max_transfer_ = 0;
     std::vector<std::uint8_t> undo_;  // previous values during a complete-access download
 };
+
+// How strictly a handle's type must match its entry's data type when it is bound.
+enum class Match : std::uint8_t {
+    Exact,      // the same width, signedness and kind (integer, real, boolean)
+    SameWidth,  // the same width and kind, either signedness: a vendor's dictionary (ESI) that declares a
+                // profile object with the other signedness (DINT digital inputs) is read bit for bit
+    Convert,    // any type, as Entry::get/set read and write it (the little-endian bytes, zero-extended or
+                // cut): for vendors' dictionaries that give a profile object another type (USINT for UDINT,
+                // REAL for DINT). Such a handle takes the slower untyped path; one of the right type the
+                // fast one.
+};
+
+// Whether an entry of data type t can be bound as a value of C++ type V.
+template <class V>
+constexpr bool binds_as(DataType t, Match m) noexcept {
+    if (protocol::holds<V>(t)) return true;
+    if (m == Match::Convert) return true;
+    if (m == Match::Exact || !std::is_integral_v<V> || std::is_same_v<V, bool>) return false;
+    return t != DataType::Boolean && !device::is_real(t) && device::fixed_bit_length(t) == 8 * sizeof(V);
+}
+
+// A typed handle on one entry, in the spirit of typed object access (lely-core's Read<T>): bound once, when
+// the device is built, and checked then against the entry's data type (a handle of std::int32_t binds only
+// to an INTEGER32 entry: a wrong width or signedness throws std::invalid_argument at bind time, never a
+// silent cut in the cycle). get() and set() then are one load and one store, without check, lock or
+// allocation. A handle of an object the dictionary does not have (a vendor ESI without it) is unbound:
+// get_or() gives the fallback and set() does nothing.
+template <class T>
+class Value {
+  public:
+    static_assert(std::is_arithmetic_v<T>);
+    Value() = default;
+    // e: the entry (nullptr: unbound).
+    explicit Value(Entry* e, Match m = Match::Exact) : entry_(e) {
+        if (!e) return;
+        if (!binds_as<T>(e->type(), m))
+            throw std::invalid_argument("entry of type " + std::string(device::type_name(e->type())) +
+                                        " bound as a value of " + std::to_string(8 * sizeof(T)) + " bits" +
+                                        (std::is_signed_v<T> ? " (signed)" : ""));
+        convert_ = !binds_as<T>(e->type(), Match::SameWidth);
+        data_ = e->storage().data();
+    }
+
+    bool bound() const { return data_ != nullptr; }
+    // Bound with Match::Convert to an entry of another type.
+    bool converts() const { return convert_; }
+    Entry* entry() const { return entry_; }
+    // The value; the handle must be bound.
+    T get() const {
+        if (convert_) [[unlikely]]
+            return entry_->get<T>();
+        if constexpr (std::is_same_v<T, bool>) {
+            return (data_[0] & 1u) != 0;
+        } else if constexpr (std::endian::native == std::endian::little) {
+            T v;
+            std::memcpy(&v, data_, sizeof(T));
+            return v;
+        } else {
+            return entry_->get<T>();
+        }
+    }
+    T get_or(T fallback) const { return data_ ? get() : fallback; }
+    // Stores the value without check or hook (the device's own write); nothing when unbound.
+    void set(T v) {
+        if (!data_) return;
+        if (convert_) [[unlikely]]
+            return entry_->set(v);
+        if constexpr (std::is_same_v<T, bool>) {
+            data_[0] = v ? 1 : 0;
+        } else if constexpr (std::endian::native == std::endian::little) {
+            std::memcpy(data_, &v, sizeof(T));
+        } else {
+            entry_->set(v);
+        }
+    }
+
+  private:
+    Entry* entry_ = nullptr;
+    std::uint8_t* data_ = nullptr;
+    bool convert_ = false;
+};
+
+// Binds a handle to a catalogue entry: its C++ type is the catalogue's data type (protocol/objects.hpp).
+template <DataType T>
+Value<protocol::value_type_t<T>> bind(ObjectDictionary& od, protocol::ObjectId<T> id,
+                                      Match m = Match::Exact) {
+    return Value<protocol::value_type_t<T>>(od.find(id.index, id.subindex), m);
+}
+// Binds a handle of type V to an entry found at run time (checked as Value's constructor does).
+template <class V>
+Value<V> bind(ObjectDictionary& od, std::uint16_t index, std::uint8_t sub = 0, Match m = Match::Exact) {
+    return Value<V>(od.find(index, sub), m);
+}
 
 // Value checks against an entry's description (type size, range). Exposed for SDO info and tests.
 SdoAbort check_length(const Entry& e, std::size_t len);

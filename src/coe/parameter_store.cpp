@@ -219,11 +219,11 @@ bool in_group(std::uint16_t index, ParameterGroup g) {
         case ParameterGroup::All:
             return true;
         case ParameterGroup::Communication:
-            return index >= 0x1000 && index <= 0x1FFF;
+            return protocol::obj::communication_area.contains(index);
         case ParameterGroup::Application:
-            return index >= 0x6000 && index <= 0x9FFF;
+            return protocol::obj::profile_area.contains(index);
         case ParameterGroup::Manufacturer:
-            return index >= 0x2000 && index <= 0x5FFF;
+            return protocol::obj::manufacturer_area.contains(index);
     }
     return false;
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "protocol/cia402_objects.hpp"
 #include "protocol/registers.hpp"
 
 namespace vecat::coe {
@@ -11,26 +12,27 @@ using protocol::AlStatusCode;
 
 namespace {
 
-constexpr std::uint16_t kOutPar = 0x1C32;
-constexpr std::uint16_t kInPar = 0x1C33;
+constexpr std::uint16_t kOutPar = protocol::obj::sync_parameter::outputs;
+constexpr std::uint16_t kInPar = protocol::obj::sync_parameter::inputs;
 // Subindices of 0x1C32/0x1C33 (ETG.1020 Table 78).
 namespace sub {
-constexpr std::uint8_t SyncMode = 1;
-constexpr std::uint8_t CycleTime = 2;
-constexpr std::uint8_t ShiftTime = 3;
-constexpr std::uint8_t SyncModesSupported = 4;
-constexpr std::uint8_t MinimumCycleTime = 5;
-constexpr std::uint8_t GetCycleTime = 8;
-constexpr std::uint8_t Sync0CycleTime = 10;
-constexpr std::uint8_t SmEventMissed = 11;
-constexpr std::uint8_t CycleTimeTooSmall = 12;
-constexpr std::uint8_t ShiftTimeTooShort = 13;
-constexpr std::uint8_t SyncError = 32;
+namespace sp = protocol::obj::sync_parameter;
+constexpr std::uint8_t SyncMode = sp::sync_mode;
+constexpr std::uint8_t CycleTime = sp::cycle_time;
+constexpr std::uint8_t ShiftTime = sp::shift_time;
+constexpr std::uint8_t SyncModesSupported = sp::sync_modes_supported;
+constexpr std::uint8_t MinimumCycleTime = sp::minimum_cycle_time;
+constexpr std::uint8_t GetCycleTime = sp::get_cycle_time;
+constexpr std::uint8_t Sync0CycleTime = sp::sync0_cycle_time;
+constexpr std::uint8_t SmEventMissed = sp::sm_event_missed;
+constexpr std::uint8_t CycleTimeTooSmall = sp::cycle_time_too_small;
+constexpr std::uint8_t ShiftTimeTooShort = sp::shift_time_too_short;
+constexpr std::uint8_t SyncError = sp::sync_error;
 }  // namespace sub
 
-constexpr std::uint16_t kErrorSettings = 0x10F1;
-constexpr std::uint8_t kSyncErrorLimit = 2;
-constexpr std::uint16_t kInterpolationPeriod = 0x60C2;
+constexpr std::uint16_t kErrorSettings = protocol::obj::error_settings::index;
+constexpr std::uint8_t kSyncErrorLimit = protocol::obj::error_settings::sync_error_counter_limit.subindex;
+constexpr std::uint16_t kInterpolationPeriod = protocol::obj::interpolation_time_period::index;
 
 // ETG.1020 21.1.3: the sync error counter goes up by 3 for each missed event and down by 1 for each good one.
 constexpr std::uint16_t kErrorStep = 3;

@@ -1,19 +1,25 @@
 // The CiA 402 (IEC 61800-7-201) objects of the vecat drive, as described data. Their behaviour lives in
 // src/cia402; this file only says which objects exist, their types, access, limits and defaults.
+#include "protocol/cia402_objects.hpp"
 #include "device/device_description.hpp"
+#include "device/drive_objects.hpp"
 
 namespace vecat::device {
 namespace {
 
 using DT = DataType;
 
-ObjectDescription var(std::uint16_t index, const char* name, DT t, std::uint16_t acc, std::int64_t def = 0) {
-    return make_var(index, name, t, acc, def);
+namespace obj = protocol::obj;
+
+template <DT T>
+ObjectDescription var(protocol::ObjectId<T> id, const char* name, std::uint16_t acc, std::int64_t def = 0) {
+    return make_var(id, name, acc, def);
 }
 
-ObjectDescription ranged(std::uint16_t index, const char* name, DT t, std::uint16_t acc, std::int64_t def,
+template <DT T>
+ObjectDescription ranged(protocol::ObjectId<T> id, const char* name, std::uint16_t acc, std::int64_t def,
                          std::int64_t min, std::int64_t max) {
-    auto o = make_var(index, name, t, acc, def);
+    auto o = make_var(id, name, acc, def);
     set_range(o.entries[0], min, max);
     return o;
 }
@@ -41,46 +47,49 @@ std::vector<ObjectDescription> cia402_drive_objects() {
     std::vector<ObjectDescription> o;
 
     // Manufacturer area: the simulated motor and a few diagnostic values.
-    o.push_back(make_record(0x2000, "Motor parameters",
-                            {make_entry(1, "Rated speed (rpm)", DT::Unsigned32, RW, 3000),
-                             make_entry(2, "Rotor inertia (g cm2)", DT::Unsigned32, RW, 120),
-                             make_entry(3, "Torque constant (mNm/A)", DT::Unsigned32, RW, 600),
-                             make_entry(4, "Load inertia (g cm2)", DT::Unsigned32, RW, 240),
-                             make_entry(5, "Viscous friction (uNm s/rad)", DT::Unsigned32, RW, 50),
-                             make_entry(6, "Coulomb friction (mNm)", DT::Unsigned32, RW, 10),
-                             make_entry(7, "Peak current (mA)", DT::Unsigned32, RW, 9000)}));
+    o.push_back(make_record(mfr::motor::index, "Motor parameters",
+                            {make_entry(mfr::motor::rated_speed, "Rated speed (rpm)", RW, 3000),
+                             make_entry(mfr::motor::rotor_inertia, "Rotor inertia (g cm2)", RW, 120),
+                             make_entry(mfr::motor::torque_constant, "Torque constant (mNm/A)", RW, 600),
+                             make_entry(mfr::motor::load_inertia, "Load inertia (g cm2)", RW, 240),
+                             make_entry(mfr::motor::viscous_friction, "Viscous friction (uNm s/rad)", RW, 50),
+                             make_entry(mfr::motor::coulomb_friction, "Coulomb friction (mNm)", RW, 10),
+                             make_entry(mfr::motor::peak_current, "Peak current (mA)", RW, 9000)}));
     // Gains of the cascaded loops; 0 = tuned from the motor parameters when the drive is enabled.
-    o.push_back(make_record(0x2003, "Control loop gains",
-                            {make_entry(1, "Position loop gain (0.01/s)", DT::Unsigned32, RW, 0),
-                             make_entry(2, "Velocity loop gain (uNm s/rad)", DT::Unsigned32, RW, 0),
-                             make_entry(3, "Velocity loop integral time (us)", DT::Unsigned32, RW, 0),
-                             make_entry(4, "Current loop bandwidth (rad/s)", DT::Unsigned32, RW, 0)}));
+    o.push_back(
+        make_record(mfr::gains::index, "Control loop gains",
+                    {make_entry(mfr::gains::position_kp, "Position loop gain (0.01/s)", RW, 0),
+                     make_entry(mfr::gains::velocity_kp, "Velocity loop gain (uNm s/rad)", RW, 0),
+                     make_entry(mfr::gains::velocity_ti, "Velocity loop integral time (us)", RW, 0),
+                     make_entry(mfr::gains::current_bandwidth, "Current loop bandwidth (rad/s)", RW, 0)}));
     // The simulated machine around the motor: switches (in increments of the machine position, which
     // homing does not move), the index pulse, an external load, the touch probe inputs.
     {
-        auto r = make_record(0x2100, "Simulated machine",
-                             {make_entry(1, "Negative limit switch (inc)", DT::Integer32, RW, -(100ll << 20)),
-                              make_entry(2, "Positive limit switch (inc)", DT::Integer32, RW, 100ll << 20),
-                              make_entry(3, "Home switch (inc)", DT::Integer32, RW, 5ll << 20),
-                              make_entry(4, "Index pulse offset (inc)", DT::Integer32, RW, 0),
-                              make_entry(5, "Load torque (0.1 %)", DT::Integer16, RWM, 0),
-                              make_entry(6, "Touch probe inputs", DT::Unsigned8, RWM, 0),
-                              make_entry(7, "Limit switch reaction", DT::Unsigned8, RW, 0)});
-        set_range(r.entries[7], 0, 1);
+        namespace m = mfr::machine;
+        auto r = make_record(
+            m::index, "Simulated machine",
+            {make_entry(m::negative_limit_switch, "Negative limit switch (inc)", RW, -(100ll << 20)),
+             make_entry(m::positive_limit_switch, "Positive limit switch (inc)", RW, 100ll << 20),
+             make_entry(m::home_switch, "Home switch (inc)", RW, 5ll << 20),
+             make_entry(m::index_pulse_offset, "Index pulse offset (inc)", RW, 0),
+             make_entry(m::load_torque, "Load torque (0.1 %)", RWM, 0),
+             make_entry(m::touch_probe_inputs, "Touch probe inputs", RWM, 0),
+             make_entry(m::limit_switch_reaction, "Limit switch reaction", RW, 0)});
+        set_range(r.entries[m::limit_switch_reaction.subindex], 0, 1);
         o.push_back(r);
     }
-    // Fault injection: the 0x603F code of a fault condition to simulate (0 = none).
-    o.push_back(var(0x2101, "Simulated fault", DT::Unsigned16, RWM, 0));
+    // Fault injection: the error code (0x603F) of a fault condition to simulate (0 = none).
+    o.push_back(var(mfr::simulated_fault, "Simulated fault", RWM, 0));
     // TwinCAT NC PTP online changes as manufacturer functions of the profile modes.
-    o.push_back(ranged(0x2110, "Velocity override (ppm)", DT::Unsigned32, RWM, 1'000'000, 0, 1'000'000));
-    o.push_back(make_record(0x2111, "Position compensation",
-                            {make_entry(1, "Compensation distance", DT::Integer32, RW, 0),
-                             make_entry(2, "Compensation length", DT::Unsigned32, RW, 0),
-                             make_entry(3, "Start compensation", DT::Unsigned8, RW, 0)}));
-    o.push_back(var(0x2001, "Drive temperature (0.1 C)", DT::Integer16, ROM, 350));
-    o.push_back(var(0x2002, "DC bus voltage (0.1 V)", DT::Unsigned16, ROM, 3250));
+    o.push_back(ranged(mfr::velocity_override, "Velocity override (ppm)", RWM, 1'000'000, 0, 1'000'000));
+    o.push_back(make_record(mfr::position_compensation::index, "Position compensation",
+                            {make_entry(mfr::position_compensation::distance, "Compensation distance", RW, 0),
+                             make_entry(mfr::position_compensation::length, "Compensation length", RW, 0),
+                             make_entry(mfr::position_compensation::start, "Start compensation", RW, 0)}));
+    o.push_back(var(mfr::drive_temperature, "Drive temperature (0.1 C)", ROM, 350));
+    o.push_back(var(mfr::dc_bus_voltage, "DC bus voltage (0.1 V)", ROM, 3250));
     {
-        auto s = make_string_var(0x2010, "User label", "axis");
+        auto s = make_string_var(mfr::user_label.index, "User label", "axis");
         s.entries[0].bit_length = 8 * 32;
         s.entries[0].access = RW;
         o.push_back(s);
@@ -88,7 +97,7 @@ std::vector<ObjectDescription> cia402_drive_objects() {
     {
         // A large read-only value (served by segmented upload).
         ObjectDescription d;
-        d.index = 0x2020;
+        d.index = mfr::diagnosis_history.index;
         d.name = "Diagnosis history";
         d.code = ObjectCode::Var;
         d.type = DT::OctetString;
@@ -104,99 +113,101 @@ std::vector<ObjectDescription> cia402_drive_objects() {
     }
 
     // Device control (CiA 402 part 2, section 8).
-    o.push_back(var(0x603F, "Error code", DT::Unsigned16, ROM));
-    o.push_back(var(0x6040, "Controlword", DT::Unsigned16, RWM));
-    o.push_back(var(0x6041, "Statusword", DT::Unsigned16, ROM));
-    o.push_back(ranged(0x605A, "Quick stop option code", DT::Integer16, RW, 2, 0, 8));
-    o.push_back(ranged(0x605B, "Shutdown option code", DT::Integer16, RW, 0, -1, 1));
-    o.push_back(ranged(0x605C, "Disable operation option code", DT::Integer16, RW, 1, -1, 1));
-    o.push_back(ranged(0x605D, "Halt option code", DT::Integer16, RW, 1, 1, 4));
-    o.push_back(ranged(0x605E, "Fault reaction option code", DT::Integer16, RW, 2, 0, 4));
-    o.push_back(ranged(0x6060, "Modes of operation", DT::Integer8, RWM, 8, -128, 127));
-    o.push_back(var(0x6061, "Modes of operation display", DT::Integer8, ROM));
+    o.push_back(var(obj::error_code, "Error code", ROM));
+    o.push_back(var(obj::controlword, "Controlword", RWM));
+    o.push_back(var(obj::statusword, "Statusword", ROM));
+    o.push_back(ranged(obj::quick_stop_option_code, "Quick stop option code", RW, 2, 0, 8));
+    o.push_back(ranged(obj::shutdown_option_code, "Shutdown option code", RW, 0, -1, 1));
+    o.push_back(ranged(obj::disable_operation_option_code, "Disable operation option code", RW, 1, -1, 1));
+    o.push_back(ranged(obj::halt_option_code, "Halt option code", RW, 1, 1, 4));
+    o.push_back(ranged(obj::fault_reaction_option_code, "Fault reaction option code", RW, 2, 0, 4));
+    o.push_back(ranged(obj::modes_of_operation, "Modes of operation", RWM, 8, -128, 127));
+    o.push_back(var(obj::modes_of_operation_display, "Modes of operation display", ROM));
 
     // Position control function and factors.
-    o.push_back(var(0x6062, "Position demand value", DT::Integer32, ROM));
-    o.push_back(var(0x6063, "Position actual internal value", DT::Integer32, ROM));
-    o.push_back(var(0x6064, "Position actual value", DT::Integer32, ROM));
-    o.push_back(var(0x6065, "Following error window", DT::Unsigned32, RWM, 100000));
-    o.push_back(var(0x6066, "Following error time out", DT::Unsigned16, RW, 10));
-    o.push_back(var(0x6067, "Position window", DT::Unsigned32, RWM, 100));
-    o.push_back(var(0x6068, "Position window time", DT::Unsigned16, RW, 10));
-    o.push_back(var(0x606B, "Velocity demand value", DT::Integer32, ROM));
-    o.push_back(var(0x606C, "Velocity actual value", DT::Integer32, ROM));
-    o.push_back(var(0x606D, "Velocity window", DT::Unsigned16, RW, 100));
-    o.push_back(var(0x606E, "Velocity window time", DT::Unsigned16, RW, 10));
-    o.push_back(var(0x606F, "Velocity threshold", DT::Unsigned16, RW, 10));
-    o.push_back(var(0x6070, "Velocity threshold time", DT::Unsigned16, RW, 10));
-    o.push_back(var(0x6071, "Target torque", DT::Integer16, RWM));
-    o.push_back(var(0x6072, "Max torque", DT::Unsigned16, RWM, 3000));
-    o.push_back(var(0x6074, "Torque demand", DT::Integer16, ROM));
-    o.push_back(var(0x6075, "Motor rated current", DT::Unsigned32, RW, 3000));
-    o.push_back(var(0x6076, "Motor rated torque", DT::Unsigned32, RW, 1270));
-    o.push_back(var(0x6077, "Torque actual value", DT::Integer16, ROM));
-    o.push_back(var(0x6078, "Current actual value", DT::Integer16, ROM));
-    o.push_back(var(0x607A, "Target position", DT::Integer32, RWM));
-    o.push_back(named_array(0x607B, "Position range limit", DT::Integer32, RW,
+    o.push_back(var(obj::position_demand_value, "Position demand value", ROM));
+    o.push_back(var(obj::position_actual_internal_value, "Position actual internal value", ROM));
+    o.push_back(var(obj::position_actual_value, "Position actual value", ROM));
+    o.push_back(var(obj::following_error_window, "Following error window", RWM, 100000));
+    o.push_back(var(obj::following_error_time_out, "Following error time out", RW, 10));
+    o.push_back(var(obj::position_window, "Position window", RWM, 100));
+    o.push_back(var(obj::position_window_time, "Position window time", RW, 10));
+    o.push_back(var(obj::velocity_demand_value, "Velocity demand value", ROM));
+    o.push_back(var(obj::velocity_actual_value, "Velocity actual value", ROM));
+    o.push_back(var(obj::velocity_window, "Velocity window", RW, 100));
+    o.push_back(var(obj::velocity_window_time, "Velocity window time", RW, 10));
+    o.push_back(var(obj::velocity_threshold, "Velocity threshold", RW, 10));
+    o.push_back(var(obj::velocity_threshold_time, "Velocity threshold time", RW, 10));
+    o.push_back(var(obj::target_torque, "Target torque", RWM));
+    o.push_back(var(obj::max_torque, "Max torque", RWM, 3000));
+    o.push_back(var(obj::torque_demand, "Torque demand", ROM));
+    o.push_back(var(obj::motor_rated_current, "Motor rated current", RW, 3000));
+    o.push_back(var(obj::motor_rated_torque, "Motor rated torque", RW, 1270));
+    o.push_back(var(obj::torque_actual_value, "Torque actual value", ROM));
+    o.push_back(var(obj::current_actual_value, "Current actual value", ROM));
+    o.push_back(var(obj::target_position, "Target position", RWM));
+    o.push_back(named_array(obj::position_range_limit::index, "Position range limit", DT::Integer32, RW,
                             {{"Min position range limit", kI32Min}, {"Max position range limit", kI32Max}}));
-    o.push_back(var(0x607C, "Home offset", DT::Integer32, RWM));
-    o.push_back(named_array(0x607D, "Software position limit", DT::Integer32, RW,
+    o.push_back(var(obj::home_offset, "Home offset", RWM));
+    o.push_back(named_array(obj::software_position_limit::index, "Software position limit", DT::Integer32, RW,
                             {{"Min position limit", kI32Min}, {"Max position limit", kI32Max}}));
-    o.push_back(var(0x607E, "Polarity", DT::Unsigned8, RW));
-    o.push_back(var(0x607F, "Max profile velocity", DT::Unsigned32, RWM, 10'000'000));
-    o.push_back(var(0x6080, "Max motor speed", DT::Unsigned32, RW, 5000));
-    o.push_back(var(0x6081, "Profile velocity", DT::Unsigned32, RWM, 1'000'000));
-    o.push_back(var(0x6082, "End velocity", DT::Unsigned32, RWM));
-    o.push_back(var(0x6083, "Profile acceleration", DT::Unsigned32, RWM, 10'000'000));
-    o.push_back(var(0x6084, "Profile deceleration", DT::Unsigned32, RWM, 10'000'000));
-    o.push_back(var(0x6085, "Quick stop deceleration", DT::Unsigned32, RWM, 50'000'000));
-    o.push_back(ranged(0x6086, "Motion profile type", DT::Integer16, RW, 0, -1, 3));
-    o.push_back(var(0x6087, "Torque slope", DT::Unsigned32, RWM, 10000));
-    o.push_back(var(0x6088, "Torque profile type", DT::Integer16, RW, 0));
-    o.push_back(named_array(0x608F, "Position encoder resolution", DT::Unsigned32, RW,
-                            {{"Encoder increments", 1 << 20}, {"Motor revolutions", 1}}));
-    o.push_back(named_array(0x6091, "Gear ratio", DT::Unsigned32, RW,
+    o.push_back(var(obj::polarity, "Polarity", RW));
+    o.push_back(var(obj::max_profile_velocity, "Max profile velocity", RWM, 10'000'000));
+    o.push_back(var(obj::max_motor_speed, "Max motor speed", RW, 5000));
+    o.push_back(var(obj::profile_velocity, "Profile velocity", RWM, 1'000'000));
+    o.push_back(var(obj::end_velocity, "End velocity", RWM));
+    o.push_back(var(obj::profile_acceleration, "Profile acceleration", RWM, 10'000'000));
+    o.push_back(var(obj::profile_deceleration, "Profile deceleration", RWM, 10'000'000));
+    o.push_back(var(obj::quick_stop_deceleration, "Quick stop deceleration", RWM, 50'000'000));
+    o.push_back(ranged(obj::motion_profile_type, "Motion profile type", RW, 0, -1, 3));
+    o.push_back(var(obj::torque_slope, "Torque slope", RWM, 10000));
+    o.push_back(var(obj::torque_profile_type, "Torque profile type", RW, 0));
+    o.push_back(named_array(obj::position_encoder_resolution::index, "Position encoder resolution",
+                            DT::Unsigned32, RW, {{"Encoder increments", 1 << 20}, {"Motor revolutions", 1}}));
+    o.push_back(named_array(obj::gear_ratio::index, "Gear ratio", DT::Unsigned32, RW,
                             {{"Motor revolutions", 1}, {"Shaft revolutions", 1}}));
-    o.push_back(named_array(0x6092, "Feed constant", DT::Unsigned32, RW,
+    o.push_back(named_array(obj::feed_constant::index, "Feed constant", DT::Unsigned32, RW,
                             {{"Feed", 1 << 20}, {"Shaft revolutions", 1}}));
 
     // Homing.
-    o.push_back(ranged(0x6098, "Homing method", DT::Integer8, RWM, 35, -128, 127));
+    o.push_back(ranged(obj::homing_method, "Homing method", RWM, 35, -128, 127));
     o.push_back(
-        named_array(0x6099, "Homing speeds", DT::Unsigned32, RW,
+        named_array(obj::homing_speeds::index, "Homing speeds", DT::Unsigned32, RW,
                     {{"Speed during search for switch", 100000}, {"Speed during search for zero", 10000}}));
-    o.push_back(var(0x609A, "Homing acceleration", DT::Unsigned32, RWM, 1'000'000));
-    o.push_back(named_array(0x60A4, "Profile jerk", DT::Unsigned32, RW, {{"Profile jerk 1", 1'000'000'000}}));
+    o.push_back(var(obj::homing_acceleration, "Homing acceleration", RWM, 1'000'000));
+    o.push_back(named_array(obj::profile_jerk::index, "Profile jerk", DT::Unsigned32, RW,
+                            {{"Profile jerk 1", 1'000'000'000}}));
 
     // Cyclic modes: offsets, touch probe, interpolation period.
-    o.push_back(var(0x60B0, "Position offset", DT::Integer32, RWM));
-    o.push_back(var(0x60B1, "Velocity offset", DT::Integer32, RWM));
-    o.push_back(var(0x60B2, "Torque offset", DT::Integer16, RWM));
-    o.push_back(var(0x60B8, "Touch probe function", DT::Unsigned16, RWM));
-    o.push_back(var(0x60B9, "Touch probe status", DT::Unsigned16, ROM));
-    o.push_back(var(0x60BA, "Touch probe 1 positive value", DT::Integer32, ROM));
-    o.push_back(var(0x60BB, "Touch probe 1 negative value", DT::Integer32, ROM));
-    o.push_back(var(0x60BC, "Touch probe 2 positive value", DT::Integer32, ROM));
-    o.push_back(var(0x60BD, "Touch probe 2 negative value", DT::Integer32, ROM));
+    o.push_back(var(obj::position_offset, "Position offset", RWM));
+    o.push_back(var(obj::velocity_offset, "Velocity offset", RWM));
+    o.push_back(var(obj::torque_offset, "Torque offset", RWM));
+    o.push_back(var(obj::touch_probe_function, "Touch probe function", RWM));
+    o.push_back(var(obj::touch_probe_status, "Touch probe status", ROM));
+    o.push_back(var(obj::touch_probe_1_positive_value, "Touch probe 1 positive value", ROM));
+    o.push_back(var(obj::touch_probe_1_negative_value, "Touch probe 1 negative value", ROM));
+    o.push_back(var(obj::touch_probe_2_positive_value, "Touch probe 2 positive value", ROM));
+    o.push_back(var(obj::touch_probe_2_negative_value, "Touch probe 2 negative value", ROM));
     {
-        auto r = make_record(0x60C2, "Interpolation time period",
-                             {make_entry(1, "Interpolation time period value", DT::Unsigned8, RW, 1),
-                              make_entry(2, "Interpolation time index", DT::Integer8, RW, -3)});
+        auto r = make_record(
+            obj::interpolation_time_period::index, "Interpolation time period",
+            {make_entry(obj::interpolation_time_period::value, "Interpolation time period value", RW, 1),
+             make_entry(obj::interpolation_time_period::time_index, "Interpolation time index", RW, -3)});
         set_range(r.entries[2], -6, 63);
         o.push_back(r);
     }
-    o.push_back(var(0x60C5, "Max acceleration", DT::Unsigned32, RW, 100'000'000));
-    o.push_back(var(0x60C6, "Max deceleration", DT::Unsigned32, RW, 100'000'000));
-    o.push_back(var(0x60E0, "Positive torque limit value", DT::Unsigned16, RWM, 3000));
-    o.push_back(var(0x60E1, "Negative torque limit value", DT::Unsigned16, RWM, 3000));
-    o.push_back(var(0x60F4, "Following error actual value", DT::Integer32, ROM));
-    o.push_back(var(0x60FC, "Position demand internal value", DT::Integer32, ROM));
-    o.push_back(var(0x60FD, "Digital inputs", DT::Unsigned32, ROM));
-    o.push_back(named_array(0x60FE, "Digital outputs", DT::Unsigned32, RWM,
+    o.push_back(var(obj::max_acceleration, "Max acceleration", RW, 100'000'000));
+    o.push_back(var(obj::max_deceleration, "Max deceleration", RW, 100'000'000));
+    o.push_back(var(obj::positive_torque_limit_value, "Positive torque limit value", RWM, 3000));
+    o.push_back(var(obj::negative_torque_limit_value, "Negative torque limit value", RWM, 3000));
+    o.push_back(var(obj::following_error_actual_value, "Following error actual value", ROM));
+    o.push_back(var(obj::position_demand_internal_value, "Position demand internal value", ROM));
+    o.push_back(var(obj::digital_inputs, "Digital inputs", ROM));
+    o.push_back(named_array(obj::digital_outputs::index, "Digital outputs", DT::Unsigned32, RWM,
                             {{"Physical outputs", 0}, {"Bit mask", 0}}));
-    o.push_back(var(0x60FF, "Target velocity", DT::Integer32, RWM));
+    o.push_back(var(obj::target_velocity, "Target velocity", RWM));
     // Supported drive modes: PP (bit 0), PV (2), PT (3), HM (5), CSP (7), CSV (8), CST (9).
-    o.push_back(var(0x6502, "Supported drive modes", DT::Unsigned32, a::RO, 0x000003AD));
+    o.push_back(var(obj::supported_drive_modes, "Supported drive modes", a::RO, 0x000003AD));
     return o;
 }
 

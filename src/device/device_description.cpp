@@ -1,5 +1,7 @@
 #include "device/device_description.hpp"
 
+#include "protocol/cia402_objects.hpp"
+
 namespace vecat::device {
 namespace {
 
@@ -56,6 +58,7 @@ DeviceDescription default_drive() {
     d.fmmus = {FmmuUsage::Outputs, FmmuUsage::Inputs, FmmuUsage::MailboxState};
 
     using DT = DataType;
+    namespace obj = protocol::obj;
     d.rx_pdos = {Pdo{0x1600,
                      "RxPDO 1 (CSP/CSV/CST)",
                      2,
@@ -63,13 +66,13 @@ DeviceDescription default_drive() {
                      false,
                      true,
                      {
-                         {0x6040, 0, 16, DT::Unsigned16, "Controlword"},
-                         {0x6060, 0, 8, DT::Integer8, "Modes of operation"},
+                         pdo_entry(obj::controlword, "Controlword"),
+                         pdo_entry(obj::modes_of_operation, "Modes of operation"),
                          {0x0000, 0, 8, DT::Unsigned8, ""},
-                         {0x607A, 0, 32, DT::Integer32, "Target position"},
-                         {0x60FF, 0, 32, DT::Integer32, "Target velocity"},
-                         {0x6071, 0, 16, DT::Integer16, "Target torque"},
-                         {0x60B8, 0, 16, DT::Unsigned16, "Touch probe function"},
+                         pdo_entry(obj::target_position, "Target position"),
+                         pdo_entry(obj::target_velocity, "Target velocity"),
+                         pdo_entry(obj::target_torque, "Target torque"),
+                         pdo_entry(obj::touch_probe_function, "Touch probe function"),
                      },
                      16,
                      {0x1601}},
@@ -80,9 +83,9 @@ DeviceDescription default_drive() {
                      false,
                      false,
                      {
-                         {0x6040, 0, 16, DT::Unsigned16, "Controlword"},
-                         {0x607A, 0, 32, DT::Integer32, "Target position"},
-                         {0x6081, 0, 32, DT::Unsigned32, "Profile velocity"},
+                         pdo_entry(obj::controlword, "Controlword"),
+                         pdo_entry(obj::target_position, "Target position"),
+                         pdo_entry(obj::profile_velocity, "Profile velocity"),
                      },
                      16,
                      {0x1600}},
@@ -95,16 +98,16 @@ DeviceDescription default_drive() {
                      false,
                      true,
                      {
-                         {0x6041, 0, 16, DT::Unsigned16, "Statusword"},
-                         {0x6061, 0, 8, DT::Integer8, "Modes of operation display"},
+                         pdo_entry(obj::statusword, "Statusword"),
+                         pdo_entry(obj::modes_of_operation_display, "Modes of operation display"),
                          {0x0000, 0, 8, DT::Unsigned8, ""},
-                         {0x6064, 0, 32, DT::Integer32, "Position actual value"},
-                         {0x606C, 0, 32, DT::Integer32, "Velocity actual value"},
-                         {0x6077, 0, 16, DT::Integer16, "Torque actual value"},
-                         {0x60F4, 0, 32, DT::Integer32, "Following error actual value"},
-                         {0x60FD, 0, 32, DT::Unsigned32, "Digital inputs"},
-                         {0x60B9, 0, 16, DT::Unsigned16, "Touch probe status"},
-                         {0x60BA, 0, 32, DT::Integer32, "Touch probe 1 positive value"},
+                         pdo_entry(obj::position_actual_value, "Position actual value"),
+                         pdo_entry(obj::velocity_actual_value, "Velocity actual value"),
+                         pdo_entry(obj::torque_actual_value, "Torque actual value"),
+                         pdo_entry(obj::following_error_actual_value, "Following error actual value"),
+                         pdo_entry(obj::digital_inputs, "Digital inputs"),
+                         pdo_entry(obj::touch_probe_status, "Touch probe status"),
+                         pdo_entry(obj::touch_probe_1_positive_value, "Touch probe 1 positive value"),
                      },
                      16,
                      {0x1A01}},
@@ -115,8 +118,8 @@ DeviceDescription default_drive() {
                      false,
                      false,
                      {
-                         {0x6041, 0, 16, DT::Unsigned16, "Statusword"},
-                         {0x6064, 0, 32, DT::Integer32, "Position actual value"},
+                         pdo_entry(obj::statusword, "Statusword"),
+                         pdo_entry(obj::position_actual_value, "Position actual value"),
                      },
                      16,
                      {0x1A00}},

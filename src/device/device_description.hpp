@@ -38,6 +38,14 @@ struct PdoEntry {
     std::string name;
 };
 
+// A mapping entry of a catalogue object: index, subindex, type and bit length from the catalogue.
+template <DataType T>
+PdoEntry pdo_entry(protocol::ObjectId<T> id, std::string name) {
+    static_assert(protocol::fixed_bit_length(T) > 0, "only fixed-size entries are mapped");
+    return PdoEntry{id.index, id.subindex, static_cast<std::uint8_t>(protocol::fixed_bit_length(T)), T,
+                    std::move(name)};
+}
+
 struct Pdo {
     std::uint16_t index = 0;  // 0x16xx RxPDO, 0x1Axx TxPDO
     std::string name;

@@ -7,6 +7,8 @@
 namespace vecat::device {
 namespace {
 
+namespace obj = protocol::obj;
+
 std::uint32_t mapping_value(const PdoEntry& e) {
     return (static_cast<std::uint32_t>(e.index) << 16) | (static_cast<std::uint32_t>(e.subindex) << 8) |
            e.bit_length;
@@ -68,21 +70,28 @@ ObjectDescription sync_parameter_object(std::uint16_t index, const DeviceDescrip
     const std::uint16_t supported = static_cast<std::uint16_t>(0x0003 | (dc ? 0x0004 : 0));
     // Default synchronisation: with the SM2 event (0x1C33 reports 0x22 "synchronous with SM2 event").
     const std::int64_t mode = outputs ? 0x0001 : 0x0022;
+    namespace sp = obj::sync_parameter;
     std::vector<EntryDescription> subs;
-    subs.push_back(make_entry(1, "Sync mode", DT::Unsigned16, access::RWPreop, mode));
-    subs.push_back(make_entry(2, "Cycle time", DT::Unsigned32, access::RWPreop, 1'000'000));
-    subs.push_back(make_entry(3, "Shift time", DT::Unsigned32, access::RO, 0));
-    subs.push_back(make_entry(4, "Sync modes supported", DT::Unsigned16, access::RO, supported));
-    subs.push_back(make_entry(5, "Minimum cycle time", DT::Unsigned32, access::RO, d.min_cycle_time_ns));
-    subs.push_back(make_entry(6, "Calc and copy time", DT::Unsigned32, access::RO, d.calc_copy_time_ns));
-    subs.push_back(make_entry(7, "Minimum delay time", DT::Unsigned32, access::RO, 0));
-    subs.push_back(make_entry(8, "Get cycle time", DT::Unsigned16, access::RW, 0));
-    subs.push_back(make_entry(9, "Delay time", DT::Unsigned32, access::RO, 0));
-    subs.push_back(make_entry(10, "Sync0 cycle time", DT::Unsigned32, access::RW, 0));
-    subs.push_back(make_entry(11, "SM event missed", DT::Unsigned16, access::RO, 0));
-    subs.push_back(make_entry(12, "Cycle time too small", DT::Unsigned16, access::RO, 0));
-    subs.push_back(make_entry(13, "Shift time too short", DT::Unsigned16, access::RO, 0));
-    subs.push_back(make_entry(32, "Sync error", DT::Boolean, access::RO | access::TxPdoMappable, 0));
+    subs.push_back(make_entry(sp::sync_mode, "Sync mode", DT::Unsigned16, access::RWPreop, mode));
+    subs.push_back(make_entry(sp::cycle_time, "Cycle time", DT::Unsigned32, access::RWPreop, 1'000'000));
+    subs.push_back(make_entry(sp::shift_time, "Shift time", DT::Unsigned32, access::RO, 0));
+    subs.push_back(
+        make_entry(sp::sync_modes_supported, "Sync modes supported", DT::Unsigned16, access::RO, supported));
+    subs.push_back(make_entry(sp::minimum_cycle_time, "Minimum cycle time", DT::Unsigned32, access::RO,
+                              d.min_cycle_time_ns));
+    subs.push_back(make_entry(sp::calc_and_copy_time, "Calc and copy time", DT::Unsigned32, access::RO,
+                              d.calc_copy_time_ns));
+    subs.push_back(make_entry(sp::minimum_delay_time, "Minimum delay time", DT::Unsigned32, access::RO, 0));
+    subs.push_back(make_entry(sp::get_cycle_time, "Get cycle time", DT::Unsigned16, access::RW, 0));
+    subs.push_back(make_entry(sp::delay_time, "Delay time", DT::Unsigned32, access::RO, 0));
+    subs.push_back(make_entry(sp::sync0_cycle_time, "Sync0 cycle time", DT::Unsigned32, access::RW, 0));
+    subs.push_back(make_entry(sp::sm_event_missed, "SM event missed", DT::Unsigned16, access::RO, 0));
+    subs.push_back(
+        make_entry(sp::cycle_time_too_small, "Cycle time too small", DT::Unsigned16, access::RO, 0));
+    subs.push_back(
+        make_entry(sp::shift_time_too_short, "Shift time too short", DT::Unsigned16, access::RO, 0));
+    subs.push_back(
+        make_entry(sp::sync_error, "Sync error", DT::Boolean, access::RO | access::TxPdoMappable, 0));
     return make_record(index, outputs ? "SM output parameter" : "SM input parameter", std::move(subs),
                        DT::SyncParameter);
 }
@@ -92,32 +101,36 @@ ObjectDescription sync_parameter_object(std::uint16_t index, const DeviceDescrip
 std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d) {
     using DT = DataType;
     std::vector<ObjectDescription> objs;
-    objs.push_back(make_var(0x1000, "Device type", DT::Unsigned32, access::RO, d.device_type));
-    objs.push_back(make_var(0x1001, "Error register", DT::Unsigned8, access::RO | access::TxPdoMappable, 0));
-    objs.push_back(make_string_var(0x1008, "Device name", d.name));
-    objs.push_back(make_string_var(0x1009, "Hardware version", d.hardware_version));
-    objs.push_back(make_string_var(0x100A, "Software version", d.software_version));
+    objs.push_back(make_var(obj::device_type, "Device type", access::RO, d.device_type));
+    objs.push_back(make_var(obj::error_register, "Error register", access::RO | access::TxPdoMappable, 0));
+    objs.push_back(make_string_var(obj::device_name.index, "Device name", d.name));
+    objs.push_back(make_string_var(obj::hardware_version.index, "Hardware version", d.hardware_version));
+    objs.push_back(make_string_var(obj::software_version.index, "Software version", d.software_version));
     // CiA 301 store parameters / restore default parameters: sub 1 all, 2 communication, 3 application,
     // 4 manufacturer area. A read gives the capability (bit 0: on command); "save" / "load" act.
     const std::vector<std::int64_t> groups = {1, 1, 1, 1};
-    objs.push_back(make_array(0x1010, "Store parameters", DT::Unsigned32, access::RW, groups));
-    objs.push_back(make_array(0x1011, "Restore default parameters", DT::Unsigned32, access::RW, groups));
+    objs.push_back(
+        make_array(obj::store_parameters::index, "Store parameters", DT::Unsigned32, access::RW, groups));
+    objs.push_back(make_array(obj::restore_default_parameters::index, "Restore default parameters",
+                              DT::Unsigned32, access::RW, groups));
     for (auto* o : {&objs[objs.size() - 2], &objs.back()}) {
         const char* names[] = {"All parameters", "Communication parameters", "Application parameters",
                                "Manufacturer parameters"};
         for (std::size_t i = 1; i < o->entries.size(); ++i)
             o->entries[i].name = names[i - 1];
     }
-    objs.push_back(
-        make_record(0x1018, "Identity",
-                    {make_entry(1, "Vendor ID", DT::Unsigned32, access::RO, d.identity.vendor_id),
-                     make_entry(2, "Product code", DT::Unsigned32, access::RO, d.identity.product_code),
-                     make_entry(3, "Revision", DT::Unsigned32, access::RO, d.identity.revision),
-                     make_entry(4, "Serial number", DT::Unsigned32, access::RO, d.identity.serial)},
-                    DT::Identity));
-    objs.push_back(make_record(0x10F1, "Error settings",
-                               {make_entry(1, "Local error reaction", DT::Unsigned32, access::RW, 1),
-                                make_entry(2, "Sync error counter limit", DT::Unsigned16, access::RW, 4)}));
+    objs.push_back(make_record(
+        obj::identity::index, "Identity",
+        {make_entry(obj::identity::vendor_id, "Vendor ID", access::RO, d.identity.vendor_id),
+         make_entry(obj::identity::product_code, "Product code", access::RO, d.identity.product_code),
+         make_entry(obj::identity::revision, "Revision", access::RO, d.identity.revision),
+         make_entry(obj::identity::serial_number, "Serial number", access::RO, d.identity.serial)},
+        DT::Identity));
+    objs.push_back(make_record(
+        obj::error_settings::index, "Error settings",
+        {make_entry(obj::error_settings::local_error_reaction, "Local error reaction", access::RW, 1),
+         make_entry(obj::error_settings::sync_error_counter_limit, "Sync error counter limit", access::RW,
+                    4)}));
     for (const auto& p : d.rx_pdos)
         objs.push_back(pdo_mapping_object(p, true));
     for (const auto& p : d.tx_pdos)
@@ -126,15 +139,18 @@ std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d) {
     std::vector<std::int64_t> sm_types;
     for (const auto& s : d.sync_managers)
         sm_types.push_back(static_cast<std::int64_t>(s.type));
-    objs.push_back(make_array(0x1C00, "Sync manager type", DT::Unsigned8, access::RO, sm_types));
+    objs.push_back(
+        make_array(obj::sync_manager_type, "Sync manager type", DT::Unsigned8, access::RO, sm_types));
     if (auto sm = d.sm_index_of_type(SmType::Outputs))
-        objs.push_back(
-            pdo_assign_object(static_cast<std::uint16_t>(0x1C10 + *sm), d.rx_pdos, "RxPDO assign"));
+        objs.push_back(pdo_assign_object(static_cast<std::uint16_t>(obj::sm_pdo_assign_first + *sm),
+                                         d.rx_pdos, "RxPDO assign"));
     if (auto sm = d.sm_index_of_type(SmType::Inputs))
-        objs.push_back(
-            pdo_assign_object(static_cast<std::uint16_t>(0x1C10 + *sm), d.tx_pdos, "TxPDO assign"));
-    if (d.sm_index_of_type(SmType::Outputs)) objs.push_back(sync_parameter_object(0x1C32, d, true));
-    if (d.sm_index_of_type(SmType::Inputs)) objs.push_back(sync_parameter_object(0x1C33, d, false));
+        objs.push_back(pdo_assign_object(static_cast<std::uint16_t>(obj::sm_pdo_assign_first + *sm),
+                                         d.tx_pdos, "TxPDO assign"));
+    if (d.sm_index_of_type(SmType::Outputs))
+        objs.push_back(sync_parameter_object(obj::sync_parameter::outputs, d, true));
+    if (d.sm_index_of_type(SmType::Inputs))
+        objs.push_back(sync_parameter_object(obj::sync_parameter::inputs, d, false));
 
     // Application objects; one with the index of a generated object replaces it.
     for (const auto& o : d.objects) {

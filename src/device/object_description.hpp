@@ -8,40 +8,17 @@
 #include <string_view>
 #include <vector>
 
+#include "protocol/objects.hpp"
+
 namespace vecat::device {
 
-// CoE base data types (ETG.1000.6 Table 64), as used in PDO entries and the dictionary.
-enum class DataType : std::uint16_t {
-    Boolean = 0x0001,
-    Integer8 = 0x0002,
-    Integer16 = 0x0003,
-    Integer32 = 0x0004,
-    Unsigned8 = 0x0005,
-    Unsigned16 = 0x0006,
-    Unsigned32 = 0x0007,
-    Real32 = 0x0008,
-    VisibleString = 0x0009,
-    OctetString = 0x000A,
-    UnicodeString = 0x000B,
-    Domain = 0x000F,
-    Integer24 = 0x0010,
-    Real64 = 0x0011,
-    Integer64 = 0x0015,
-    Unsigned24 = 0x0016,
-    Unsigned64 = 0x001B,
-    // ETG.1020 structure types of the communication area.
-    PdoMapping = 0x0021,
-    Identity = 0x0023,
-    SyncParameter = 0x0029,  // ETG.1000.6: record type of 0x1C32/0x1C33
-};
-
-// Bit length of a fixed-size base type; 0 for strings, domains and structures.
-unsigned fixed_bit_length(DataType t) noexcept;
-bool is_signed(DataType t) noexcept;
-bool is_real(DataType t) noexcept;
-// Strings, octet strings and domains: values whose length may be shorter than the entry's bit length.
-bool is_variable_length(DataType t) noexcept;
-std::string_view type_name(DataType t) noexcept;  // ESI spelling: "UINT", "DINT", "STRING"...
+// CoE base data types (ETG.1000.6 Table 64) and their properties, from the protocol library.
+using protocol::DataType;
+using protocol::fixed_bit_length;
+using protocol::is_real;
+using protocol::is_signed;
+using protocol::is_variable_length;
+using protocol::type_name;
 
 // Object code of the object description (ETG.1000.6 Table 46).
 enum class ObjectCode : std::uint8_t {
@@ -116,6 +93,19 @@ EntryDescription make_string_entry(std::uint8_t sub, std::string name, std::stri
 ObjectDescription make_var(std::uint16_t index, std::string name, DataType t, std::uint16_t access,
                            std::int64_t default_value = 0);
 ObjectDescription make_string_var(std::uint16_t index, std::string name, std::string_view text);
+// A VAR of a catalogue object: index and type from the catalogue (protocol/objects.hpp).
+template <DataType T>
+ObjectDescription make_var(protocol::ObjectId<T> id, std::string name, std::uint16_t access,
+                           std::int64_t default_value = 0) {
+    static_assert(fixed_bit_length(T) > 0, "a VAR of a fixed-size type");
+    return make_var(id.index, std::move(name), T, access, default_value);
+}
+// An entry of a catalogue record: subindex and type from the catalogue.
+template <DataType T>
+EntryDescription make_entry(protocol::ObjectId<T> id, std::string name, std::uint16_t access,
+                            std::int64_t default_value = 0) {
+    return make_entry(id.subindex, std::move(name), T, access, default_value);
+}
 // A RECORD whose subindex 0 (U8, read-only) holds the highest subindex.
 ObjectDescription make_record(std::uint16_t index, std::string name, std::vector<EntryDescription> subs,
                               DataType struct_type = DataType::Unsigned8);

@@ -2,6 +2,7 @@
 
 #include "cia402/drive.hpp"
 #include "coe/coe_application.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "protocol/registers.hpp"
 
 namespace vecat::telemetry {
@@ -32,15 +33,16 @@ struct Sampler::Slot {
     esc::Slave* slave = nullptr;
     coe::CoeApplication* coe = nullptr;  // nullptr: no CoE (status only)
     cia402::Drive* drive = nullptr;      // nullptr: no drive (no axis samples)
-    const coe::Entry* controlword = nullptr;
-    const coe::Entry* statusword = nullptr;
-    const coe::Entry* error_code = nullptr;
-    const coe::Entry* mode = nullptr;
-    const coe::Entry* position_demand = nullptr;
-    const coe::Entry* position_actual = nullptr;
-    const coe::Entry* velocity_actual = nullptr;
-    const coe::Entry* torque_actual = nullptr;
-    const coe::Entry* following_error = nullptr;
+    // The CiA 402 objects (unbound where the device has none: they read 0).
+    coe::Value<std::uint16_t> controlword;
+    coe::Value<std::uint16_t> statusword;
+    coe::Value<std::uint16_t> error_code;
+    coe::Value<std::int8_t> mode;
+    coe::Value<std::int32_t> position_demand;
+    coe::Value<std::int32_t> position_actual;
+    coe::Value<std::int32_t> velocity_actual;
+    coe::Value<std::int16_t> torque_actual;
+    coe::Value<std::int32_t> following_error;
     std::uint64_t last_exchange = 0;
     std::uint64_t exchanges_seen = 0;  // exchanges since sampling started (decimation)
     std::uint64_t samples = 0;
@@ -54,9 +56,11 @@ struct Sampler::Slot {
 
 namespace {
 
+namespace obj = protocol::obj;
+
 template <class T>
-T read(const coe::Entry* e) {
-    return e ? e->get<T>() : T{};
+T read(const coe::Value<T>& v) {
+    return v.get_or(T{});
 }
 
 }  // namespace
@@ -73,15 +77,15 @@ Sampler::Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt) : seg
         s.drive = dynamic_cast<cia402::Drive*>(&s.slave->app());
         if (s.coe) {
             auto& od = s.coe->dictionary();
-            s.controlword = od.find(0x6040, 0);
-            s.statusword = od.find(0x6041, 0);
-            s.error_code = od.find(0x603F, 0);
-            s.mode = od.find(0x6061, 0);
-            s.position_demand = od.find(0x6062, 0);
-            s.position_actual = od.find(0x6064, 0);
-            s.velocity_actual = od.find(0x606C, 0);
-            s.torque_actual = od.find(0x6077, 0);
-            s.following_error = od.find(0x60F4, 0);
+            s.controlword = coe::bind(od, obj::controlword);
+            s.statusword = coe::bind(od, obj::statusword);
+            s.error_code = coe::bind(od, obj::error_code);
+            s.mode = coe::bind(od, obj::modes_of_operation_display);
+            s.position_demand = coe::bind(od, obj::position_demand_value);
+            s.position_actual = coe::bind(od, obj::position_actual_value);
+            s.velocity_actual = coe::bind(od, obj::velocity_actual_value);
+            s.torque_actual = coe::bind(od, obj::torque_actual_value);
+            s.following_error = coe::bind(od, obj::following_error_actual_value);
             s.last_exchange = s.coe->exchanges();
             s.emergencies = s.coe->sdo_server().counters().emergencies_sent;
         }

@@ -12,8 +12,14 @@
 #include "faults/injector.hpp"
 #include "faults/twinsync_faults.hpp"
 #include "master/coe_client.hpp"
+#include "protocol/cia402.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "test_support.hpp"
 #include "twinsync/parameters.hpp"
+
+namespace cia = vecat::protocol::cia402;
+
+namespace obj = vecat::protocol::obj;
 
 namespace vecat::faults {
 namespace {
@@ -321,14 +327,14 @@ TEST_F(FaultTest, SdoAbortWithTheChosenCodeOnTheChosenObject) {
     up(1);
     master::CoeClient c(b->master, b->station(0));
     ASSERT_EQ(b->inject("sdo_abort slave=0 index=0x6060 code=0x08000022 count=1").substr(0, 2), "ok");
-    EXPECT_TRUE(c.upload(0x6041, 0).ok());  // another object: unaffected
-    ASSERT_NE(b->od0().find(0x6060, 0)->get<std::int8_t>(), 10);
-    const auto r = c.download_value<std::int8_t>(0x6060, 0, 10);
+    EXPECT_TRUE(c.upload(obj::statusword.index, 0).ok());  // another object: unaffected
+    ASSERT_NE(b->od0().find(obj::modes_of_operation)->get<std::int8_t>(), 10);
+    const auto r = c.download_value<std::int8_t>(obj::modes_of_operation.index, 0, 10);
     EXPECT_TRUE(r.transport_ok);
     EXPECT_EQ(static_cast<std::uint32_t>(r.abort), 0x08000022u);
-    EXPECT_NE(b->od0().find(0x6060, 0)->get<std::int8_t>(), 10);     // not executed
-    EXPECT_TRUE(c.download_value<std::int8_t>(0x6060, 0, 10).ok());  // count reached
-    EXPECT_EQ(b->od0().find(0x6060, 0)->get<std::int8_t>(), 10);
+    EXPECT_NE(b->od0().find(obj::modes_of_operation)->get<std::int8_t>(), 10);              // not executed
+    EXPECT_TRUE(c.download_value<std::int8_t>(obj::modes_of_operation.index, 0, 10).ok());  // count reached
+    EXPECT_EQ(b->od0().find(obj::modes_of_operation)->get<std::int8_t>(), 10);
     EXPECT_EQ(b->inj.counters().sdo_aborts, 1u);
 }
 
@@ -336,11 +342,11 @@ TEST_F(FaultTest, LostMailboxReplyTimesOutThoughTheRequestWasExecuted) {
     up(1);
     master::CoeClient c(b->master, b->station(0));
     ASSERT_EQ(b->inject("mailbox_lost_reply slave=0 count=1").substr(0, 2), "ok");
-    const auto r = c.download_value<std::int8_t>(0x6060, 0, 9);
+    const auto r = c.download_value<std::int8_t>(obj::modes_of_operation.index, 0, 9);
     EXPECT_FALSE(r.transport_ok);
-    EXPECT_EQ(b->od0().find(0x6060, 0)->get<std::int8_t>(), 9);
+    EXPECT_EQ(b->od0().find(obj::modes_of_operation)->get<std::int8_t>(), 9);
     EXPECT_EQ(b->inj.counters().mailbox_replies_lost, 1u);
-    EXPECT_TRUE(c.upload(0x6060, 0).ok());
+    EXPECT_TRUE(c.upload(obj::modes_of_operation.index, 0).ok());
 }
 
 struct DriveFaultCase {
@@ -352,21 +358,21 @@ struct DriveFaultTest : FaultTest, ::testing::WithParamInterface<DriveFaultCase>
 TEST_P(DriveFaultTest, StatuswordFaultBitErrorCodeAndEmergency) {
     up(1);
     auto& od = b->od0();
-    od.find(0x6060, 0)->set(std::int8_t{8});  // CSP: the drive holds its position
+    od.find(obj::modes_of_operation)->set(std::int8_t{8});  // CSP: the drive holds its position
     for (int cw : {0x06, 0x07, 0x0F}) {
-        od.find(0x6040, 0)->set(static_cast<std::uint16_t>(cw));
+        od.find(obj::controlword)->set(static_cast<std::uint16_t>(cw));
         b->advance(kMs);
     }
     master::CoeClient c(b->master, b->station(0));
-    auto sw = c.upload(0x6041, 0);
+    auto sw = c.upload(obj::statusword.index, 0);
     ASSERT_TRUE(sw.ok());
     ASSERT_EQ(ld_le16(sw.data.data()) & 0x6F, 0x27);
     ASSERT_EQ(b->inject(std::string(GetParam().kind) + " slave=0 id=f"), "ok f");
     b->advance(2 * kMs);
-    sw = c.upload(0x6041, 0);
+    sw = c.upload(obj::statusword.index, 0);
     ASSERT_TRUE(sw.ok());
-    EXPECT_TRUE(ld_le16(sw.data.data()) & 0x0008) << std::hex << ld_le16(sw.data.data());
-    const auto err = c.upload(0x603F, 0);
+    EXPECT_TRUE(ld_le16(sw.data.data()) & cia::sw::Fault) << std::hex << ld_le16(sw.data.data());
+    const auto err = c.upload(obj::error_code.index, 0);
     ASSERT_TRUE(err.ok());
     EXPECT_EQ(ld_le16(err.data.data()), GetParam().code);
     bool seen = false;
@@ -375,11 +381,11 @@ TEST_P(DriveFaultTest, StatuswordFaultBitErrorCodeAndEmergency) {
     EXPECT_TRUE(seen);
     // Cause removed, fault reset by the master: the drive leaves the fault state.
     b->inj.execute("clear f", b->now);
-    od.find(0x6040, 0)->set(std::uint16_t{0x80});
+    od.find(obj::controlword)->set(std::uint16_t{0x80});
     b->advance(2 * kMs);
-    sw = c.upload(0x6041, 0);
+    sw = c.upload(obj::statusword.index, 0);
     ASSERT_TRUE(sw.ok());
-    EXPECT_FALSE(ld_le16(sw.data.data()) & 0x0008);
+    EXPECT_FALSE(ld_le16(sw.data.data()) & cia::sw::Fault);
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinds, DriveFaultTest,

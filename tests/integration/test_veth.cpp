@@ -15,8 +15,14 @@
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
+#include "protocol/cia402.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "protocol/registers.hpp"
 #include "test_support.hpp"
+
+namespace cia = vecat::protocol::cia402;
+
+namespace obj = vecat::protocol::obj;
 
 using namespace vecat;
 using protocol::AlState;
@@ -234,10 +240,11 @@ TEST(VethCoe, RemapInPreOpReachesOpWithTheNewLayout) {
         ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
     // Then: the drive received the target position through the new mapping, and refuses to have it
     // written by SDO while it is mapped.
-    auto tp = c.upload(0x607A, 0);
+    auto tp = c.upload(obj::target_position.index, 0);
     ASSERT_TRUE(tp.ok());
     EXPECT_EQ(ld_le32(tp.data.data()), 123456u);
-    EXPECT_EQ(c.download_value<std::int32_t>(0x607A, 0, 1).abort, protocol::SdoAbort::MappedToRxPdo);
+    EXPECT_EQ(c.download_value<std::int32_t>(obj::target_position.index, 0, 1).abort,
+              protocol::SdoAbort::MappedToRxPdo);
     EXPECT_EQ(c.download_value<std::uint8_t>(0x1C12, 0, 0).abort, protocol::SdoAbort::WrongState);
 
     // A wrong SM2 length is refused at PREOP -> SAFEOP with 0x001D.
@@ -307,8 +314,8 @@ TEST(VethDrive, TwoDrivesEnableAndFollowCyclicPositions) {
     for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
         for (int i = 0; i < 20; ++i)
             misses += !cycle(cw, a0, b0);
-    EXPECT_EQ(sw(0) & 0x6F, 0x27) << std::hex << sw(0);
-    EXPECT_EQ(sw(1) & 0x6F, 0x27) << std::hex << sw(1);
+    EXPECT_EQ(cia::decode_state(sw(0)), cia::State::OperationEnabled) << std::hex << sw(0);
+    EXPECT_EQ(cia::decode_state(sw(1)), cia::State::OperationEnabled) << std::hex << sw(1);
     // 1000 cycles: drive 0 ramps forward at 500000 units/s, drive 1 backward at 250000 units/s.
     for (int k = 1; k <= 1000; ++k)
         misses += !cycle(0x0F, a0 + 500 * k, b0 - 250 * k);
@@ -322,7 +329,7 @@ TEST(VethDrive, TwoDrivesEnableAndFollowCyclicPositions) {
     EXPECT_FALSE(sw(0) & (1u << 13)) << "no following error";
     for (int i = 0; i < 5; ++i)
         cycle(0x00, a0 + 500'000, b0 - 250'000);
-    EXPECT_EQ(sw(0) & 0x4F, 0x40);  // disable voltage: switch on disabled
+    EXPECT_EQ(cia::decode_state(sw(0)), cia::State::SwitchOnDisabled);  // disable voltage: switch on disabled
     ASSERT_TRUE(m.request_state(AlState::Init));
     EXPECT_EQ(vecat.stop(), 0);
     std::filesystem::remove(pcap);

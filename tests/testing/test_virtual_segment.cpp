@@ -6,7 +6,10 @@
 #include <cstdlib>
 
 #include "net/raw_socket.hpp"
+#include "protocol/cia402.hpp"
 #include "testing/virtual_segment.hpp"
+
+namespace cia = vecat::protocol::cia402;
 
 namespace vecat::testing {
 namespace {
@@ -22,7 +25,7 @@ TEST(VirtualSegment, BringsTheDrivesToOpAndEnablesThem) {
     const std::uint64_t t0 = vs.now_ns();
     ASSERT_TRUE(vs.enable(0));
     EXPECT_GT(vs.now_ns(), t0);  // enabling took simulated cycles
-    EXPECT_EQ(vs.statusword(0) & 0x6F, 0x27);
+    EXPECT_EQ(cia::decode_state(vs.statusword(0)), cia::State::OperationEnabled);
     EXPECT_NE(vs.drive(1).cia402_state(), cia402::State::OperationEnabled);
     // A CSP set-point is followed.
     const std::int32_t p0 = vs.position(0);

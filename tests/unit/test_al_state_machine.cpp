@@ -2,7 +2,10 @@
 // configuration checks and their AL status codes, the watchdog.
 #include <gtest/gtest.h>
 
+#include "protocol/cia402_objects.hpp"
 #include "test_support.hpp"
+
+namespace obj = vecat::protocol::obj;
 
 using namespace vecat;
 using namespace vecat::test;
@@ -173,7 +176,7 @@ TEST(AlStateMachine, ProcessDataWatchdogDropsToSafeOp) {
     auto out = b.master.outputs(0);
     out[0] = 0x0F;  // controlword, the first object of RxPDO 0x1600
     b.master.exchange_process_data();
-    auto& controlword = *b.od().find(0x6040, 0);
+    auto& controlword = *b.od().find(obj::controlword);
     EXPECT_EQ(controlword.get<std::uint16_t>(), 0x0F);
     b.advance(50'000'000);  // 50 ms: within the 100 ms default
     EXPECT_EQ(b.slave().state(), S::Op);
@@ -188,8 +191,8 @@ TEST(AlStateMachine, ProcessDataWatchdogDropsToSafeOp) {
 TEST(AlStateMachine, InputsValidInSafeOpOutputsAppliedOnlyInOp) {
     Bench b(1);
     reach(b, S::SafeOp);
-    b.od().find(0x6041, 0)->set(std::uint16_t{0x5A});  // statusword, first in TxPDO 0x1A00
-    auto& controlword = *b.od().find(0x6040, 0);
+    b.od().find(obj::statusword)->set(std::uint16_t{0x5A});  // statusword, first in TxPDO 0x1A00
+    auto& controlword = *b.od().find(obj::controlword);
     b.master.outputs(0)[0] = 0x77;
     b.master.exchange_process_data();
     b.master.exchange_process_data();

@@ -10,7 +10,10 @@
 
 #include "coe/coe_application.hpp"
 #include "master/coe_client.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "test_support.hpp"
+
+namespace obj = vecat::protocol::obj;
 
 using namespace vecat;
 using namespace vecat::test;
@@ -580,8 +583,8 @@ TEST(DcSyncMode, Sync0DrivesTheCycleAndTheObjectsTellIt) {
     EXPECT_EQ(b.od_get(0x1C33, 1), 2u);
     EXPECT_EQ(b.od_get(0x1C32, 2), 1'000'000u);
     EXPECT_EQ(b.od_get(0x1C32, 10), 1'000'000u);
-    EXPECT_EQ(b.od_get(0x60C2, 1), 1u);
-    EXPECT_EQ(static_cast<std::int8_t>(b.od_get(0x60C2, 2)), -3);
+    EXPECT_EQ(b.od_get(obj::interpolation_time_period::index, 1), 1u);
+    EXPECT_EQ(static_cast<std::int8_t>(b.od_get(obj::interpolation_time_period::index, 2)), -3);
     EXPECT_EQ(b.app().sync_mode(), coe::SyncMode::DcSync0);
     EXPECT_EQ(b.app().cycle_time_ns(), 1'000'000u);
     master::CoeClient c(b.master, st);
@@ -610,8 +613,8 @@ TEST(DcSyncMode, InterpolationPeriodFollows250us) {
     b.request(AlState::SafeOp);
     b.cycle();
     ASSERT_EQ(b.status().state(), AlState::SafeOp);
-    EXPECT_EQ(b.od_get(0x60C2, 1), 250u);
-    EXPECT_EQ(static_cast<std::int8_t>(b.od_get(0x60C2, 2)), -6);
+    EXPECT_EQ(b.od_get(obj::interpolation_time_period::index, 1), 250u);
+    EXPECT_EQ(static_cast<std::int8_t>(b.od_get(obj::interpolation_time_period::index, 2)), -6);
     EXPECT_EQ(b.app().cycle_time_ns(), 250'000u);
 }
 

@@ -2,12 +2,19 @@
 // values, length and range checks, SDO access per AL state, complete access layout and its undo.
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <stdexcept>
+#include <type_traits>
+
 #include <string>
 #include <tuple>
 #include <vector>
 
 #include "coe/object_dictionary.hpp"
 #include "device/device_description.hpp"
+#include "protocol/cia402_objects.hpp"
+
+namespace obj = vecat::protocol::obj;
 
 using namespace vecat;
 using namespace vecat::coe;
@@ -64,6 +71,32 @@ TEST_F(DefaultDictionary, EveryDescribedObjectAndEntryIsFound) {
     }
 }
 
+// Typed handles: bound once against the entry's data type, then plain loads and stores.
+TEST_F(DefaultDictionary, TypedHandlesCheckTheEntryTypeWhenTheyAreBound) {
+    auto cw = coe::bind(od, obj::controlword);  // UNSIGNED16: a Value<std::uint16_t>
+    static_assert(std::is_same_v<decltype(cw), coe::Value<std::uint16_t>>);
+    ASSERT_TRUE(cw.bound());
+    cw.set(0x1234);
+    EXPECT_EQ(od.find(obj::controlword)->get<std::uint16_t>(), 0x1234);
+    EXPECT_EQ(cw.get(), 0x1234);
+    auto limit = coe::bind(od, obj::software_position_limit::min);  // INTEGER32, subindex 1
+    EXPECT_EQ(limit.get(), std::numeric_limits<std::int32_t>::min());
+    // Wrong width or signedness: refused when bound, not cut at every access.
+    EXPECT_THROW(coe::bind<std::int32_t>(od, obj::profile_velocity.index), std::invalid_argument);
+    EXPECT_THROW(coe::bind<std::uint8_t>(od, obj::controlword.index), std::invalid_argument);
+    EXPECT_THROW(coe::bind<float>(od, obj::target_position.index), std::invalid_argument);
+    // The same width with the other signedness only when asked (a vendor's dictionary).
+    EXPECT_NO_THROW(coe::bind<std::int32_t>(od, obj::profile_velocity.index, 0, coe::Match::SameWidth));
+    auto conv = coe::bind<std::uint32_t>(od, obj::controlword.index, 0, coe::Match::Convert);
+    EXPECT_TRUE(conv.converts());
+    EXPECT_EQ(conv.get(), 0x1234u);
+    // An object the dictionary does not have: unbound, the fallback, writes go nowhere.
+    coe::Value<std::uint16_t> none = coe::bind<std::uint16_t>(od, 0x5FFF);
+    EXPECT_FALSE(none.bound());
+    EXPECT_EQ(none.get_or(7), 7);
+    none.set(1);
+}
+
 TEST_F(DefaultDictionary, CommunicationAreaObjectsExist) {
     for (int i : {0x1000, 0x1001, 0x1008, 0x1009, 0x100A, 0x1018, 0x10F1, 0x1600, 0x1601, 0x1602,
                   0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x1C00, 0x1C12, 0x1C13, 0x1C32, 0x1C33})
@@ -75,7 +108,7 @@ TEST_F(DefaultDictionary, UnknownIndexOrSubindexIsNotFound) {
     EXPECT_EQ(od.find(0x0000), nullptr);
     EXPECT_EQ(od.find(0xFFFF), nullptr);
     EXPECT_EQ(od.find(0x1018, 5), nullptr);
-    EXPECT_EQ(od.find(0x6040, 1), nullptr);
+    EXPECT_EQ(od.find(obj::controlword.index, 1), nullptr);
     // 0x1C32 has subindexes 0..13 and 32: the ones in between do not exist.
     EXPECT_NE(od.find(0x1C32, 13), nullptr);
     EXPECT_EQ(od.find(0x1C32, 14), nullptr);
@@ -194,7 +227,7 @@ TEST_F(DefaultDictionary, IdentityAndDeviceNameComeFromTheDescription) {
 // ---- typed values ----
 
 TEST_F(DefaultDictionary, AsInt64SignExtendsSignedTypesOnly) {
-    Entry& i8 = *od.find(0x6060, 0);  // INTEGER8
+    Entry& i8 = *od.find(obj::modes_of_operation);  // INTEGER8
     i8.set(std::uint8_t{0xF6});
     EXPECT_EQ(i8.as_int64(), -10);
     i8.set(std::int8_t{127});
@@ -202,7 +235,7 @@ TEST_F(DefaultDictionary, AsInt64SignExtendsSignedTypesOnly) {
     i8.set(std::uint8_t{0x80});
     EXPECT_EQ(i8.as_int64(), -128);
 
-    Entry& i16 = *od.find(0x605A, 0);  // INTEGER16
+    Entry& i16 = *od.find(obj::quick_stop_option_code);  // INTEGER16
     i16.set(std::uint16_t{0xFFFE});
     EXPECT_EQ(i16.as_int64(), -2);
     i16.set(std::uint16_t{0x7FFF});
@@ -210,11 +243,11 @@ TEST_F(DefaultDictionary, AsInt64SignExtendsSignedTypesOnly) {
     i16.set(std::uint16_t{0x8000});
     EXPECT_EQ(i16.as_int64(), -32768);
 
-    Entry& i32 = *od.find(0x607A, 0);  // INTEGER32
+    Entry& i32 = *od.find(obj::target_position);  // INTEGER32
     i32.set(std::int32_t{-100000});
     EXPECT_EQ(i32.as_int64(), -100000);
 
-    Entry& u16 = *od.find(0x6040, 0);  // UNSIGNED16: no sign extension
+    Entry& u16 = *od.find(obj::controlword);  // UNSIGNED16: no sign extension
     u16.set(std::uint16_t{0xFFFF});
     EXPECT_EQ(u16.as_int64(), 0xFFFF);
     EXPECT_EQ(u16.as_uint64(), 0xFFFFu);
@@ -224,7 +257,7 @@ TEST_F(DefaultDictionary, AsInt64SignExtendsSignedTypesOnly) {
 }
 
 TEST_F(DefaultDictionary, GetSetAreLittleEndian) {
-    Entry& e = *od.find(0x607A, 0);
+    Entry& e = *od.find(obj::target_position);
     e.set(std::int32_t{0x12345678});
     EXPECT_EQ(value_of(e), (Buf{0x78, 0x56, 0x34, 0x12}));
     EXPECT_EQ(e.get<std::int32_t>(), 0x12345678);
@@ -245,7 +278,7 @@ TEST_F(DefaultDictionary, AssignCutsLongInputAndKeepsStringLengths) {
     label.reset_to_default();
     EXPECT_EQ(value_of(label), (Buf{'a', 'x', 'i', 's'}));
 
-    Entry& u16 = *od.find(0x6040, 0);  // fixed size: always 2 bytes
+    Entry& u16 = *od.find(obj::controlword);  // fixed size: always 2 bytes
     u16.assign(cb(Buf{0x11, 0x22, 0x33}));
     EXPECT_EQ(value_of(u16), (Buf{0x11, 0x22}));
     u16.assign(cb(Buf{0x44}));
@@ -256,16 +289,16 @@ TEST_F(DefaultDictionary, AssignCutsLongInputAndKeepsStringLengths) {
 // ---- checks ----
 
 TEST_F(DefaultDictionary, CheckLengthOfFixedAndVariableTypes) {
-    const Entry& u16 = *od.find(0x6066, 0);
+    const Entry& u16 = *od.find(obj::following_error_time_out);
     EXPECT_EQ(check_length(u16, 2), SdoAbort::None);
     EXPECT_EQ(check_length(u16, 1), SdoAbort::LengthTooLow);
     EXPECT_EQ(check_length(u16, 0), SdoAbort::LengthTooLow);
     EXPECT_EQ(check_length(u16, 4), SdoAbort::LengthTooHigh);
-    const Entry& u32 = *od.find(0x6065, 0);
+    const Entry& u32 = *od.find(obj::following_error_window);
     EXPECT_EQ(check_length(u32, 4), SdoAbort::None);
     EXPECT_EQ(check_length(u32, 3), SdoAbort::LengthTooLow);
     EXPECT_EQ(check_length(u32, 5), SdoAbort::LengthTooHigh);
-    const Entry& i8 = *od.find(0x6060, 0);
+    const Entry& i8 = *od.find(obj::modes_of_operation);
     EXPECT_EQ(check_length(i8, 1), SdoAbort::None);
     EXPECT_EQ(check_length(i8, 2), SdoAbort::LengthTooHigh);
     // Strings: anything up to the capacity.
@@ -277,20 +310,20 @@ TEST_F(DefaultDictionary, CheckLengthOfFixedAndVariableTypes) {
 }
 
 TEST_F(DefaultDictionary, CheckRangeOfSignedAndUnsignedEntries) {
-    const Entry& qs = *od.find(0x605A, 0);  // INTEGER16, 0..8
+    const Entry& qs = *od.find(obj::quick_stop_option_code);  // INTEGER16, 0..8
     EXPECT_EQ(check_range(qs, cb(Buf{0x00, 0x00})), SdoAbort::None);
     EXPECT_EQ(check_range(qs, cb(Buf{0x08, 0x00})), SdoAbort::None);
     EXPECT_EQ(check_range(qs, cb(Buf{0x09, 0x00})), SdoAbort::ValueTooHigh);
     EXPECT_EQ(check_range(qs, cb(Buf{0xFF, 0xFF})), SdoAbort::ValueTooLow);  // -1, not 65535
     EXPECT_EQ(check_range(qs, cb(Buf{0x00, 0x80})), SdoAbort::ValueTooLow);  // -32768
 
-    const Entry& sd = *od.find(0x605B, 0);  // INTEGER16, -1..1
+    const Entry& sd = *od.find(obj::shutdown_option_code);  // INTEGER16, -1..1
     EXPECT_EQ(check_range(sd, cb(Buf{0xFF, 0xFF})), SdoAbort::None);
     EXPECT_EQ(check_range(sd, cb(Buf{0xFE, 0xFF})), SdoAbort::ValueTooLow);
     EXPECT_EQ(check_range(sd, cb(Buf{0x02, 0x00})), SdoAbort::ValueTooHigh);
 
-    const Entry& ip = *od.find(0x60C2, 2);                      // INTEGER8, -6..63
-    EXPECT_EQ(check_range(ip, cb(Buf{0xFA})), SdoAbort::None);  // -6
+    const Entry& ip = *od.find(obj::interpolation_time_period::time_index);  // INTEGER8, -6..63
+    EXPECT_EQ(check_range(ip, cb(Buf{0xFA})), SdoAbort::None);               // -6
     EXPECT_EQ(check_range(ip, cb(Buf{0xF9})), SdoAbort::ValueTooLow);
     EXPECT_EQ(check_range(ip, cb(Buf{0x3F})), SdoAbort::None);
     EXPECT_EQ(check_range(ip, cb(Buf{0x40})), SdoAbort::ValueTooHigh);
@@ -302,8 +335,8 @@ TEST_F(DefaultDictionary, CheckRangeOfSignedAndUnsignedEntries) {
     EXPECT_EQ(check_range(assign, cb(Buf{0xFF})), SdoAbort::ValueTooHigh);  // 255, not -1
 
     // No declared range: every value of the type is accepted.
-    EXPECT_EQ(check_range(*od.find(0x6040, 0), cb(Buf{0xFF, 0xFF})), SdoAbort::None);
-    EXPECT_EQ(check_range(*od.find(0x607A, 0), cb(Buf{0x00, 0x00, 0x00, 0x80})), SdoAbort::None);
+    EXPECT_EQ(check_range(*od.find(obj::controlword), cb(Buf{0xFF, 0xFF})), SdoAbort::None);
+    EXPECT_EQ(check_range(*od.find(obj::target_position), cb(Buf{0x00, 0x00, 0x00, 0x80})), SdoAbort::None);
     EXPECT_EQ(check_range(*od.find(0x2010, 0), cb(Buf{'a'})), SdoAbort::None);
 }
 
@@ -438,25 +471,32 @@ TEST_F(DefaultDictionary, NoSdoAccessInInit) {
     std::size_t len = 0;
     EXPECT_EQ(od.upload(0x1018, 1, false, AlState::Init, Bytes(out.data(), out.size()), len),
               SdoAbort::WrongState);
-    EXPECT_EQ(od.download(0x6066, 0, false, AlState::Init, cb(Buf{1, 0})), SdoAbort::WrongState);
-    EXPECT_EQ(od.download(0x6066, 0, false, AlState::PreOp, cb(Buf{1, 0})), SdoAbort::None);
+    EXPECT_EQ(od.download(obj::following_error_time_out.index, 0, false, AlState::Init, cb(Buf{1, 0})),
+              SdoAbort::WrongState);
+    EXPECT_EQ(od.download(obj::following_error_time_out.index, 0, false, AlState::PreOp, cb(Buf{1, 0})),
+              SdoAbort::None);
 }
 
 TEST_F(DefaultDictionary, DownloadChecksInOrder) {
     EXPECT_EQ(od.download(0x1234, 0, false, AlState::PreOp, cb(Buf{1})), SdoAbort::ObjectDoesNotExist);
-    EXPECT_EQ(od.download(0x6040, 1, false, AlState::PreOp, cb(Buf{1, 0})), SdoAbort::SubindexDoesNotExist);
+    EXPECT_EQ(od.download(obj::controlword.index, 1, false, AlState::PreOp, cb(Buf{1, 0})),
+              SdoAbort::SubindexDoesNotExist);
     EXPECT_EQ(od.download(0x1018, 1, false, AlState::PreOp, cb(Buf{1, 0, 0, 0})), SdoAbort::ReadOnly);
     EXPECT_EQ(od.download(0x1C12, 0, false, AlState::SafeOp, cb(Buf{1})), SdoAbort::WrongState);
-    EXPECT_EQ(od.download(0x6066, 0, false, AlState::PreOp, cb(Buf{1, 0, 0, 0})), SdoAbort::LengthTooHigh);
-    EXPECT_EQ(od.download(0x6066, 0, false, AlState::PreOp, cb(Buf{1})), SdoAbort::LengthTooLow);
-    EXPECT_EQ(od.download(0x605A, 0, false, AlState::PreOp, cb(Buf{9, 0})), SdoAbort::ValueTooHigh);
-    EXPECT_EQ(od.find(0x605A, 0)->as_int64(), 2);  // refused writes change nothing
-    EXPECT_EQ(od.download(0x605A, 0, false, AlState::Op, cb(Buf{8, 0})), SdoAbort::None);
-    EXPECT_EQ(od.find(0x605A, 0)->as_int64(), 8);
+    EXPECT_EQ(od.download(obj::following_error_time_out.index, 0, false, AlState::PreOp, cb(Buf{1, 0, 0, 0})),
+              SdoAbort::LengthTooHigh);
+    EXPECT_EQ(od.download(obj::following_error_time_out.index, 0, false, AlState::PreOp, cb(Buf{1})),
+              SdoAbort::LengthTooLow);
+    EXPECT_EQ(od.download(obj::quick_stop_option_code.index, 0, false, AlState::PreOp, cb(Buf{9, 0})),
+              SdoAbort::ValueTooHigh);
+    EXPECT_EQ(od.find(obj::quick_stop_option_code)->as_int64(), 2);  // refused writes change nothing
+    EXPECT_EQ(od.download(obj::quick_stop_option_code.index, 0, false, AlState::Op, cb(Buf{8, 0})),
+              SdoAbort::None);
+    EXPECT_EQ(od.find(obj::quick_stop_option_code)->as_int64(), 8);
 }
 
 TEST_F(DefaultDictionary, DownloadHooksValidateStoreAndRefresh) {
-    Entry& e = *od.find(0x6066, 0);
+    Entry& e = *od.find(obj::following_error_time_out);
     int after = 0;
     e.hooks().on_download = [](const Entry&, ConstBytes v) {
         return v[0] == 0x77 ? SdoAbort::CannotTransfer : SdoAbort::None;
@@ -465,16 +505,19 @@ TEST_F(DefaultDictionary, DownloadHooksValidateStoreAndRefresh) {
         ++after;
         EXPECT_EQ(x.get<std::uint16_t>(), 0x0102);  // already stored
     };
-    EXPECT_EQ(od.download(0x6066, 0, false, AlState::PreOp, cb(Buf{0x77, 0x00})), SdoAbort::CannotTransfer);
+    EXPECT_EQ(od.download(obj::following_error_time_out.index, 0, false, AlState::PreOp, cb(Buf{0x77, 0x00})),
+              SdoAbort::CannotTransfer);
     EXPECT_EQ(e.get<std::uint16_t>(), 10u);
     EXPECT_EQ(after, 0);
-    EXPECT_EQ(od.download(0x6066, 0, false, AlState::PreOp, cb(Buf{0x02, 0x01})), SdoAbort::None);
+    EXPECT_EQ(od.download(obj::following_error_time_out.index, 0, false, AlState::PreOp, cb(Buf{0x02, 0x01})),
+              SdoAbort::None);
     EXPECT_EQ(after, 1);
 
-    od.find(0x6041, 0)->hooks().before_upload = [](Entry& x) { x.set(std::uint16_t{0x1234}); };
+    od.find(obj::statusword)->hooks().before_upload = [](Entry& x) { x.set(std::uint16_t{0x1234}); };
     Buf out(4);
     std::size_t len = 0;
-    ASSERT_EQ(od.upload(0x6041, 0, false, AlState::Op, Bytes(out.data(), out.size()), len), SdoAbort::None);
+    ASSERT_EQ(od.upload(obj::statusword.index, 0, false, AlState::Op, Bytes(out.data(), out.size()), len),
+              SdoAbort::None);
     EXPECT_EQ(Buf(out.begin(), out.begin() + 2), (Buf{0x34, 0x12}));
 }
 
@@ -482,19 +525,22 @@ TEST_F(DefaultDictionary, DownloadGuardRunsFirst) {
     od.download_guard = [](const Entry& e, AlState st) {
         return e.desc().subindex == 0 && st == AlState::Op ? SdoAbort::LocalControl : SdoAbort::None;
     };
-    EXPECT_EQ(od.download(0x6066, 0, false, AlState::Op, cb(Buf{1, 0})), SdoAbort::LocalControl);
-    EXPECT_EQ(od.download(0x6066, 0, false, AlState::PreOp, cb(Buf{1, 0})), SdoAbort::None);
+    EXPECT_EQ(od.download(obj::following_error_time_out.index, 0, false, AlState::Op, cb(Buf{1, 0})),
+              SdoAbort::LocalControl);
+    EXPECT_EQ(od.download(obj::following_error_time_out.index, 0, false, AlState::PreOp, cb(Buf{1, 0})),
+              SdoAbort::None);
 }
 
 TEST_F(DefaultDictionary, CompleteAccessRefusesVarObjectsAndHighSubindexes) {
     Buf out(od.max_transfer_size());
     std::size_t len = 0;
-    EXPECT_EQ(od.upload(0x6040, 0, true, AlState::PreOp, Bytes(out.data(), out.size()), len),
+    EXPECT_EQ(od.upload(obj::controlword.index, 0, true, AlState::PreOp, Bytes(out.data(), out.size()), len),
               SdoAbort::UnsupportedAccess);
     EXPECT_EQ(od.upload(0x1018, 2, true, AlState::PreOp, Bytes(out.data(), out.size()), len),
               SdoAbort::UnsupportedAccess);
     EXPECT_EQ(od.download(0x1018, 2, true, AlState::PreOp, cb(Buf(16))), SdoAbort::UnsupportedAccess);
-    EXPECT_EQ(od.download(0x6040, 0, true, AlState::PreOp, cb(Buf(2))), SdoAbort::UnsupportedAccess);
+    EXPECT_EQ(od.download(obj::controlword.index, 0, true, AlState::PreOp, cb(Buf(2))),
+              SdoAbort::UnsupportedAccess);
 }
 
 TEST_F(DefaultDictionary, CompleteAccessDownloadLengths) {

@@ -12,7 +12,10 @@
 #include "coe/parameter_store.hpp"
 #include "device/device_description.hpp"
 #include "master/coe_client.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "test_support.hpp"
+
+namespace obj = vecat::protocol::obj;
 
 using namespace vecat;
 using namespace vecat::coe;
@@ -152,7 +155,7 @@ TEST_F(ParameterStoreTest, ProcessValuesAreNotStored) {
     const auto r = load_parameter_file(path);
     ASSERT_EQ(r.status, LoadStatus::Loaded);
     for (const auto& rec : r.set.records) {
-        EXPECT_NE(rec.index, 0x6040) << "controlword is the master's, not a setting";
+        EXPECT_NE(rec.index, obj::controlword.index) << "controlword is the master's, not a setting";
         EXPECT_NE(rec.index, 0x1010);
         EXPECT_NE(rec.index, 0x1011);
     }

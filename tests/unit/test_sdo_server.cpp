@@ -13,8 +13,11 @@
 #include "device/device_description.hpp"
 #include "esc/mailbox.hpp"
 #include "master/coe_client.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "protocol/coe.hpp"
 #include "test_support.hpp"
+
+namespace obj = vecat::protocol::obj;
 
 using namespace vecat;
 using namespace vecat::coe;
@@ -251,7 +254,8 @@ TEST_F(Sdo, ExpeditedUploadOfU32) {
 
 TEST_F(Sdo, ExpeditedUploadOfSignedValue) {
     // 0x60C2:02 Interpolation time index, INTEGER8 default -3.
-    EXPECT_EQ(send(upload_req(0x60C2, 2)), (Buf{0x00, 0x30, 0x4F, 0xC2, 0x60, 0x02, 0xFD, 0x00, 0x00, 0x00}));
+    EXPECT_EQ(send(upload_req(obj::interpolation_time_period::index, 2)),
+              (Buf{0x00, 0x30, 0x4F, 0xC2, 0x60, 0x02, 0xFD, 0x00, 0x00, 0x00}));
 }
 
 TEST_F(Sdo, NormalUploadOfDeviceName) {
@@ -406,24 +410,30 @@ TEST_F(Sdo, NewRequestOrResetEndsASegmentedUpload) {
 
 TEST_F(Sdo, ExpeditedDownloadOfI8AndReadBack) {
     // 0x6060 Modes of operation := -3 (INTEGER8): command 0x2F (size indicated, 3 bytes unused).
-    EXPECT_EQ(send(sdo_req(0x2F, 0x6060, 0, {0xFD})), download_ok(0x6060, 0));
-    EXPECT_EQ(od().find(0x6060, 0)->as_int64(), -3);
-    EXPECT_EQ(send(upload_req(0x6060, 0)), (Buf{0x00, 0x30, 0x4F, 0x60, 0x60, 0x00, 0xFD, 0x00, 0x00, 0x00}));
+    EXPECT_EQ(send(sdo_req(0x2F, obj::modes_of_operation.index, 0, {0xFD})),
+              download_ok(obj::modes_of_operation.index, 0));
+    EXPECT_EQ(od().find(obj::modes_of_operation)->as_int64(), -3);
+    EXPECT_EQ(send(upload_req(obj::modes_of_operation.index, 0)),
+              (Buf{0x00, 0x30, 0x4F, 0x60, 0x60, 0x00, 0xFD, 0x00, 0x00, 0x00}));
     EXPECT_EQ(app.sdo_server().counters().sdo_downloads, 1u);
 }
 
 TEST_F(Sdo, ExpeditedDownloadOfI32AndReadBack) {
-    EXPECT_EQ(send(sdo_req(0x23, 0x607A, 0, le32(0xFFFE7960))), download_ok(0x607A, 0));  // -100000
-    EXPECT_EQ(od().find(0x607A, 0)->as_int64(), -100000);
-    EXPECT_EQ(send(upload_req(0x607A, 0)), (Buf{0x00, 0x30, 0x43, 0x7A, 0x60, 0x00, 0x60, 0x79, 0xFE, 0xFF}));
+    EXPECT_EQ(send(sdo_req(0x23, obj::target_position.index, 0, le32(0xFFFE7960))),
+              download_ok(obj::target_position.index, 0));  // -100000
+    EXPECT_EQ(od().find(obj::target_position)->as_int64(), -100000);
+    EXPECT_EQ(send(upload_req(obj::target_position.index, 0)),
+              (Buf{0x00, 0x30, 0x43, 0x7A, 0x60, 0x00, 0x60, 0x79, 0xFE, 0xFF}));
 }
 
 TEST_F(Sdo, ExpeditedDownloadWithoutSizeUsesTheEntrySize) {
     // Command 0x22: expedited, size not indicated; the 1-byte entry takes the first data byte.
-    EXPECT_EQ(send(sdo_req(0x22, 0x6060, 0, {0x09, 0xEE, 0xEE, 0xEE})), download_ok(0x6060, 0));
-    EXPECT_EQ(od().find(0x6060, 0)->as_int64(), 9);
-    EXPECT_EQ(send(sdo_req(0x22, 0x6072, 0, {0x34, 0x12, 0xEE, 0xEE})), download_ok(0x6072, 0));
-    EXPECT_EQ(od().find(0x6072, 0)->as_uint64(), 0x1234u);
+    EXPECT_EQ(send(sdo_req(0x22, obj::modes_of_operation.index, 0, {0x09, 0xEE, 0xEE, 0xEE})),
+              download_ok(obj::modes_of_operation.index, 0));
+    EXPECT_EQ(od().find(obj::modes_of_operation)->as_int64(), 9);
+    EXPECT_EQ(send(sdo_req(0x22, obj::max_torque.index, 0, {0x34, 0x12, 0xEE, 0xEE})),
+              download_ok(obj::max_torque.index, 0));
+    EXPECT_EQ(od().find(obj::max_torque)->as_uint64(), 0x1234u);
 }
 
 TEST_F(Sdo, NormalDownloadOfString) {
@@ -525,11 +535,14 @@ TEST_F(Sdo, DownloadSegmentWithoutTransferAborts) {
 
 TEST_F(Sdo, NormalDownloadOfFixedSizeValue) {
     // A U32 written by normal transfer, and one whose announced size is wrong.
-    EXPECT_EQ(send(normal_req(0x6081, 0, 4, le32(123456))), download_ok(0x6081, 0));
-    EXPECT_EQ(read_u32(0x6081, 0), 123456u);
-    EXPECT_EQ(send(normal_req(0x6081, 0, 5, {1, 2, 3, 4, 5})), abort_frame(0x6081, 0, 0x06070012));
-    EXPECT_EQ(send(normal_req(0x6081, 0, 3, {1, 2, 3})), abort_frame(0x6081, 0, 0x06070013));
-    EXPECT_EQ(read_u32(0x6081, 0), 123456u);
+    EXPECT_EQ(send(normal_req(obj::profile_velocity.index, 0, 4, le32(123456))),
+              download_ok(obj::profile_velocity.index, 0));
+    EXPECT_EQ(read_u32(obj::profile_velocity.index, 0), 123456u);
+    EXPECT_EQ(send(normal_req(obj::profile_velocity.index, 0, 5, {1, 2, 3, 4, 5})),
+              abort_frame(obj::profile_velocity.index, 0, 0x06070012));
+    EXPECT_EQ(send(normal_req(obj::profile_velocity.index, 0, 3, {1, 2, 3})),
+              abort_frame(obj::profile_velocity.index, 0, 0x06070013));
+    EXPECT_EQ(read_u32(obj::profile_velocity.index, 0), 123456u);
 }
 
 // =========================================================================================================
@@ -551,38 +564,48 @@ TEST_F(Sdo, UnknownObject) {
 TEST_F(Sdo, UnknownSubindex) {
     EXPECT_EQ(send(upload_req(0x1018, 5)), abort_frame(0x1018, 5, 0x06090011));
     EXPECT_EQ(send(upload_req(0x1C32, 20)), abort_frame(0x1C32, 20, 0x06090011));
-    EXPECT_EQ(send(expedited_req(0x6040, 1, {1, 0})), abort_frame(0x6040, 1, 0x06090011));
+    EXPECT_EQ(send(expedited_req(obj::controlword.index, 1, {1, 0})),
+              abort_frame(obj::controlword.index, 1, 0x06090011));
     EXPECT_EQ(send(normal_req(0x2010, 1, 5, text("hello"))), abort_frame(0x2010, 1, 0x06090011));
 }
 
 TEST_F(Sdo, WriteToReadOnly) {
     EXPECT_EQ(send(expedited_req(0x1018, 1, le32(0x12345678))), abort_frame(0x1018, 1, 0x06010002));
     EXPECT_EQ(send(normal_req(0x1008, 0, 5, text("hello"))), abort_frame(0x1008, 0, 0x06010002));
-    EXPECT_EQ(send(expedited_req(0x6041, 0, {1, 0})), abort_frame(0x6041, 0, 0x06010002));
+    EXPECT_EQ(send(expedited_req(obj::statusword.index, 0, {1, 0})),
+              abort_frame(obj::statusword.index, 0, 0x06010002));
     EXPECT_EQ(read_u32(0x1018, 1), 0x00000A3Cu);
 }
 
 TEST_F(Sdo, LengthTooHighOrTooLow) {
     // 0x6066 Following error time out: UNSIGNED16.
-    EXPECT_EQ(send(expedited_req(0x6066, 0, {1, 0, 0, 0})), abort_frame(0x6066, 0, 0x06070012));
-    EXPECT_EQ(send(expedited_req(0x6066, 0, {1, 0, 0})), abort_frame(0x6066, 0, 0x06070012));
-    EXPECT_EQ(send(expedited_req(0x6066, 0, {1})), abort_frame(0x6066, 0, 0x06070013));
-    EXPECT_EQ(send(expedited_req(0x607A, 0, {1, 2})), abort_frame(0x607A, 0, 0x06070013));
-    EXPECT_EQ(read(0x6066, 0), le16(10));
+    EXPECT_EQ(send(expedited_req(obj::following_error_time_out.index, 0, {1, 0, 0, 0})),
+              abort_frame(obj::following_error_time_out.index, 0, 0x06070012));
+    EXPECT_EQ(send(expedited_req(obj::following_error_time_out.index, 0, {1, 0, 0})),
+              abort_frame(obj::following_error_time_out.index, 0, 0x06070012));
+    EXPECT_EQ(send(expedited_req(obj::following_error_time_out.index, 0, {1})),
+              abort_frame(obj::following_error_time_out.index, 0, 0x06070013));
+    EXPECT_EQ(send(expedited_req(obj::target_position.index, 0, {1, 2})),
+              abort_frame(obj::target_position.index, 0, 0x06070013));
+    EXPECT_EQ(read(obj::following_error_time_out.index, 0), le16(10));
 }
 
 TEST_F(Sdo, ValueTooHighOrTooLow) {
     // 0x605A Quick stop option code: INTEGER16, 0..8.
-    EXPECT_EQ(send(expedited_req(0x605A, 0, le16(9))), abort_frame(0x605A, 0, 0x06090031));
-    EXPECT_EQ(send(expedited_req(0x605A, 0, le16(0xFFFF))), abort_frame(0x605A, 0, 0x06090032));
-    EXPECT_EQ(write_u16(0x605A, 0, 8), 0u);
-    EXPECT_EQ(write_u16(0x605A, 0, 0), 0u);
+    EXPECT_EQ(send(expedited_req(obj::quick_stop_option_code.index, 0, le16(9))),
+              abort_frame(obj::quick_stop_option_code.index, 0, 0x06090031));
+    EXPECT_EQ(send(expedited_req(obj::quick_stop_option_code.index, 0, le16(0xFFFF))),
+              abort_frame(obj::quick_stop_option_code.index, 0, 0x06090032));
+    EXPECT_EQ(write_u16(obj::quick_stop_option_code.index, 0, 8), 0u);
+    EXPECT_EQ(write_u16(obj::quick_stop_option_code.index, 0, 0), 0u);
     // 0x60C2:02 Interpolation time index: INTEGER8, -6..63.
-    EXPECT_EQ(send(expedited_req(0x60C2, 2, {64})), abort_frame(0x60C2, 2, 0x06090031));
-    EXPECT_EQ(send(expedited_req(0x60C2, 2, {0xF9})), abort_frame(0x60C2, 2, 0x06090032));
-    EXPECT_EQ(write_u8(0x60C2, 2, 0xFA), 0u);
-    EXPECT_EQ(write_u8(0x60C2, 2, 63), 0u);
-    EXPECT_EQ(read(0x60C2, 2), (Buf{63}));
+    EXPECT_EQ(send(expedited_req(obj::interpolation_time_period::index, 2, {64})),
+              abort_frame(obj::interpolation_time_period::index, 2, 0x06090031));
+    EXPECT_EQ(send(expedited_req(obj::interpolation_time_period::index, 2, {0xF9})),
+              abort_frame(obj::interpolation_time_period::index, 2, 0x06090032));
+    EXPECT_EQ(write_u8(obj::interpolation_time_period::index, 2, 0xFA), 0u);
+    EXPECT_EQ(write_u8(obj::interpolation_time_period::index, 2, 63), 0u);
+    EXPECT_EQ(read(obj::interpolation_time_period::index, 2), (Buf{63}));
 }
 
 TEST_F(Sdo, WrongState) {
@@ -685,8 +708,10 @@ TEST_F(Sdo, CompleteAccessWithSubindexAboveOneIsRefused) {
 }
 
 TEST_F(Sdo, CompleteAccessOnVarObjectIsRefused) {
-    EXPECT_EQ(send(upload_req(0x6040, 0, true)), abort_frame(0x6040, 0, 0x06010000));
-    EXPECT_EQ(send(expedited_req(0x6040, 0, {0x06, 0x00}, true)), abort_frame(0x6040, 0, 0x06010000));
+    EXPECT_EQ(send(upload_req(obj::controlword.index, 0, true)),
+              abort_frame(obj::controlword.index, 0, 0x06010000));
+    EXPECT_EQ(send(expedited_req(obj::controlword.index, 0, {0x06, 0x00}, true)),
+              abort_frame(obj::controlword.index, 0, 0x06010000));
 }
 
 TEST_F(Sdo, CompleteAccessDownloadOfAssignment) {
@@ -759,11 +784,11 @@ TEST_F(Sdo, RemapChangesTheOutputImage) {
     EXPECT_EQ(send(upload_req(0x1600, 0)), (Buf{0x00, 0x30, 0x4F, 0x00, 0x16, 0x00, 0x03, 0x00, 0x00, 0x00}));
     const Buf image = {0x0F, 0x00, 0xEE, 0x78, 0x56, 0x34, 0x12};
     app.process_data().copy_outputs(ConstBytes(image.data(), image.size()));
-    EXPECT_EQ(od().find(0x6040, 0)->get<std::uint16_t>(), 0x000F);
-    EXPECT_EQ(od().find(0x607A, 0)->get<std::uint32_t>(), 0x12345678u);
-    EXPECT_EQ(read(0x6040, 0), (Buf{0x0F, 0x00}));
+    EXPECT_EQ(od().find(obj::controlword)->get<std::uint16_t>(), 0x000F);
+    EXPECT_EQ(od().find(obj::target_position)->get<std::uint32_t>(), 0x12345678u);
+    EXPECT_EQ(read(obj::controlword.index, 0), (Buf{0x0F, 0x00}));
     // The target velocity is no longer mapped.
-    EXPECT_EQ(od().find(0x60FF, 0)->get<std::uint32_t>(), 0u);
+    EXPECT_EQ(od().find(obj::target_velocity)->get<std::uint32_t>(), 0u);
 }
 
 TEST_F(Sdo, RemapChangesTheInputImage) {
@@ -771,8 +796,8 @@ TEST_F(Sdo, RemapChangesTheInputImage) {
     ASSERT_EQ(app.process_data().input_bytes(), 28u);
     remap(0x1A00, {0x60410010, 0x60640020, 0x1C322001});
     EXPECT_EQ(app.process_data().input_bytes(), 7u);
-    od().find(0x6041, 0)->set(std::uint16_t{0x0237});
-    od().find(0x6064, 0)->set(std::int32_t{-2});
+    od().find(obj::statusword)->set(std::uint16_t{0x0237});
+    od().find(obj::position_actual_value)->set(std::int32_t{-2});
     od().find(0x1C32, 32)->set(std::uint8_t{1});
     Buf image(7, 0);
     app.process_data().copy_inputs(Bytes(image.data(), image.size()));
@@ -785,16 +810,16 @@ TEST_F(Sdo, DefaultImagesMoveValuesBothWays) {
     const Buf out = {0x06, 0x00, 0x08, 0xEE, 0x01, 0x02, 0x03, 0x04,
                      0x05, 0x06, 0x07, 0x08, 0x09, 0x0A, 0x0B, 0x0C};
     app.process_data().copy_outputs(ConstBytes(out.data(), out.size()));
-    EXPECT_EQ(od().find(0x6040, 0)->get<std::uint16_t>(), 0x0006);
-    EXPECT_EQ(od().find(0x6060, 0)->as_int64(), 8);
-    EXPECT_EQ(od().find(0x607A, 0)->get<std::uint32_t>(), 0x04030201u);
-    EXPECT_EQ(od().find(0x60FF, 0)->get<std::uint32_t>(), 0x08070605u);
-    EXPECT_EQ(od().find(0x6071, 0)->get<std::uint16_t>(), 0x0A09);
-    EXPECT_EQ(od().find(0x60B8, 0)->get<std::uint16_t>(), 0x0C0B);
+    EXPECT_EQ(od().find(obj::controlword)->get<std::uint16_t>(), 0x0006);
+    EXPECT_EQ(od().find(obj::modes_of_operation)->as_int64(), 8);
+    EXPECT_EQ(od().find(obj::target_position)->get<std::uint32_t>(), 0x04030201u);
+    EXPECT_EQ(od().find(obj::target_velocity)->get<std::uint32_t>(), 0x08070605u);
+    EXPECT_EQ(od().find(obj::target_torque)->get<std::uint16_t>(), 0x0A09);
+    EXPECT_EQ(od().find(obj::touch_probe_function)->get<std::uint16_t>(), 0x0C0B);
     // Default TxPDO 0x1A00 starts with statusword, mode display, gap, position actual value.
-    od().find(0x6041, 0)->set(std::uint16_t{0x1237});
-    od().find(0x6061, 0)->set(std::int8_t{8});
-    od().find(0x6064, 0)->set(std::int32_t{0x11223344});
+    od().find(obj::statusword)->set(std::uint16_t{0x1237});
+    od().find(obj::modes_of_operation_display)->set(std::int8_t{8});
+    od().find(obj::position_actual_value)->set(std::int32_t{0x11223344});
     Buf in(app.process_data().input_bytes(), 0);
     app.process_data().copy_inputs(Bytes(in.data(), in.size()));
     EXPECT_EQ(Buf(in.begin(), in.begin() + 8), (Buf{0x37, 0x12, 0x08, 0x00, 0x44, 0x33, 0x22, 0x11}));
@@ -884,37 +909,39 @@ TEST_F(Sdo, AssignmentRulesForCountAndDuplicates) {
 TEST_F(Sdo, RxMappedObjectCannotBeWrittenBySdoInSafeOp) {
     // Given SAFEOP, the controlword (mapped into the assigned RxPDO) is written by the outputs only;
     // an unmapped RW object still is writable.
-    EXPECT_EQ(write_u16(0x6040, 0, 0x0006), 0u);  // PREOP: allowed
+    EXPECT_EQ(write_u16(obj::controlword.index, 0, 0x0006), 0u);  // PREOP: allowed
     app.on_state_change(AlState::PreOp, AlState::SafeOp);
-    EXPECT_EQ(send(expedited_req(0x6040, 0, le16(0x000F))), abort_frame(0x6040, 0, 0x06010006));
-    EXPECT_EQ(write_u32(0x6081, 0, 5000), 0u);
+    EXPECT_EQ(send(expedited_req(obj::controlword.index, 0, le16(0x000F))),
+              abort_frame(obj::controlword.index, 0, 0x06010006));
+    EXPECT_EQ(write_u32(obj::profile_velocity.index, 0, 5000), 0u);
     app.on_state_change(AlState::SafeOp, AlState::Op);
-    EXPECT_EQ(send(expedited_req(0x607A, 0, le32(1))), abort_frame(0x607A, 0, 0x06010006));
-    EXPECT_EQ(od().find(0x6040, 0)->get<std::uint16_t>(), 0x0006);
-    EXPECT_EQ(read(0x6040, 0), (Buf{0x06, 0x00}));
+    EXPECT_EQ(send(expedited_req(obj::target_position.index, 0, le32(1))),
+              abort_frame(obj::target_position.index, 0, 0x06010006));
+    EXPECT_EQ(od().find(obj::controlword)->get<std::uint16_t>(), 0x0006);
+    EXPECT_EQ(read(obj::controlword.index, 0), (Buf{0x06, 0x00}));
 }
 
 TEST_F(Sdo, ExchangeMovesProcessDataThroughTheMappedObjects) {
     // Outputs are stored only when applied; inputs are always produced.
     const Buf out = {0x0F, 0x00, 0x09, 0x00, 0x10, 0x00, 0x00, 0x00, 0, 0, 0, 0, 0, 0, 0, 0};
-    od().find(0x6041, 0)->set(std::uint16_t{0x0637});
+    od().find(obj::statusword)->set(std::uint16_t{0x0637});
     Buf in(app.input_bytes(), 0);
     app.exchange(1000, ConstBytes(out.data(), out.size()), false, Bytes(in.data(), in.size()));
-    EXPECT_EQ(od().find(0x6040, 0)->get<std::uint16_t>(), 0u);
+    EXPECT_EQ(od().find(obj::controlword)->get<std::uint16_t>(), 0u);
     EXPECT_EQ(in[0], 0x37);
     EXPECT_EQ(in[1], 0x06);
     app.exchange(2000, ConstBytes(out.data(), out.size()), true, Bytes(in.data(), in.size()));
-    EXPECT_EQ(od().find(0x6040, 0)->get<std::uint16_t>(), 0x000F);
-    EXPECT_EQ(od().find(0x6060, 0)->as_int64(), 9);
-    EXPECT_EQ(od().find(0x607A, 0)->get<std::uint32_t>(), 0x10u);
+    EXPECT_EQ(od().find(obj::controlword)->get<std::uint16_t>(), 0x000F);
+    EXPECT_EQ(od().find(obj::modes_of_operation)->as_int64(), 9);
+    EXPECT_EQ(od().find(obj::target_position)->get<std::uint32_t>(), 0x10u);
     EXPECT_EQ(app.exchanges(), 2u);
     // Safe state: every RxPDO-mapped object back to zero, others untouched.
-    od().find(0x6081, 0)->set(std::uint32_t{777});
+    od().find(obj::profile_velocity)->set(std::uint32_t{777});
     app.outputs_safe_state();
-    EXPECT_EQ(od().find(0x6040, 0)->get<std::uint16_t>(), 0u);
-    EXPECT_EQ(od().find(0x6060, 0)->as_int64(), 0);
-    EXPECT_EQ(od().find(0x607A, 0)->get<std::uint32_t>(), 0u);
-    EXPECT_EQ(od().find(0x6081, 0)->get<std::uint32_t>(), 777u);
+    EXPECT_EQ(od().find(obj::controlword)->get<std::uint16_t>(), 0u);
+    EXPECT_EQ(od().find(obj::modes_of_operation)->as_int64(), 0);
+    EXPECT_EQ(od().find(obj::target_position)->get<std::uint32_t>(), 0u);
+    EXPECT_EQ(od().find(obj::profile_velocity)->get<std::uint32_t>(), 777u);
 }
 
 TEST_F(Sdo, ApplicationServesCoeOnly) {
@@ -1023,18 +1050,18 @@ TEST_F(Sdo, OdListOfPdoMappableObjects) {
     const InfoReply tx = info_of(send(info_req(0x01, le16(3))));
     EXPECT_EQ(ld_le16(tx.data.data()), 3);
     const auto t = indexes_of(tx.data);
-    EXPECT_NE(std::find(t.begin(), t.end(), 0x6041), t.end());
-    EXPECT_NE(std::find(t.begin(), t.end(), 0x6064), t.end());
+    EXPECT_NE(std::find(t.begin(), t.end(), obj::statusword.index), t.end());
+    EXPECT_NE(std::find(t.begin(), t.end(), obj::position_actual_value.index), t.end());
     EXPECT_NE(std::find(t.begin(), t.end(), 0x1C32), t.end());  // sync error
-    EXPECT_EQ(std::find(t.begin(), t.end(), 0x6040), t.end());
+    EXPECT_EQ(std::find(t.begin(), t.end(), obj::controlword.index), t.end());
     EXPECT_EQ(std::find(t.begin(), t.end(), 0x1018), t.end());
     EXPECT_TRUE(std::is_sorted(t.begin(), t.end()));
 
     const InfoReply rx = info_of(send(info_req(0x01, le16(2))));
     const auto x = indexes_of(rx.data);
-    EXPECT_NE(std::find(x.begin(), x.end(), 0x6040), x.end());
-    EXPECT_NE(std::find(x.begin(), x.end(), 0x607A), x.end());
-    EXPECT_EQ(std::find(x.begin(), x.end(), 0x6041), x.end());
+    EXPECT_NE(std::find(x.begin(), x.end(), obj::controlword.index), x.end());
+    EXPECT_NE(std::find(x.begin(), x.end(), obj::target_position.index), x.end());
+    EXPECT_EQ(std::find(x.begin(), x.end(), obj::statusword.index), x.end());
 }
 
 TEST_F(Sdo, OdListOfUnknownTypeIsAnInfoError) {
@@ -1107,7 +1134,7 @@ TEST_F(Sdo, ObjectDescription) {
         cat({{0x00, 0x80, 0x04, 0x00, 0x00, 0x00, 0x18, 0x10, 0x23, 0x00, 0x04, 0x09}, text("Identity")}));
     // A VAR: 0x6040 UNSIGNED16, code 7.
     EXPECT_EQ(
-        send(info_req(0x03, le16(0x6040))),
+        send(info_req(0x03, le16(obj::controlword.index))),
         cat({{0x00, 0x80, 0x04, 0x00, 0x00, 0x00, 0x40, 0x60, 0x06, 0x00, 0x00, 0x07}, text("Controlword")}));
     // An ARRAY: 0x1C12 of UNSIGNED16, 4 slots, code 8.
     EXPECT_EQ(send(info_req(0x03, le16(0x1C12))),
@@ -1181,7 +1208,7 @@ TEST_F(Sdo, RaisedFaultIsSentAsEmergency) {
     // emergency: CoE service 1, error code, error register (current + generic), 5 data bytes.
     app.raise_fault(0x2310, error_register::Current, {0xA1, 0xA2, 0xA3, 0xA4, 0xA5});
     EXPECT_EQ(od().find(0x1001, 0)->as_uint64(), 0x03u);
-    EXPECT_EQ(od().find(0x603F, 0)->as_uint64(), 0x2310u);
+    EXPECT_EQ(od().find(obj::error_code)->as_uint64(), 0x2310u);
     EXPECT_EQ(sink.queued(), 0u);
     app.sdo_server().poll(sink);
     ASSERT_EQ(sink.queued(), 1u);
@@ -1193,7 +1220,7 @@ TEST_F(Sdo, RaisedFaultIsSentAsEmergency) {
     EXPECT_EQ(sink.queued(), 0u);
     // The registers are readable by SDO.
     EXPECT_EQ(read(0x1001, 0), (Buf{0x03}));
-    EXPECT_EQ(read(0x603F, 0), (Buf{0x10, 0x23}));
+    EXPECT_EQ(read(obj::error_code.index, 0), (Buf{0x10, 0x23}));
 }
 
 TEST_F(Sdo, EmergencyWaitsForTheMailbox) {
@@ -1211,7 +1238,7 @@ TEST_F(Sdo, ClearFaultsSendsErrorReset) {
     app.raise_fault(0x2310, error_register::Current);
     app.clear_faults();
     EXPECT_EQ(od().find(0x1001, 0)->as_uint64(), 0u);
-    EXPECT_EQ(od().find(0x603F, 0)->as_uint64(), 0u);
+    EXPECT_EQ(od().find(obj::error_code)->as_uint64(), 0u);
     app.sdo_server().poll(sink);  // the fault first, then the reset
     ASSERT_EQ(sink.queued(), 1u);
     EXPECT_EQ(sink.take().bytes, (Buf{0x00, 0x10, 0x10, 0x23, 0x03, 0, 0, 0, 0, 0}));
@@ -1224,8 +1251,8 @@ TEST_F(Sdo, AlErrorDuringPreOpToSafeOpIsReported) {
     // The AL status code 0x001D goes into the first data bytes of emergency 0xA000.
     EXPECT_EQ(app.check_transition(AlState::PreOp, AlState::SafeOp), protocol::AlStatusCode::NoError);
     app.on_al_error(protocol::AlStatusCode::InvalidOutputConfig);
-    EXPECT_EQ(od().find(0x1001, 0)->as_uint64(), 0x11u);  // communication + generic
-    EXPECT_EQ(od().find(0x603F, 0)->as_uint64(), 0u);     // not a device fault
+    EXPECT_EQ(od().find(0x1001, 0)->as_uint64(), 0x11u);     // communication + generic
+    EXPECT_EQ(od().find(obj::error_code)->as_uint64(), 0u);  // not a device fault
     app.sdo_server().poll(sink);
     ASSERT_EQ(sink.queued(), 1u);
     EXPECT_EQ(sink.take().bytes, (Buf{0x00, 0x10, 0x00, 0xA0, 0x11, 0x1D, 0x00, 0x00, 0x00, 0x00}));
@@ -1307,7 +1334,7 @@ TEST(CoeClientThroughTheSlave, SdoInformationAndSegmentedTransfers) {
     ASSERT_TRUE(o);
     EXPECT_EQ(o->name, "Identity");
     EXPECT_EQ(o->max_subindex, 4);
-    auto e = c.entry_description(0x605A, 0, 0x70);
+    auto e = c.entry_description(obj::quick_stop_option_code.index, 0, 0x70);
     ASSERT_TRUE(e);
     EXPECT_EQ(e->values, (Buf{0x02, 0x00, 0x00, 0x00, 0x08, 0x00}));
     EXPECT_EQ(e->name, "Quick stop option code");

@@ -13,7 +13,13 @@
 #include "cia402/drive.hpp"
 #include "master/coe_client.hpp"
 #include "serve/in_process_link.hpp"
+#include "protocol/cia402.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "test_support.hpp"
+
+namespace cia = vecat::protocol::cia402;
+
+namespace obj = vecat::protocol::obj;
 
 namespace vecat::cia402 {
 namespace {
@@ -29,13 +35,18 @@ struct DriveTest : ::testing::Test {
         EXPECT_NE(x, nullptr) << std::hex << i;
         return *x;
     }
+    coe::Entry& e(protocol::ObjectRef r) { return e(r.index, r.subindex); }
     template <class T>
     void set(std::uint16_t i, T v, std::uint8_t s = 0) {
         e(i, s).set(v);
     }
-    std::uint16_t statusword() { return e(0x6041).get<std::uint16_t>(); }
-    std::int32_t position() { return e(0x6064).get<std::int32_t>(); }
-    std::int32_t velocity() { return e(0x606C).get<std::int32_t>(); }
+    template <class T>
+    void set(protocol::ObjectRef r, T v) {
+        e(r).set(v);
+    }
+    std::uint16_t statusword() { return e(obj::statusword).get<std::uint16_t>(); }
+    std::int32_t position() { return e(obj::position_actual_value).get<std::int32_t>(); }
+    std::int32_t velocity() { return e(obj::velocity_actual_value).get<std::int32_t>(); }
     void run_ms(double ms) { b.advance(static_cast<std::uint64_t>(ms * 1e6)); }
     // Runs in 1 ms steps until pred holds; the time it took (ms) or -1 after limit_ms.
     double run_until(const std::function<bool()>& pred, double limit_ms,
@@ -53,23 +64,23 @@ struct DriveTest : ::testing::Test {
         run_ms(1);
     }
     void enable(Mode m) {
-        set<std::int8_t>(0x6060, static_cast<std::int8_t>(m));
-        set<std::uint16_t>(0x6040, 0x06);
+        set<std::int8_t>(obj::modes_of_operation, static_cast<std::int8_t>(m));
+        set<std::uint16_t>(obj::controlword, 0x06);
         run_ms(1);
-        set<std::uint16_t>(0x6040, 0x07);
+        set<std::uint16_t>(obj::controlword, 0x07);
         run_ms(1);
-        set<std::uint16_t>(0x6040, 0x0F);
+        set<std::uint16_t>(obj::controlword, 0x0F);
         run_ms(1);
-        ASSERT_EQ(statusword() & 0x6F, 0x27) << std::hex << statusword();
-        ASSERT_EQ(e(0x6061).get<std::int8_t>(), static_cast<std::int8_t>(m));
+        ASSERT_EQ(cia::decode_state(statusword()), cia::State::OperationEnabled) << std::hex << statusword();
+        ASSERT_EQ(e(obj::modes_of_operation_display).get<std::int8_t>(), static_cast<std::int8_t>(m));
     }
     // A profile position move with the bit 4 / bit 12 handshake; returns the time to target reached (ms).
     double pp_move(std::int32_t target, std::uint16_t extra_bits = 0) {
-        set<std::int32_t>(0x607A, target);
-        set<std::uint16_t>(0x6040, static_cast<std::uint16_t>(0x1F | extra_bits));
+        set<std::int32_t>(obj::target_position, target);
+        set<std::uint16_t>(obj::controlword, static_cast<std::uint16_t>(0x1F | extra_bits));
         const double ack = run_until([&] { return statusword() & sw::Bit12; }, 10);
         EXPECT_GE(ack, 0) << "set-point not acknowledged";
-        set<std::uint16_t>(0x6040, static_cast<std::uint16_t>(0x0F | extra_bits));
+        set<std::uint16_t>(obj::controlword, static_cast<std::uint16_t>(0x0F | extra_bits));
         run_ms(1);
         EXPECT_FALSE(statusword() & sw::Bit12);
         return run_until([&] { return statusword() & sw::TargetReached; }, 20000) + ack + 1;
@@ -78,17 +89,17 @@ struct DriveTest : ::testing::Test {
 
 TEST_F(DriveTest, EnableSequenceShowsEveryStateInTheStatusword) {
     EXPECT_EQ(statusword(), 0x0250);  // switch on disabled, voltage enabled, remote
-    set<std::uint16_t>(0x6040, 0x06);
+    set<std::uint16_t>(obj::controlword, 0x06);
     run_ms(1);
     EXPECT_EQ(statusword() & 0x027F, 0x0231);
-    set<std::uint16_t>(0x6040, 0x07);
+    set<std::uint16_t>(obj::controlword, 0x07);
     run_ms(1);
     EXPECT_EQ(statusword() & 0x027F, 0x0233);
-    set<std::uint16_t>(0x6040, 0x0F);
+    set<std::uint16_t>(obj::controlword, 0x0F);
     run_ms(1);
     EXPECT_EQ(statusword() & 0x027F, 0x0237);
     EXPECT_EQ(drive().cia402_state(), State::OperationEnabled);
-    set<std::uint16_t>(0x6040, 0x00);
+    set<std::uint16_t>(obj::controlword, 0x00);
     run_ms(1);
     EXPECT_EQ(statusword() & 0x027F, 0x0250);
 }
@@ -96,33 +107,37 @@ TEST_F(DriveTest, EnableSequenceShowsEveryStateInTheStatusword) {
 TEST_F(DriveTest, ModesOfOperationDisplayFollowsSupportedModesOnly) {
     for (int mi : {1, 3, 4, 6, 8, 9, 10}) {
         const auto m = static_cast<std::int8_t>(mi);
-        set<std::int8_t>(0x6060, m);
+        set<std::int8_t>(obj::modes_of_operation, m);
         run_ms(1);
-        EXPECT_EQ(e(0x6061).get<std::int8_t>(), m);
+        EXPECT_EQ(e(obj::modes_of_operation_display).get<std::int8_t>(), m);
     }
-    set<std::int8_t>(0x6060, 7);  // interpolated position: not supported, display keeps the last mode
+    set<std::int8_t>(obj::modes_of_operation,
+                     7);  // interpolated position: not supported, display keeps the last mode
     run_ms(1);
-    EXPECT_EQ(e(0x6061).get<std::int8_t>(), 10);
-    EXPECT_EQ(e(0x6502).get<std::uint32_t>(), 0x3ADu);
+    EXPECT_EQ(e(obj::modes_of_operation_display).get<std::int8_t>(), 10);
+    EXPECT_EQ(e(obj::supported_drive_modes).get<std::uint32_t>(), 0x3ADu);
 }
 
 TEST_F(DriveTest, ProfilePositionTrapezoidTakesTheClosedFormTime) {
     enable(Mode::ProfilePosition);
     const std::int32_t start = position();
-    set<std::uint32_t>(0x6081, 500'000);
-    set<std::uint32_t>(0x6083, 5'000'000);
-    set<std::uint32_t>(0x6084, 5'000'000);
+    set<std::uint32_t>(obj::profile_velocity, 500'000);
+    set<std::uint32_t>(obj::profile_acceleration, 5'000'000);
+    set<std::uint32_t>(obj::profile_deceleration, 5'000'000);
     const std::int32_t target = start + 1'000'000;
     // Watch the demand while moving: it never exceeds V.
     double peak_demand = 0;
-    set<std::int32_t>(0x607A, target);
-    set<std::uint16_t>(0x6040, 0x1F);
+    set<std::int32_t>(obj::target_position, target);
+    set<std::uint16_t>(obj::controlword, 0x1F);
     run_ms(1);
     ASSERT_TRUE(statusword() & sw::Bit12);
-    set<std::uint16_t>(0x6040, 0x0F);
-    const double t = run_until(
-        [&] { return statusword() & sw::TargetReached; }, 5000,
-        [&] { peak_demand = std::max(peak_demand, std::abs(e(0x606B).get<std::int32_t>() * 1.0)); });
+    set<std::uint16_t>(obj::controlword, 0x0F);
+    const double t =
+        run_until([&] { return statusword() & sw::TargetReached; }, 5000,
+                  [&] {
+                      peak_demand = std::max(
+                          peak_demand, std::abs(e(obj::velocity_demand_value).get<std::int32_t>() * 1.0));
+                  });
     ASSERT_GT(t, 0);
     ProfileLimits l{500'000, 5'000'000, 5'000'000, 0};
     const double expect_ms = ProfileGenerator::rest_to_rest_duration(1'000'000, l) * 1e3;
@@ -134,24 +149,24 @@ TEST_F(DriveTest, ProfilePositionTrapezoidTakesTheClosedFormTime) {
     EXPECT_LE(t, expect_ms + 40);
     EXPECT_LE(peak_demand, 500'000 * 1.0001);
     EXPECT_LE(std::abs(position() - target), 100);
-    EXPECT_LE(std::abs(e(0x60F4).get<std::int32_t>()), 100);
+    EXPECT_LE(std::abs(e(obj::following_error_actual_value).get<std::int32_t>()), 100);
 }
 
 TEST_F(DriveTest, ProfilePositionJerkLimitedNeverExceedsTheLimits) {
     enable(Mode::ProfilePosition);
-    set<std::int16_t>(0x6086, 3);
-    set<std::uint32_t>(0x60A4, 50'000'000, 1);
-    set<std::uint32_t>(0x6081, 400'000);
-    set<std::uint32_t>(0x6083, 4'000'000);
-    set<std::uint32_t>(0x6084, 2'000'000);
+    set<std::int16_t>(obj::motion_profile_type, 3);
+    set<std::uint32_t>(obj::profile_jerk::jerk_1, 50'000'000);
+    set<std::uint32_t>(obj::profile_velocity, 400'000);
+    set<std::uint32_t>(obj::profile_acceleration, 4'000'000);
+    set<std::uint32_t>(obj::profile_deceleration, 2'000'000);
     const std::int32_t start = position();
     std::vector<double> v;
-    set<std::int32_t>(0x607A, start + 600'000);
-    set<std::uint16_t>(0x6040, 0x1F);
+    set<std::int32_t>(obj::target_position, start + 600'000);
+    set<std::uint16_t>(obj::controlword, 0x1F);
     run_ms(1);
-    set<std::uint16_t>(0x6040, 0x0F);
+    set<std::uint16_t>(obj::controlword, 0x0F);
     const double t = run_until([&] { return statusword() & sw::TargetReached; }, 5000,
-                               [&] { v.push_back(e(0x606B).get<std::int32_t>()); });
+                               [&] { v.push_back(e(obj::velocity_demand_value).get<std::int32_t>()); });
     ASSERT_GT(t, 0);
     ProfileLimits l{400'000, 4'000'000, 2'000'000, 50'000'000};
     const double expect_ms = ProfileGenerator::rest_to_rest_duration(600'000, l) * 1e3;
@@ -170,7 +185,7 @@ TEST_F(DriveTest, ProfilePositionJerkLimitedNeverExceedsTheLimits) {
 
 TEST_F(DriveTest, ProfilePositionRelativeAndSetOfSetPoints) {
     enable(Mode::ProfilePosition);
-    set<std::uint32_t>(0x6081, 1'000'000);
+    set<std::uint32_t>(obj::profile_velocity, 1'000'000);
     const std::int32_t start = position();
     ASSERT_GT(pp_move(start + 200'000), 0);
     // Relative (bit 6): 0x607A is added to the previous target.
@@ -178,16 +193,16 @@ TEST_F(DriveTest, ProfilePositionRelativeAndSetOfSetPoints) {
     EXPECT_NEAR(position(), start + 250'000, 100);
     // Set of set-points (bit 5 = 0): a second set-point during a move is buffered; bit 12 stays set
     // until the buffer is free again.
-    set<std::int32_t>(0x607A, start + 1'250'000);
-    set<std::uint16_t>(0x6040, 0x1F);
+    set<std::int32_t>(obj::target_position, start + 1'250'000);
+    set<std::uint16_t>(obj::controlword, 0x1F);
     run_ms(2);
-    set<std::uint16_t>(0x6040, 0x0F);
+    set<std::uint16_t>(obj::controlword, 0x0F);
     run_ms(100);
     EXPECT_FALSE(statusword() & sw::Bit12);
-    set<std::int32_t>(0x607A, start);
-    set<std::uint16_t>(0x6040, 0x1F);
+    set<std::int32_t>(obj::target_position, start);
+    set<std::uint16_t>(obj::controlword, 0x1F);
     run_ms(2);
-    set<std::uint16_t>(0x6040, 0x0F);
+    set<std::uint16_t>(obj::controlword, 0x0F);
     run_ms(2);
     EXPECT_TRUE(statusword() & sw::Bit12) << "buffered set-point keeps the acknowledge";
     // The first target is reached before the axis returns.
@@ -202,18 +217,18 @@ TEST_F(DriveTest, ProfilePositionRelativeAndSetOfSetPoints) {
 
 TEST_F(DriveTest, ProfilePositionChangeImmediately) {
     enable(Mode::ProfilePosition);
-    set<std::uint32_t>(0x6081, 1'000'000);
+    set<std::uint32_t>(obj::profile_velocity, 1'000'000);
     const std::int32_t start = position();
-    set<std::int32_t>(0x607A, start + 2'000'000);
-    set<std::uint16_t>(0x6040, 0x3F);
+    set<std::int32_t>(obj::target_position, start + 2'000'000);
+    set<std::uint16_t>(obj::controlword, 0x3F);
     run_ms(2);
-    set<std::uint16_t>(0x6040, 0x2F);
+    set<std::uint16_t>(obj::controlword, 0x2F);
     run_ms(300);
     // New target behind: with bit 5 the axis turns around at once.
-    set<std::int32_t>(0x607A, start + 100'000);
-    set<std::uint16_t>(0x6040, 0x3F);
+    set<std::int32_t>(obj::target_position, start + 100'000);
+    set<std::uint16_t>(obj::controlword, 0x3F);
     run_ms(2);
-    set<std::uint16_t>(0x6040, 0x2F);
+    set<std::uint16_t>(obj::controlword, 0x2F);
     double furthest = 0;
     ASSERT_GT(run_until([&] { return statusword() & sw::TargetReached; }, 10000,
                         [&] { furthest = std::max(furthest, drive().position_actual() - start); }),
@@ -224,31 +239,31 @@ TEST_F(DriveTest, ProfilePositionChangeImmediately) {
 
 TEST_F(DriveTest, VelocityOverrideAndPositionCompensationOfTheProfileModes) {
     enable(Mode::ProfilePosition);
-    set<std::uint32_t>(0x6081, 400'000);
+    set<std::uint32_t>(obj::profile_velocity, 400'000);
     set<std::uint32_t>(0x2110, 500'000);  // 50 %
     const std::int32_t start = position();
     double peak = 0;
-    set<std::int32_t>(0x607A, start + 800'000);
-    set<std::uint16_t>(0x6040, 0x1F);
+    set<std::int32_t>(obj::target_position, start + 800'000);
+    set<std::uint16_t>(obj::controlword, 0x1F);
     run_ms(1);
-    set<std::uint16_t>(0x6040, 0x0F);
+    set<std::uint16_t>(obj::controlword, 0x0F);
     run_until([&] { return position() > start + 400'000; }, 5000,
-              [&] { peak = std::max(peak, e(0x606B).get<std::int32_t>() * 1.0); });
+              [&] { peak = std::max(peak, e(obj::velocity_demand_value).get<std::int32_t>() * 1.0); });
     EXPECT_NEAR(peak, 200'000, 200);
     // Back to 100 %: the cruise velocity returns to V.
     set<std::uint32_t>(0x2110, 1'000'000);
     run_ms(150);
-    EXPECT_NEAR(e(0x606B).get<std::int32_t>(), 400'000, 200);
+    EXPECT_NEAR(e(obj::velocity_demand_value).get<std::int32_t>(), 400'000, 200);
     ASSERT_GT(run_until([&] { return statusword() & sw::TargetReached; }, 5000), 0);
     EXPECT_NEAR(position(), start + 800'000, 100);
     // Position compensation: 50000 extra within a length of 400000 of a 1e6 move.
     master::CoeClient c(b.master, 0x1001);
     ASSERT_EQ(c.download_value<std::int32_t>(0x2111, 1, 50'000).abort, protocol::SdoAbort::None);
     ASSERT_EQ(c.download_value<std::uint32_t>(0x2111, 2, 400'000).abort, protocol::SdoAbort::None);
-    set<std::int32_t>(0x607A, start + 1'800'000);
-    set<std::uint16_t>(0x6040, 0x1F);
+    set<std::int32_t>(obj::target_position, start + 1'800'000);
+    set<std::uint16_t>(obj::controlword, 0x1F);
     run_ms(200);
-    set<std::uint16_t>(0x6040, 0x0F);
+    set<std::uint16_t>(obj::controlword, 0x0F);
     ASSERT_EQ(c.download_value<std::uint8_t>(0x2111, 3, 1).abort, protocol::SdoAbort::None);
     ASSERT_GT(run_until([&] { return statusword() & sw::TargetReached; }, 10000), 0);
     EXPECT_NEAR(position(), start + 1'850'000, 100);
@@ -256,16 +271,16 @@ TEST_F(DriveTest, VelocityOverrideAndPositionCompensationOfTheProfileModes) {
 
 TEST_F(DriveTest, ProfileVelocityReachesTheTargetAndHaltShowsSpeedZero) {
     enable(Mode::ProfileVelocity);
-    set<std::uint32_t>(0x6083, 2'000'000);
-    set<std::uint32_t>(0x6084, 2'000'000);
-    set<std::int32_t>(0x60FF, 300'000);
+    set<std::uint32_t>(obj::profile_acceleration, 2'000'000);
+    set<std::uint32_t>(obj::profile_deceleration, 2'000'000);
+    set<std::int32_t>(obj::target_velocity, 300'000);
     const double t = run_until([&] { return statusword() & sw::TargetReached; }, 2000);
     // 0.15 s ramp, then the velocity window time (10 ms).
     EXPECT_GT(t, 140);
     EXPECT_LT(t, 220);
     EXPECT_NEAR(velocity(), 300'000, 1000);
-    EXPECT_FALSE(statusword() & sw::Bit12);  // speed is not zero
-    set<std::uint16_t>(0x6040, 0x10F);       // halt
+    EXPECT_FALSE(statusword() & sw::Bit12);       // speed is not zero
+    set<std::uint16_t>(obj::controlword, 0x10F);  // halt
     const double stop = run_until([&] { return statusword() & sw::Bit12; }, 2000);
     EXPECT_GT(stop, 140);
     EXPECT_LT(stop, 230);
@@ -275,11 +290,12 @@ TEST_F(DriveTest, ProfileVelocityReachesTheTargetAndHaltShowsSpeedZero) {
 
 TEST_F(DriveTest, ProfileTorqueRampsWithTheSlopeAndAcceleratesTheInertia) {
     enable(Mode::ProfileTorque);
-    set<std::uint32_t>(0x607F, 200'000'000);  // the speed limit (0x6080, 5000 rpm) stays out of the way
-    set<std::uint32_t>(0x6087, 1000);         // per mille per second
-    set<std::int16_t>(0x6071, 100);           // 10 % of 1.27 Nm
+    set<std::uint32_t>(obj::max_profile_velocity,
+                       200'000'000);              // the speed limit (0x6080, 5000 rpm) stays out of the way
+    set<std::uint32_t>(obj::torque_slope, 1000);  // per mille per second
+    set<std::int16_t>(obj::target_torque, 100);   // 10 % of 1.27 Nm
     run_ms(50);
-    const double half = e(0x6074).get<std::int16_t>();
+    const double half = e(obj::torque_demand).get<std::int16_t>();
     EXPECT_NEAR(half, 50, 2);
     EXPECT_FALSE(statusword() & sw::TargetReached);
     run_ms(60);
@@ -293,15 +309,16 @@ TEST_F(DriveTest, ProfileTorqueRampsWithTheSlopeAndAcceleratesTheInertia) {
 
 TEST_F(DriveTest, QuickStopDeceleratesWithTheQuickStopRampAndDisables) {
     enable(Mode::ProfileVelocity);
-    set<std::uint32_t>(0x6083, 10'000'000);
-    set<std::int32_t>(0x60FF, 500'000);
+    set<std::uint32_t>(obj::profile_acceleration, 10'000'000);
+    set<std::int32_t>(obj::target_velocity, 500'000);
     run_ms(200);
     ASSERT_NEAR(velocity(), 500'000, 2000);
-    set<std::uint32_t>(0x6085, 5'000'000);
-    set<std::uint16_t>(0x6040, 0x0B);  // quick stop
+    set<std::uint32_t>(obj::quick_stop_deceleration, 5'000'000);
+    set<std::uint16_t>(obj::controlword, 0x0B);  // quick stop
     run_ms(1);
-    EXPECT_EQ(statusword() & 0x6F, 0x07);  // quick stop active
-    const double t = run_until([&] { return (statusword() & 0x4F) == 0x40; }, 2000);
+    EXPECT_EQ(cia::decode_state(statusword()), cia::State::QuickStopActive);  // quick stop active
+    const double t =
+        run_until([&] { return cia::decode_state(statusword()) == cia::State::SwitchOnDisabled; }, 2000);
     EXPECT_GT(t, 90);  // 500000 / 5e6 = 100 ms
     EXPECT_LT(t, 130);
     EXPECT_EQ(drive().cia402_state(), State::SwitchOnDisabled);
@@ -310,9 +327,9 @@ TEST_F(DriveTest, QuickStopDeceleratesWithTheQuickStopRampAndDisables) {
 TEST_F(DriveTest, SoftwareLimitStopsTheMoveAndSetsInternalLimit) {
     enable(Mode::ProfilePosition);
     const std::int32_t start = position();
-    set<std::int32_t>(0x607D, start - 100'000, 1);
-    set<std::int32_t>(0x607D, start + 300'000, 2);
-    set<std::uint32_t>(0x6081, 1'000'000);
+    set<std::int32_t>(obj::software_position_limit::min, start - 100'000);
+    set<std::int32_t>(obj::software_position_limit::max, start + 300'000);
+    set<std::uint32_t>(obj::profile_velocity, 1'000'000);
     ASSERT_GT(pp_move(start + 2'000'000), 0);
     EXPECT_NEAR(position(), start + 300'000, 100);
     EXPECT_TRUE(statusword() & sw::InternalLimit);
@@ -326,16 +343,16 @@ TEST_F(DriveTest, HardwareLimitSwitchBlocksItsDirectionOnly) {
     const std::int32_t start = position();
     set<std::int32_t>(0x2100, start + 200'000, 2);  // positive limit switch (increments = user units here)
     enable(Mode::ProfileVelocity);
-    set<std::uint32_t>(0x6083, 5'000'000);
-    set<std::uint32_t>(0x6085, 20'000'000);
-    set<std::int32_t>(0x60FF, 400'000);
-    ASSERT_GT(run_until([&] { return e(0x60FD).get<std::uint32_t>() & 2; }, 3000), 0);
+    set<std::uint32_t>(obj::profile_acceleration, 5'000'000);
+    set<std::uint32_t>(obj::quick_stop_deceleration, 20'000'000);
+    set<std::int32_t>(obj::target_velocity, 400'000);
+    ASSERT_GT(run_until([&] { return e(obj::digital_inputs).get<std::uint32_t>() & 2; }, 3000), 0);
     run_ms(100);
     EXPECT_LT(std::abs(velocity()), 50);
     EXPECT_TRUE(statusword() & sw::InternalLimit);
     EXPECT_LT(position(), start + 200'000 + 10'000);  // 400000^2 / (2 * 2e7) = 4000 past the switch
-    set<std::int32_t>(0x60FF, -400'000);
-    ASSERT_GT(run_until([&] { return !(e(0x60FD).get<std::uint32_t>() & 2); }, 3000), 0);
+    set<std::int32_t>(obj::target_velocity, -400'000);
+    ASSERT_GT(run_until([&] { return !(e(obj::digital_inputs).get<std::uint32_t>() & 2); }, 3000), 0);
     run_ms(20);
     EXPECT_LT(velocity(), -100'000);
     EXPECT_FALSE(statusword() & sw::InternalLimit);
@@ -343,14 +360,14 @@ TEST_F(DriveTest, HardwareLimitSwitchBlocksItsDirectionOnly) {
 
 TEST_F(DriveTest, FollowingErrorFaultsWith8611AndAnEmergency) {
     enable(Mode::CyclicPosition);
-    set<std::uint32_t>(0x6065, 10'000);
-    set<std::uint16_t>(0x6066, 5);
-    set<std::uint16_t>(0x6072, 50);  // weak motor: it cannot follow a big step
-    set<std::int32_t>(0x607A, position() + 5'000'000);
+    set<std::uint32_t>(obj::following_error_window, 10'000);
+    set<std::uint16_t>(obj::following_error_time_out, 5);
+    set<std::uint16_t>(obj::max_torque, 50);  // weak motor: it cannot follow a big step
+    set<std::int32_t>(obj::target_position, position() + 5'000'000);
     ASSERT_GT(run_until([&] { return drive().cia402_state() == State::Fault; }, 500), 0);
-    EXPECT_EQ(e(0x603F).get<std::uint16_t>(), fault::FollowingError);
+    EXPECT_EQ(e(obj::error_code).get<std::uint16_t>(), fault::FollowingError);
     EXPECT_TRUE(e(0x1001).get<std::uint8_t>() & coe::error_register::DeviceProfile);
-    EXPECT_EQ(statusword() & 0x4F, 0x08);
+    EXPECT_EQ(cia::decode_state(statusword()), cia::State::Fault);
     master::CoeClient c(b.master, 0x1001);
     c.upload(0x1000, 0);
     bool seen = false;
@@ -366,17 +383,17 @@ TEST_F(DriveTest, InjectedFaultNeedsTheCauseGoneBeforeReset) {
     ASSERT_EQ(c.download_value<std::uint16_t>(0x2101, 0, fault::Encoder).abort, protocol::SdoAbort::None);
     run_ms(2);
     EXPECT_EQ(drive().cia402_state(), State::Fault);
-    EXPECT_EQ(e(0x603F).get<std::uint16_t>(), fault::Encoder);
-    set<std::uint16_t>(0x6040, 0x80);
+    EXPECT_EQ(e(obj::error_code).get<std::uint16_t>(), fault::Encoder);
+    set<std::uint16_t>(obj::controlword, 0x80);
     run_ms(2);
     EXPECT_EQ(drive().cia402_state(), State::Fault) << "reset refused while the encoder is broken";
-    set<std::uint16_t>(0x6040, 0x00);
+    set<std::uint16_t>(obj::controlword, 0x00);
     ASSERT_EQ(c.download_value<std::uint16_t>(0x2101, 0, 0).abort, protocol::SdoAbort::None);
     run_ms(1);
-    set<std::uint16_t>(0x6040, 0x80);
+    set<std::uint16_t>(obj::controlword, 0x80);
     run_ms(2);
     EXPECT_EQ(drive().cia402_state(), State::SwitchOnDisabled);
-    EXPECT_EQ(e(0x603F).get<std::uint16_t>(), 0);
+    EXPECT_EQ(e(obj::error_code).get<std::uint16_t>(), 0);
     EXPECT_EQ(e(0x1001).get<std::uint8_t>(), 0);
     c.upload(0x1000, 0);
     c.upload(0x1000, 0);
@@ -389,62 +406,65 @@ TEST_F(DriveTest, StalledMotorAtFullTorqueTripsTheOverCurrentProtection) {
     // A load that holds the motor: 300 % torque (6.35 A, over twice the rated 3 A) against a 300 % load.
     set<std::int16_t>(0x2100, 3000, 5);
     enable(Mode::CyclicTorque);
-    set<std::int16_t>(0x6071, 3000);
+    set<std::int16_t>(obj::target_torque, 3000);
     const double t = run_until([&] { return drive().cia402_state() == State::Fault; }, 10000);
     // I2t: (i^2 - rated^2) t = (peak^2 - rated^2) * 1 s  ->  t = 72 / (6.35^2 - 9) = 2.34 s.
     EXPECT_NEAR(t, 2340, 60);
-    EXPECT_EQ(e(0x603F).get<std::uint16_t>(), fault::OverCurrent);
+    EXPECT_EQ(e(obj::error_code).get<std::uint16_t>(), fault::OverCurrent);
     EXPECT_TRUE(e(0x1001).get<std::uint8_t>() & coe::error_register::Current);
 }
 
 TEST_F(DriveTest, TouchProbeLatchesTheIndexPulseExactly) {
     enable(Mode::ProfileVelocity);
     // TP1 enabled, single, trigger on the zero impulse, positive edge.
-    set<std::uint16_t>(0x60B8, 0x0015);
-    set<std::int32_t>(0x60FF, 200'000);
+    set<std::uint16_t>(obj::touch_probe_function, 0x0015);
+    set<std::int32_t>(obj::target_velocity, 200'000);
     const std::int32_t start = position();
-    ASSERT_GT(run_until([&] { return e(0x60B9).get<std::uint16_t>() & 0x02; }, 6000), 0);
-    const std::int32_t latched = e(0x60BA).get<std::int32_t>();
+    ASSERT_GT(run_until([&] { return e(obj::touch_probe_status).get<std::uint16_t>() & 0x02; }, 6000), 0);
+    const std::int32_t latched = e(obj::touch_probe_1_positive_value).get<std::int32_t>();
     // The index comes once per revolution (2^20 increments, 1:1 user units).
     EXPECT_EQ(latched % (1 << 20), 0) << latched;
     EXPECT_GT(latched, start);
     EXPECT_LE(latched, start + (1 << 20));
-    EXPECT_EQ(e(0x60B9).get<std::uint16_t>() & 0x07, 0x03);
+    EXPECT_EQ(e(obj::touch_probe_status).get<std::uint16_t>() & 0x07, 0x03);
     // Single mode: the next index does not overwrite it.
     run_ms(6000);
-    EXPECT_EQ(e(0x60BA).get<std::int32_t>(), latched);
+    EXPECT_EQ(e(obj::touch_probe_1_positive_value).get<std::int32_t>(), latched);
 }
 
 TEST_F(DriveTest, TouchProbeOnTheDigitalInput) {
     enable(Mode::ProfileVelocity);
-    set<std::uint16_t>(0x60B8, 0x0033);  // TP1 enabled, continuous, input, both edges
-    set<std::int32_t>(0x60FF, 100'000);
+    set<std::uint16_t>(obj::touch_probe_function, 0x0033);  // TP1 enabled, continuous, input, both edges
+    set<std::int32_t>(obj::target_velocity, 100'000);
     run_ms(300);
     set<std::uint8_t>(0x2100, 1, 6);
     run_ms(1);
-    const std::int32_t rise = e(0x60BA).get<std::int32_t>();
+    const std::int32_t rise = e(obj::touch_probe_1_positive_value).get<std::int32_t>();
     EXPECT_NEAR(rise, position(), 200);
-    EXPECT_TRUE(e(0x60FD).get<std::uint32_t>() & (1u << 16));
+    EXPECT_TRUE(e(obj::digital_inputs).get<std::uint32_t>() & (1u << 16));
     run_ms(100);
     set<std::uint8_t>(0x2100, 0, 6);
     run_ms(1);
-    EXPECT_NEAR(e(0x60BB).get<std::int32_t>() - rise, 10'000, 300);  // 100 ms at 100000/s
-    EXPECT_EQ(e(0x60B9).get<std::uint16_t>() & 0x07, 0x07);
+    EXPECT_NEAR(e(obj::touch_probe_1_negative_value).get<std::int32_t>() - rise, 10'000,
+                300);  // 100 ms at 100000/s
+    EXPECT_EQ(e(obj::touch_probe_status).get<std::uint16_t>() & 0x07, 0x07);
 }
 
 TEST_F(DriveTest, FactorGroupConvertsUserUnitsExactly) {
     // 1 user unit = 1 um with a 5 mm feed per revolution: 2^20 increments per 5000 units.
-    set<std::uint32_t>(0x6092, 5000, 1);
+    set<std::uint32_t>(obj::feed_constant::feed, 5000);
     run_ms(1);
     enable(Mode::ProfilePosition);
     const std::int32_t start = position();
-    set<std::uint32_t>(0x6081, 10'000);
-    set<std::uint32_t>(0x6083, 100'000);
-    set<std::uint32_t>(0x6084, 100'000);
-    set<std::uint32_t>(0x6067, 1);
+    set<std::uint32_t>(obj::profile_velocity, 10'000);
+    set<std::uint32_t>(obj::profile_acceleration, 100'000);
+    set<std::uint32_t>(obj::profile_deceleration, 100'000);
+    set<std::uint32_t>(obj::position_window, 1);
     ASSERT_GT(pp_move(start + 5000), 0);
     // 5000 user units = one revolution of the motor = 2^20 increments.
-    EXPECT_NEAR(static_cast<double>(e(0x6063).get<std::int32_t>()) - start * 1048576.0 / 5000, 1 << 20, 210);
+    EXPECT_NEAR(static_cast<double>(e(obj::position_actual_internal_value).get<std::int32_t>()) -
+                    start * 1048576.0 / 5000,
+                1 << 20, 210);
     EXPECT_EQ(position(), start + 5000);
     EXPECT_NEAR(drive().mechanics().position() / (2 * 3.14159265358979), (start + 5000) / 5000.0, 1e-4);
 }
@@ -462,11 +482,11 @@ TEST_F(DriveTest, RandomValuesInEveryDriveObjectNeverBreakTheSimulation) {
     std::mt19937 rng(402);
     for (int round = 0; round < 3000; ++round) {
         if (round % 200 == 0) {
-            set<std::uint16_t>(0x6040, 0x80);
+            set<std::uint16_t>(obj::controlword, 0x80);
             run_ms(1);
-            set<std::uint16_t>(0x6040, 0x06);
+            set<std::uint16_t>(obj::controlword, 0x06);
             run_ms(1);
-            set<std::uint16_t>(0x6040, 0x0F);
+            set<std::uint16_t>(obj::controlword, 0x0F);
         }
         coe::Entry* en = targets[rng() % targets.size()];
         std::uint8_t v[8];
@@ -482,21 +502,21 @@ TEST_F(DriveTest, RandomValuesInEveryDriveObjectNeverBreakTheSimulation) {
         ASSERT_TRUE(std::isfinite(drive().mechanics().velocity())) << round;
     }
     master::CoeClient c(b.master, 0x1001);
-    EXPECT_TRUE(c.upload(0x6041, 0).ok());
+    EXPECT_TRUE(c.upload(obj::statusword.index, 0).ok());
 }
 
 // Homing (0x6098) on the simulated switches and index pulse; the found home then reads as 0x607C.
 struct DriveHoming : DriveTest {
     void home(std::int8_t method, std::int32_t offset) {
-        set<std::int8_t>(0x6098, method);
-        set<std::int32_t>(0x607C, offset);
-        set<std::uint32_t>(0x6099, 400'000, 1);
-        set<std::uint32_t>(0x6099, 50'000, 2);
-        set<std::uint32_t>(0x609A, 4'000'000);
+        set<std::int8_t>(obj::homing_method, method);
+        set<std::int32_t>(obj::home_offset, offset);
+        set<std::uint32_t>(obj::homing_speeds::search_for_switch, 400'000);
+        set<std::uint32_t>(obj::homing_speeds::search_for_zero, 50'000);
+        set<std::uint32_t>(obj::homing_acceleration, 4'000'000);
         enable(Mode::Homing);
         EXPECT_EQ(statusword() & (sw::TargetReached | sw::Bit12 | sw::Bit13),
                   sw::TargetReached);  // not started
-        set<std::uint16_t>(0x6040, 0x1F);
+        set<std::uint16_t>(obj::controlword, 0x1F);
         elapsed = run_until(
             [&] {
                 return (statusword() & (sw::TargetReached | sw::Bit12)) == (sw::TargetReached | sw::Bit12) ||
@@ -505,12 +525,14 @@ struct DriveHoming : DriveTest {
             30000);
     }
     // User position of machine increment inc after homing (1:1 factors).
-    std::int64_t user_of(std::int64_t inc) { return inc + (position() - e(0x6063).get<std::int32_t>()); }
+    std::int64_t user_of(std::int64_t inc) {
+        return inc + (position() - e(obj::position_actual_internal_value).get<std::int32_t>());
+    }
     double elapsed = 0;
 };
 
 TEST_F(DriveHoming, Method37TakesTheCurrentPositionAtOnce) {
-    const std::int32_t inc = e(0x6063).get<std::int32_t>();
+    const std::int32_t inc = e(obj::position_actual_internal_value).get<std::int32_t>();
     home(37, 12'345);
     EXPECT_GE(elapsed, 0);
     EXPECT_LE(elapsed, 2);
@@ -532,7 +554,7 @@ TEST_F(DriveHoming, Method1NegativeLimitSwitchAndIndexPulse) {
     EXPECT_FALSE(statusword() & sw::Bit13);
     // The first index pulse to the right of the switch: machine increment 0 (one per 2^20).
     EXPECT_EQ(user_of(0), 1000);
-    EXPECT_FALSE(e(0x60FD).get<std::uint32_t>() & 1) << "ends off the limit switch";
+    EXPECT_FALSE(e(obj::digital_inputs).get<std::uint32_t>() & 1) << "ends off the limit switch";
 }
 
 TEST_F(DriveHoming, Method3HomeSwitchAndIndexPulse) {
@@ -611,7 +633,7 @@ TEST_F(DriveCyclic, CyclicSynchronousPositionFollowsASineWithSmallFollowingError
     for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
         for (int i = 0; i < 3; ++i)
             cycle(cw, 8, p0);
-    ASSERT_EQ(sw_in() & 0x6F, 0x27);
+    ASSERT_EQ(cia::decode_state(sw_in()), cia::State::OperationEnabled);
     EXPECT_TRUE(sw_in() & sw::Bit12);
     double worst = 0, worst_lag = 0;
     const double amp = 500'000, w = 2 * 3.14159265358979;  // 1 Hz, peak velocity 3.1e6 units/s
@@ -689,7 +711,7 @@ TEST(DriveSync, OutputsTakeEffectAtSync0InDcModeAndAtOnceInFreeRun) {
             if (!in_op()) return false;
             EXPECT_EQ(wkc, m.expected_wkc());
             if (pulses != before) continue;  // a SYNC0 fell during the exchange
-            const std::int32_t now = od.find(0x607A, 0)->get<std::int32_t>();
+            const std::int32_t now = od.find(obj::target_position)->get<std::int32_t>();
             if (!dc) {
                 EXPECT_EQ(now, target);
                 return true;
@@ -701,7 +723,7 @@ TEST(DriveSync, OutputsTakeEffectAtSync0InDcModeAndAtOnceInFreeRun) {
             if (!in_op()) return false;
             EXPECT_EQ(wkc2, m.expected_wkc());
             EXPECT_GT(pulses, before);
-            EXPECT_EQ(od.find(0x607A, 0)->get<std::int32_t>(), target);
+            EXPECT_EQ(od.find(obj::target_position)->get<std::int32_t>(), target);
             return true;
         }
         ADD_FAILURE() << "a SYNC0 fell during each of 100 exchanges";

@@ -299,3 +299,45 @@ TEST(Cia402StateMachine, StopKindsFromOptionCodes) {
 
 }  // namespace
 }  // namespace vecat::cia402
+
+namespace vecat::cia402 {
+namespace {
+
+// protocol::cia402::decode_state is the inverse of the state machine's statusword: every state, reached the
+// way a drive reaches it, reads back as itself, also with the other statusword bits set.
+TEST(Cia402StateMachine, DecodeStateIsTheInverseOfTheStatuswordForEveryState) {
+    namespace cia = protocol::cia402;
+    std::vector<State> seen;
+    auto check = [&](const StateMachine& sm) {
+        const std::uint16_t bits = sm.statusword_bits();
+        EXPECT_EQ(cia::decode_state(bits), sm.state()) << to_string(sm.state()) << std::hex << " 0x" << bits;
+        // Warning, remote, target reached, internal limit and the mode bits do not change the state.
+        const std::uint16_t others = cia::sw::Warning | cia::sw::Remote | cia::sw::TargetReached |
+                                     cia::sw::InternalLimit | cia::sw::Bit12 | cia::sw::Bit13 | 0xC100;
+        EXPECT_EQ(cia::decode_state(static_cast<std::uint16_t>(bits | others)), sm.state())
+            << to_string(sm.state());
+        seen.push_back(sm.state());
+    };
+    OptionCodes oc;
+    oc.quick_stop = 6;  // stay in QUICK STOP ACTIVE
+    StateMachine sm;
+    check(sm);  // NOT READY TO SWITCH ON
+    for (State s : {State::SwitchOnDisabled, State::ReadyToSwitchOn, State::SwitchedOn,
+                    State::OperationEnabled, State::QuickStopActive}) {
+        StateMachine m;
+        reach(m, s, oc);
+        check(m);
+    }
+    StateMachine f;
+    reach(f, State::OperationEnabled, oc);
+    f.update(kEnable, true, false, oc);  // 13: FAULT REACTION ACTIVE
+    check(f);
+    f.update(kEnable, true, true, oc);  // 14: FAULT
+    check(f);
+    EXPECT_EQ(seen.size(), 8u);
+    // A pattern Table 30 does not give has no state.
+    EXPECT_FALSE(cia::decode_state(0x0001).has_value());
+}
+
+}  // namespace
+}  // namespace vecat::cia402

@@ -9,8 +9,14 @@
 
 #include "cia402/drive.hpp"
 #include "master/coe_client.hpp"
+#include "protocol/cia402.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "test_support.hpp"
 #include "twinsync/parameters.hpp"
+
+namespace cia = vecat::protocol::cia402;
+
+namespace obj = vecat::protocol::obj;
 
 namespace vecat::cia402 {
 namespace {
@@ -140,11 +146,12 @@ TEST_F(TwinBench, CableBreakFaultsBothDrivesWithin40_00WithinTheMaxFaultTime) {
     for (int k = 1; k <= 80 && (t_fault[0] < 0 || t_fault[1] < 0); ++k) {
         cycle(0x0F, p += 125, 0, 8, 0, kCycle);
         for (int d = 0; d < 2; ++d)
-            if (t_fault[d] < 0 && (e(d, 0x6041).get<std::uint16_t>() & 0x08)) t_fault[d] = k * kCycle / 1e6;
+            if (t_fault[d] < 0 && (e(d, obj::statusword.index).get<std::uint16_t>() & cia::sw::Fault))
+                t_fault[d] = k * kCycle / 1e6;
     }
     cycle(0x0F, p);
-    EXPECT_TRUE(sw(0) & 0x08);  // and the master sees it over EtherCAT
-    EXPECT_TRUE(sw(1) & 0x08);
+    EXPECT_TRUE(sw(0) & cia::sw::Fault);  // and the master sees it over EtherCAT
+    EXPECT_TRUE(sw(1) & cia::sw::Fault);
     std::printf(
         "cable break: fault after %.2f ms (master drive) and %.2f ms (slave drive), P2613 = %.0f ms\n",
         t_fault[0], t_fault[1], max_fault_ms);
@@ -153,7 +160,7 @@ TEST_F(TwinBench, CableBreakFaultsBothDrivesWithin40_00WithinTheMaxFaultTime) {
         EXPECT_GT(t_fault[d], max_fault_ms);
         EXPECT_LE(t_fault[d], max_fault_ms + kCycle / 1e6);  // P2613 plus one control cycle
         EXPECT_EQ(drive(d).twinsync_error(), error::Communication);
-        EXPECT_EQ(e(d, 0x603F).get<std::uint16_t>(), 0x7520);
+        EXPECT_EQ(e(d, obj::error_code.index).get<std::uint16_t>(), 0x7520);
         EXPECT_TRUE(par(d, p::CommStatus).get<std::uint16_t>() & comm_status::CommunicationLost);
         // The emergency carries the MSD error 40-00.
         master::CoeClient c(b.master, static_cast<std::uint16_t>(0x1001 + d));
@@ -175,7 +182,7 @@ TEST_F(TwinBench, CableBreakFaultsBothDrivesWithin40_00WithinTheMaxFaultTime) {
         cycle(i % 2 ? 0x80 : 0x00, pos(0));
     EXPECT_EQ(drive(0).cia402_state(), State::SwitchOnDisabled);
     EXPECT_EQ(drive(1).cia402_state(), State::SwitchOnDisabled);
-    EXPECT_EQ(e(0, 0x603F).get<std::uint16_t>(), 0);
+    EXPECT_EQ(e(0, obj::error_code.index).get<std::uint16_t>(), 0);
 }
 
 TEST_F(TwinBench, GantrySlaveBrakesFromWhereItIsWhenItsPartnerFaultsInMotion) {
@@ -226,7 +233,7 @@ TEST_F(TwinBench, TwoMastersGive40_02) {
         EXPECT_EQ(drive(d).twinsync_error(), error::ModeConflict) << d;
         EXPECT_EQ(par(d, p::CurrentError, 1).get<std::uint16_t>(), 40);
         EXPECT_EQ(par(d, p::CurrentError, 2).get<std::uint16_t>(), 2);
-        EXPECT_EQ(sw(d) & 0x08, 0x08);
+        EXPECT_EQ(sw(d) & cia::sw::Fault, cia::sw::Fault);
     }
 }
 
@@ -244,7 +251,7 @@ TEST_F(TwinBench, DifferentSwitchingFrequenciesGive40_01) {
             cycle(cw, pos(0));
     EXPECT_EQ(drive(1).twinsync_error(), error::SwitchingFrequency);
     EXPECT_EQ(drive(1).cia402_state(), State::Fault);
-    EXPECT_EQ(sw(1) & 0x08, 0x08);
+    EXPECT_EQ(sw(1) & cia::sw::Fault, cia::sw::Fault);
 }
 
 TEST_F(TwinBench, SlaveLeavingControlGives40_04AfterTheMaxFaultTime) {
@@ -377,7 +384,7 @@ TEST_F(TwinBench, ExtendedMappingCarriesWhatTheUserMapped) {
         cycle(0x0F, p);
     EXPECT_EQ(par(1, p::RemoteRefPos).get<std::int32_t>(), par(0, p::LocalRefPos).get<std::int32_t>());
     // Both follow the same set-point; stiction leaves each up to ~0.01 % of a revolution off for a while.
-    EXPECT_EQ(e(1, 0x6062).get<std::int32_t>(), p);
+    EXPECT_EQ(e(1, obj::position_demand_value.index).get<std::int32_t>(), p);
     EXPECT_NEAR(pos(1), p, 150);
     EXPECT_NEAR(pos(0), p, 150);
     // No status word in the extended layout, so no 40-xx monitoring: P2619 stays 0.

@@ -1,8 +1,9 @@
-// The TWINsync option card of one drive: it reads its configuration from the drive's dictionary (the
-// parameters of src/device/twinsync_objects.cpp), checks it when it is written (refusing what cannot work,
-// with the reason in 0x2102), builds the telegram from the send mapping once per control cycle, checks the
-// received one (length, CRC) and copies its process data into the mapped parameters, runs the
-// synchronisation controller of a slave and the monitoring of chapter 7.
+// The TWINsync option card of one drive, bound to the drive's dictionary (so it lives above coe, next to
+// the drive; the pure parts, telegram, mapping, link and parameters, are src/twinsync): it reads its
+// configuration from the drive's dictionary (the parameters of src/device/twinsync_objects.cpp), checks it
+// when it is written (refusing what cannot work, with the reason in 0x2102), builds the telegram from the
+// send mapping once per control cycle, checks the received one (length, CRC) and copies its process data into
+// the mapped parameters, runs the synchronisation controller of a slave and the monitoring of chapter 7.
 //
 // The drive calls receive() at the start of its control cycle and transmit() at its end. The port tells
 // the drive the control word received from the master drive, whether the partner is enabled, and the
@@ -16,37 +17,13 @@
 #include <vector>
 
 #include "coe/object_dictionary.hpp"
+#include "twinsync/errors.hpp"
 #include "twinsync/link.hpp"
 #include "twinsync/mapping.hpp"
 #include "twinsync/status.hpp"
 #include "twinsync/telegram.hpp"
 
 namespace vecat::twinsync {
-
-// MSD error numbers of the TWINsync monitoring (chapter 7): number-location.
-struct ErrorId {
-    std::uint8_t number = 0;
-    std::uint8_t location = 0;
-    bool operator==(const ErrorId&) const = default;
-};
-namespace error {
-inline constexpr ErrorId Communication{40, 0};       // faulty or missing telegrams > P2613, or sync lost
-inline constexpr ErrorId SwitchingFrequency{40, 1};  // master and slave switching frequencies differ
-inline constexpr ErrorId ModeConflict{40, 2};        // both master or both slave
-inline constexpr ErrorId DriveComState{40, 4};       // different DriveCom states
-inline constexpr ErrorId SpeedDifference{39, 0};     // gantry: speed (or position) tracking error
-inline constexpr ErrorId TorqueDifference{39, 1};    // torque difference
-inline constexpr ErrorId OtherAxis{39, 2};           // error detected on the other axis
-}  // namespace error
-
-// P2619 bits. vecat reads bit 0 "no error" as set while no error bit is.
-namespace comm_status {
-inline constexpr std::uint16_t NoError = 1u << 0;
-inline constexpr std::uint16_t CommunicationLost = 1u << 1;
-inline constexpr std::uint16_t SwitchingFrequency = 1u << 2;
-inline constexpr std::uint16_t ModeConflict = 1u << 3;
-inline constexpr std::uint16_t DriveComState = 1u << 5;
-}  // namespace comm_status
 
 // What the drive tells the port about itself every cycle.
 struct LocalState {

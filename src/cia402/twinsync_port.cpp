@@ -1,4 +1,4 @@
-#include "twinsync/port.hpp"
+#include "cia402/twinsync_port.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,0 +1,84 @@
+#include "cia402/touch_probe.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vecat::cia402 {
+namespace {
+
+// As the drive's: floor() as a saturated 64-bit integer, and the 32-bit wrap of 0x6064.
+std::int64_t floor64(double v) {
+    if (!(v == v)) return 0;
+    return static_cast<std::int64_t>(std::floor(std::clamp(v, -9.2e18, 9.2e18)));
+}
+std::int32_t wrap32(std::int64_t v) {
+    return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
+}
+
+// 0x60B8 bits of one probe, and its 0x60B9 status bits.
+constexpr std::uint16_t kEnable = 0x01, kContinuous = 0x02, kPositiveEdge = 0x10, kNegativeEdge = 0x20;
+constexpr std::uint16_t kEnabled = 0x01, kPositiveStored = 0x02, kNegativeStored = 0x04;
+
+}  // namespace
+
+TouchProbe::Latched TouchProbe::step(const Period& p, const FactorRatios& ratios, double home_shift) {
+    Latched out;
+    const std::uint16_t fn = p.function;
+    for (int n = 0; n < 2; ++n) {
+        const unsigned shift = 8u * static_cast<unsigned>(n);
+        const std::uint16_t f = static_cast<std::uint16_t>(fn >> shift);
+        const std::uint16_t pf = static_cast<std::uint16_t>(previous_function_ >> shift);
+        std::uint16_t st = static_cast<std::uint16_t>(status_ >> shift) & 0xFF;
+        if (!(f & kEnable)) {
+            st = 0;  // disabled: status cleared
+        } else {
+            st |= kEnabled;
+            // Arming: enabling the probe or an edge enable bit rising clears the stored flags.
+            if (!(pf & kEnable)) st = kEnabled;
+            if ((f & kPositiveEdge) && !(pf & kPositiveEdge))
+                st &= static_cast<std::uint16_t>(~kPositiveStored);
+            if ((f & kNegativeEdge) && !(pf & kNegativeEdge))
+                st &= static_cast<std::uint16_t>(~kNegativeStored);
+            const bool continuous = f & kContinuous;
+            const unsigned source = (f >> 2) & 0x03;  // 0: touch probe input, 1: zero impulse (index)
+            bool rise = false, fall = false;
+            double at_inc = p.machine_inc;
+            if (source == 0) {
+                const bool now = p.inputs & (1u << n);
+                const bool before = previous_inputs_ & (1u << n);
+                rise = now && !before;
+                fall = !now && before;
+            } else if (source == 1) {
+                // Index pulse once per motor revolution at the configured offset: the exact crossing.
+                const double period = ratios.per_revolution;
+                const double offset = p.index_offset;
+                const double lo = std::min(p.previous_inc, p.machine_inc),
+                             hi = std::max(p.previous_inc, p.machine_inc);
+                const double k = std::ceil((lo - offset) / period);
+                const double crossing = k * period + offset;
+                if (crossing <= hi && hi > lo && crossing > lo) {
+                    rise = fall = true;
+                    at_inc = crossing;
+                }
+            }
+            const double user = static_cast<double>(ratios.increments_to_user(floor64(at_inc))) + home_shift;
+            const std::int32_t latched = wrap32(floor64(user));
+            if (rise && (f & kPositiveEdge) && (continuous || !(st & kPositiveStored))) {
+                out.set[n][0] = true;
+                out.value[n][0] = latched;
+                st |= kPositiveStored;
+            }
+            if (fall && (f & kNegativeEdge) && (continuous || !(st & kNegativeStored))) {
+                out.set[n][1] = true;
+                out.value[n][1] = latched;
+                st |= kNegativeStored;
+            }
+        }
+        status_ = static_cast<std::uint16_t>((status_ & ~(0xFFu << shift)) | (st << shift));
+    }
+    previous_function_ = fn;
+    previous_inputs_ = p.inputs;
+    return out;
+}
+
+}  // namespace vecat::cia402
