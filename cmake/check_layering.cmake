@@ -24,12 +24,13 @@ set(LAYER_net common)              # transport: raw socket, link, pcapng, netns,
 set(LAYER_serve net esc)           # serve loop, in-process link: a segment behind a link
 set(LAYER_master protocol net)     # the master: wire formats and a link, never the slave emulation
 set(LAYER_faults esc coe net)
+set(LAYER_report esc net)          # the report on the master: checks on the frames beside the slaves
 set(LAYER_telemetry cia402 telemetry_idl)
 set(LAYER_telemetry_idl "")    # the telemetry IDL types compiled by idlc (with VECAT_TELEMETRY)
 set(LAYER_telemetry_types "")  # ... and idlc's generated sources
 set(LAYER_testing master cia402 faults telemetry serve)
 set(LAYER_esi device esc)
-set(LAYER_cli master telemetry cia402 faults esi serve esc)
+set(LAYER_cli master telemetry cia402 faults esi serve esc report)
 
 # ---------------------------------------------------------------------------------------------------------
 if(NOT SOURCE_DIR OR NOT LINKS)

@@ -228,6 +228,8 @@ int run_exec(const ExecOptions& o, const ServeFunction& serve) {
     if (server.joinable()) {
         stop = true;
         server.join();
+        // What serving found after COMMAND succeeded (vecat run --report-fail: the master broke a rule).
+        if (status == 0 && serve_rc != 0) status = serve_rc;
     }
     return status;
 }

@@ -1,8 +1,9 @@
 // `vecat exec [run options] -- COMMAND...`: COMMAND runs in a private network namespace (and, for an
 // ordinary user, a private user namespace: no root, no setuid helper) in which vecat serves the slaves on
 // one end of a veth pair; COMMAND gets the other end (environment VECAT_IFACE, and "{iface}" in its
-// arguments). The exit status is COMMAND's; the namespaces, the interfaces and every process COMMAND
-// started disappear with it, also when vecat itself is killed.
+// arguments). The exit status is COMMAND's (or, when COMMAND succeeded, what serving returned: 3 for a failed
+// report with --report-fail); the namespaces, the interfaces and every process COMMAND started disappear with
+// it, also when vecat itself is killed.
 #pragma once
 
 #include <atomic>

@@ -29,6 +29,7 @@
 #include "net/privileges.hpp"
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
+#include "report/master_checks.hpp"
 #include "serve/server.hpp"
 
 namespace {
@@ -90,6 +91,19 @@ bool attach_parameter_stores(vecat::esc::Segment& seg, const std::string& dir, s
     return true;
 }
 
+int write_output(const std::string& out, const std::string& data) {
+    if (out.empty() || out == "-") {
+        std::fwrite(data.data(), 1, data.size(), stdout);
+        return 0;
+    }
+    std::ofstream f(out, std::ios::binary);
+    f.write(data.data(), static_cast<std::streamsize>(data.size()));
+    return f ? 0 : 1;
+}
+
+// vecat run --report-fail: the master broke a rule of the report.
+constexpr int kReportFailed = 3;
+
 // Everything `vecat run` is given on its command line.
 struct RunOptions {
     std::string iface;
@@ -109,6 +123,8 @@ struct RunOptions {
     vecat::net::RealtimeOptions rt;
     std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
     std::string downstream;
+    std::string report_path;   // --report: JUnit XML of the checks on the master
+    bool report_fail = false;  // --report-fail: exit 3 when a check failed
 };
 
 // Serves until stop. ready (when given) is set once the serve loop runs; messages go to log. vecat run
@@ -116,7 +132,8 @@ struct RunOptions {
 int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* ready = nullptr,
             std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
-                 sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream] = o;
+                 sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, report_path,
+                 report_fail] = o;
     std::string why;
     for (const std::string& i : {iface, downstream}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -172,6 +189,11 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     if (down)
         fmt::print(log, "vecat: port 1 of the last slave cabled to {} ({})\n", downstream,
                    down->carrier() ? "link up: the line goes on" : "no link yet: the line closes here");
+    std::unique_ptr<vecat::report::MasterChecks> checks;
+    if (!report_path.empty()) {
+        checks = std::make_unique<vecat::report::MasterChecks>(*seg);
+        opt.observer = checks.get();
+    }
     auto tel = vecat::cli::RunTelemetry::start(*seg, telemetry, opt);
     if (!tel) return 2;
     // The serve loop runs on this thread: pinning, SCHED_FIFO and locked memory apply to it.
@@ -209,17 +231,16 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
                    "between the first and the last\n",
                    i, dc.counters().sync_pulses[0], dc.counters().pulses_not_delivered, span, sync.cycle0_ns);
     }
-    return 0;
-}
-
-int write_output(const std::string& out, const std::string& data) {
-    if (out.empty() || out == "-") {
-        std::fwrite(data.data(), 1, data.size(), stdout);
-        return 0;
+    if (checks) {
+        fmt::print(log, "{}", vecat::report::summary(*checks));
+        if (write_output(report_path, vecat::report::junit_xml(*checks)) != 0) {
+            fmt::print(stderr, "vecat: cannot write the report to {}\n", report_path);
+            return 1;
+        }
+        fmt::print(log, "vecat: report written to {}\n", report_path);
+        if (report_fail && !checks->findings().empty()) return kReportFailed;
     }
-    std::ofstream f(out, std::ios::binary);
-    f.write(data.data(), static_cast<std::streamsize>(data.size()));
-    return f ? 0 : 1;
+    return 0;
 }
 
 int cmd_esi_generate(const std::string& out, const std::string& esi_path,
@@ -339,6 +360,12 @@ int main(int argc, char** argv) {
              "position (PCON 7/8) or speed (SCON 5/6); drive 2 is then controlled through TWINsync")
             ->transform(CLI::CheckedTransformer(presets, CLI::ignore_case));
         c->add_option("--pcap", ro.pcap_path, "Write every frame in and out to this pcapng file");
+        c->add_option("--report", ro.report_path,
+                      "Check what the master does against the rules of the EtherCAT specifications and write "
+                      "the result as JUnit XML to this file (a summary is printed at exit)");
+        c->add_flag("--report-fail", ro.report_fail,
+                    "With --report: exit with 3 when the master broke a rule (vecat exec: when COMMAND "
+                    "itself succeeded)");
         c->add_flag("--busy-poll,!--blocking", ro.busy,
                     "Spin on the socket instead of sleeping in poll() (lowest latency, one core busy); "
                     "--blocking (the default) suits laptops");

@@ -131,6 +131,7 @@ class Slave {
     Esc& esc() { return esc_; }
     const Esc& esc() const { return esc_; }
     Application& app() { return *app_; }
+    const Application& app() const { return *app_; }
     const device::DeviceDescription& description() const { return *model_.description; }
     const DeviceModel& model() const { return model_; }
 

@@ -248,6 +248,9 @@ bool Master::read_slave_information() {
         auto dl = read16(s.station, ra(Reg::DlStatus));
         if (!dl) return false;
         s.dl_status = *dl;
+        // The outcome of reset_slaves()' INIT request (SOEM's ecx_config_init reads it per slave too): a
+        // master learns a state request's result from the AL status before it requests the next state.
+        if (!read_al_status(s.station).ok) return false;
         auto img = read_sii_image(s.station);
         if (!img) return false;
         s.sii_image = *img;

@@ -8,6 +8,7 @@
 
 #include "esc/segment.hpp"
 #include "net/frame_filter.hpp"
+#include "net/frame_observer.hpp"
 #include "net/link.hpp"
 
 namespace vecat::net {
@@ -19,6 +20,7 @@ class InProcessLink final : public Link {
         if (frame.size() > buf_.size()) return false;
         std::memcpy(buf_.data(), frame.data(), frame.size());
         len_ = frame.size();
+        if (observer_) observer_->on_request(ConstBytes(buf_.data(), len_), now_ns());
         pending_ = filter_ ? filter_->process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns())
                            : seg_.process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns());
         return true;
@@ -31,6 +33,7 @@ class InProcessLink final : public Link {
         pending_ = false;
         const std::size_t n = std::min(len_, out.size());
         std::memcpy(out.data(), buf_.data(), n);
+        if (observer_) observer_->on_reply(ConstBytes(buf_.data(), len_), now_ns());
         return static_cast<long>(n);
     }
     // Time seen by the segment; tests may drive it by hand.
@@ -42,6 +45,8 @@ class InProcessLink final : public Link {
     }
     // Fault injection between the link and the segment (nullptr: none).
     void set_filter(FrameFilter* f) { filter_ = f; }
+    // Sees each frame before the segment and each reply as the master receives it (nullptr: none).
+    void set_observer(FrameObserver* o) { observer_ = o; }
     void set_time(std::uint64_t ns) {
         manual_time_ = true;
         manual_now_ = ns;
@@ -50,6 +55,7 @@ class InProcessLink final : public Link {
   private:
     esc::Segment& seg_;
     FrameFilter* filter_ = nullptr;
+    FrameObserver* observer_ = nullptr;
     std::array<std::uint8_t, 1600> buf_{};
     std::size_t len_ = 0;
     bool pending_ = false;

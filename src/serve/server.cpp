@@ -10,13 +10,15 @@ namespace vecat::net {
 
 namespace {
 
-// Every frame to the master side goes out here: sent, counted, captured.
-void send_to_master(RawSocket& sock, const ServeOptions& opt, ConstBytes frame, ServeStats& st) {
+// Every frame to the master side goes out here: sent, counted, captured, observed.
+void send_to_master(RawSocket& sock, const ServeOptions& opt, ConstBytes frame, ServeStats& st,
+                    std::uint64_t now_ns) {
     if (sock.send(frame))
         ++st.sent;
     else
         ++st.send_errors;
     if (opt.pcap) opt.pcap->write(frame, realtime_ns(), PcapngWriter::kOutbound);
+    if (opt.observer) opt.observer->on_reply(frame, now_ns);
 }
 
 // Sends the replies a fault held back whose time has come; shortens the wait to the next one.
@@ -24,7 +26,7 @@ void send_due_replies(RawSocket& sock, const ServeOptions& opt, std::array<std::
                       ServeStats& st, std::int64_t& wait_us) {
     const std::uint64_t t = monotonic_ns();
     while (const std::size_t n = opt.filter->take_due(t, Bytes(buf.data(), buf.size())))
-        send_to_master(sock, opt, ConstBytes(buf.data(), n), st);
+        send_to_master(sock, opt, ConstBytes(buf.data(), n), st, t);
     const std::uint64_t due = opt.filter->next_due_ns();
     if (due != ~std::uint64_t{0})
         wait_us = std::min<std::int64_t>(wait_us, due > t ? static_cast<std::int64_t>((due - t) / 1000) : 0);
@@ -104,7 +106,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             std::size_t len = static_cast<std::size_t>(n);
             if (seg.return_frame(Bytes(buf.data(), buf.size()), len, now)) {
                 ++st.returned;
-                send_to_master(sock, opt, ConstBytes(buf.data(), len), st);
+                send_to_master(sock, opt, ConstBytes(buf.data(), len), st, now);
             }
         } else if (n > 0) {
             ++st.received;
@@ -122,6 +124,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             if (opt.pcap)
                 opt.pcap->write(ConstBytes(buf.data(), len), rx_real ? rx_real : real,
                                 PcapngWriter::kInbound);
+            if (opt.observer) opt.observer->on_request(ConstBytes(buf.data(), len), at);
             const bool reply = opt.filter ? opt.filter->process_frame(Bytes(buf.data(), buf.size()), len, at)
                                           : seg.process_frame(Bytes(buf.data(), buf.size()), len, at);
             if (reply && opt.downstream && seg.frame_goes_downstream()) {
@@ -131,7 +134,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
                 else
                     ++st.send_errors;
             } else if (reply) {
-                send_to_master(sock, opt, ConstBytes(buf.data(), len), st);
+                send_to_master(sock, opt, ConstBytes(buf.data(), len), st, at);
             }
             seg.run_deferred_firmware();
             if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);

@@ -8,6 +8,7 @@
 #include "esc/segment.hpp"
 #include "net/clock.hpp"
 #include "net/frame_filter.hpp"
+#include "net/frame_observer.hpp"
 #include "net/pcapng_writer.hpp"
 #include "net/raw_socket.hpp"
 
@@ -30,6 +31,9 @@ struct ServeOptions {
     std::int64_t tick_us = 250;
     PcapngWriter* pcap = nullptr;   // capture of every frame in and out
     FrameFilter* filter = nullptr;  // fault injection (src/faults): frames go through it to the segment
+    // Sees every frame from the master as it came, and every reply as it goes back (the report on the
+    // master, src/report). Not given: nothing is copied or parsed for it.
+    FrameObserver* observer = nullptr;
     // Called on the serving thread after each processed frame, once its reply is sent (telemetry); it must
     // neither block nor allocate. now_ns: the time the frame was processed at.
     void (*after_frame)(void* context, std::uint64_t now_ns) = nullptr;

@@ -1,7 +1,9 @@
 // The project's master on the interface it is given, as a user's test would run under `vecat exec`:
-//   vecat_exec_probe IFACE N
+//   vecat_exec_probe IFACE N [--break-a-rule]
 // scans the line, brings it to OP, exchanges 100 cycles of process data, prints one line per slave and exits
 // 0 when N slaves were found and every cycle had the expected working counter (1 otherwise).
+// --break-a-rule: also writes the AL status register (read-only) of the first slave, for the report on the
+// master (vecat run --report) to flag.
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -9,10 +11,12 @@
 
 #include "master/master.hpp"
 #include "net/raw_socket.hpp"
+#include "protocol/registers.hpp"
 
 int main(int argc, char** argv) {
-    if (argc != 3) {
-        std::fprintf(stderr, "usage: %s IFACE N\n", argv[0]);
+    const bool break_a_rule = argc == 4 && std::string(argv[3]) == "--break-a-rule";
+    if (argc != 3 && !break_a_rule) {
+        std::fprintf(stderr, "usage: %s IFACE N [--break-a-rule]\n", argv[0]);
         return 2;
     }
     try {
@@ -27,6 +31,10 @@ int main(int argc, char** argv) {
             std::printf("slave %u: station 0x%04X, vendor 0x%08X, product 0x%08X, %s\n", s.position + 1u,
                         s.station, s.sii.identity.vendor_id, s.sii.identity.product_code,
                         s.sii.device_name().c_str());
+        if (break_a_rule) {
+            std::uint8_t state[2] = {0x08, 0};
+            m.fpwr(m.slaves().at(0).station, vecat::protocol::addr(vecat::protocol::Reg::AlStatus), state);
+        }
         int good = 0;
         for (int i = 0; i < 100; ++i)
             good += m.exchange_process_data().value_or(0) == m.expected_wkc();

@@ -95,6 +95,31 @@ TEST(Exec, TheCommandScansTheServedSlavesOnTheInterfaceItIsGiven) {
     EXPECT_EQ(e.status, 0) << e.output;
 }
 
+TEST(Exec, TheReportOnTheMasterIsWrittenAndFailsTheRunWhenTheMasterBrokeARule) {
+    SKIP_WITHOUT_NAMESPACES();
+    const auto xml = temp_path("vecat-report.xml");
+    // The project master's start-up and cycles break no rule.
+    const auto ok =
+        run({kVecat, "exec", "-n", "2", "--report", xml, "--report-fail", "--", kProbe, "{iface}", "2"});
+    EXPECT_EQ(ok.status, 0) << ok.output;
+    EXPECT_NE(ok.output.find("11 of 11 checks passed"), std::string::npos) << ok.output;
+    EXPECT_NE(read_file(xml).find("<testsuite name=\"vecat.master\" tests=\"11\" failures=\"0\""),
+              std::string::npos)
+        << read_file(xml);
+    // A master that writes a read-only register: the command succeeds, the report fails the run.
+    const auto bad = run({kVecat, "exec", "-n", "2", "--report", xml, "--report-fail", "--", kProbe,
+                          "{iface}", "2", "--break-a-rule"});
+    EXPECT_EQ(bad.status, 3) << bad.output;
+    EXPECT_NE(bad.output.find("read-only-write"), std::string::npos) << bad.output;
+    EXPECT_NE(read_file(xml).find("failures=\"1\""), std::string::npos) << read_file(xml);
+    // Without --report-fail the report is only a report.
+    EXPECT_EQ(
+        run({kVecat, "exec", "-n", "2", "--report", xml, "--", kProbe, "{iface}", "2", "--break-a-rule"})
+            .status,
+        0);
+    fs::remove(xml);
+}
+
 TEST(Exec, TheExitStatusIsTheCommandsOrSaysWhyItDidNotRun) {
     SKIP_WITHOUT_NAMESPACES();
     EXPECT_EQ(run({kVecat, "exec", "--", "/bin/sh", "-c", "exit 7"}).status, 7);
