@@ -3,7 +3,8 @@
 // machine, mailbox layer, process data). The slaves have a bare process image: the CoE stack behind the
 // mailbox has its own target (fuzz_mailbox), and building a dictionary per input would slow this one 3x.
 // The description and SII image are built once (esc::DeviceModel); every input gets a new segment from them.
-// Input: length-prefixed frames, processed in order 100 us apart against the same segment.
+// Input: length-prefixed frames, processed in order 100 us apart against the same segment. The report on the
+// master (report::MasterChecks) watches every request and reply, as with vecat run --report.
 // Invariants beyond "no crash": a frame is answered exactly when the parser accepts it; the reply has the
 // request's length (padded to 60); only data, working counters, IRQ fields and auto-increment addresses
 // change; each datagram's working counter grows by at most 3 per slave; the header lengths never change.
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "fuzz_support.hpp"
+#include "report/master_checks.hpp"
 
 using namespace vecat;
 
@@ -81,6 +83,7 @@ void check_reply(ConstBytes in, ConstBytes out, std::size_t in_len, std::size_t 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     static const auto model = esc::DeviceModel::of(device::default_drive());
     auto seg = esc::make_segment(model, kSlaves);
+    report::MasterChecks checks(*seg);
     std::uint64_t now = 1'000'000'000;
     fuzz::Input in(data, size);
     std::vector<std::uint8_t> req, buf;
@@ -91,7 +94,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::copy(f.begin(), f.end(), buf.begin());
         req.resize(buf.size(), 0);
         std::size_t len = f.size();
+        checks.on_request(f, now);
         const bool answered = seg->process_frame(Bytes(buf.data(), buf.size()), len, now);
+        if (answered) checks.on_reply(ConstBytes(buf.data(), len), now);
         const protocol::ParsedFrame pf = protocol::parse_frame(f);
         const bool parsable =
             pf.error == protocol::FrameError::None || pf.error == protocol::FrameError::NotCommands;
