@@ -97,7 +97,8 @@ LineResult bring_up(const std::string& iface) {
 }  // namespace
 
 TEST(ChainVeth, ThreeProcessesFormTheSameLineAsOne) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     std::string why;
     // master - A (2 slaves) - B (1 slave) - C (2 slaves); and a reference pair for one process of 5.
     for (auto [x, y] : {std::pair{"chm", "cha"}, std::pair{"chao", "chb"}, std::pair{"chbo", "chc"},
@@ -165,7 +166,8 @@ TEST(ChainVeth, ThreeProcessesFormTheSameLineAsOne) {
 // drifting clocks (+-50 ppm) in three processes against one, 2 s of reference clock distribution at 1 ms
 // in OP; prints the worst |0x092C| of the line every 100 ms after the first second.
 TEST(ChainVeth, DISABLED_SystemTimeDifferenceAcrossProcesses) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     std::string why;
     for (auto [x, y] : {std::pair{"dhm", "dha"}, std::pair{"dhao", "dhb"}, std::pair{"dhbo", "dhc"},
                         std::pair{"dhrm", "dhrs"}})

@@ -131,7 +131,8 @@ void check_capture(const std::string& pcap, unsigned n, unsigned lrw_expected) {
 class Veth : public ::testing::TestWithParam<unsigned> {
   protected:
     void SetUp() override {
-        if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+        if (!g_netns)
+            GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
         ++g_pair;
         m_ = "tm" + std::to_string(g_pair);
         s_ = "ts" + std::to_string(g_pair);
@@ -193,7 +194,8 @@ INSTANTIATE_TEST_SUITE_P(Slaves, Veth, ::testing::Values(1u, 3u));
 // A master remaps the PDOs through CoE in PREOP, reaches OP with the new layout, and a wrong SM2 length
 // is refused with 0x001D (and reported by an emergency).
 TEST(VethCoe, RemapInPreOpReachesOpWithTheNewLayout) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     ++g_pair;
     const std::string mi = "cm" + std::to_string(g_pair), si = "cs" + std::to_string(g_pair);
     std::string why;
@@ -278,7 +280,8 @@ TEST(VethCoe, RemapInPreOpReachesOpWithTheNewLayout) {
 // The real binary's drives move: the master enables two drives (6, 7, 15) and runs CSP with a ramp of
 // set-points every millisecond of real time; both follow and stop at the last set-point.
 TEST(VethDrive, TwoDrivesEnableAndFollowCyclicPositions) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     ++g_pair;
     const std::string mi = "dm" + std::to_string(g_pair), si = "ds" + std::to_string(g_pair);
     std::string why;
@@ -339,7 +342,8 @@ TEST(VethDrive, TwoDrivesEnableAndFollowCyclicPositions) {
 // the static drift with FRMW bursts, waits for 0x092C, starts SYNC0 at 1 ms and runs 3 s in OP with the
 // reference clock distributed in every cyclic frame. vecat runs with drifting clocks (--dc-drift-ppm).
 TEST(VethDc, Sync0AtOneMillisecondInOpWithDriftingClocks) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     std::string why;
     ASSERT_TRUE(net::create_veth_pair("dcm", "dcs", &why)) << why;
     const std::string pcap =
@@ -448,7 +452,8 @@ TEST(VethDc, Sync0AtOneMillisecondInOpWithDriftingClocks) {
 }
 
 TEST(VethCli, RefusesAnInterfaceWithAnAddress) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     std::string why;
     ASSERT_TRUE(net::create_veth_pair("ipm", "ips", &why)) << why;
     ASSERT_EQ(system("ip addr add 192.0.2.1/24 dev ips"), 0);  // documentation range, inside our namespace
@@ -475,23 +480,27 @@ void expect_refused(const std::string& iface, const std::string& setup, const st
 }
 
 TEST(VethCli, RefusesTheDefaultRouteInterface) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     expect_refused("drs", "ip route add default dev drs", "default route");
 }
 
 TEST(VethCli, RefusesTheIpv6DefaultRouteInterface) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     expect_refused("d6s", "ip -6 route add default dev d6s", "IPv6 default route");
 }
 
 TEST(VethCli, RefusesABridgePort) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     expect_refused("brs", "ip link add vbr0 type bridge && ip link set brs master vbr0", "port of vbr0");
 }
 
 // Capability sets of a running vecat (/proc/PID/status): empty once the socket is open.
 TEST(VethCli, ServesWithoutCapabilities) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     std::string why;
     ASSERT_TRUE(net::create_veth_pair("capm", "caps", &why)) << why;
     VecatProcess v("caps", 1, "/dev/null");

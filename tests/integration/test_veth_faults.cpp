@@ -27,7 +27,8 @@ std::string temp(const std::string& name) {
 }
 
 TEST(VethFaults, ScenarioCutsTheLineAndTheControlSocketRepairsIt) {
-    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     std::string why;
     ASSERT_TRUE(net::create_veth_pair("fm", "fs", &why)) << why;
     const std::string scenario = temp("vecat-scenario") + ".yaml", sock_path = temp("vecat-faults") + ".sock";
