@@ -34,3 +34,5 @@ def test_my_master_brings_the_line_to_op(vecat_network):
             master.receive_processdata(2_000)
     finally:
         master.close()
+    # And the master broke none of the rules vecat checks (docs/master-report.md).
+    assert vecat_network.report_findings() == []

@@ -8,7 +8,7 @@ import textwrap
 
 import pytest
 
-from ethercat_probe import broadcast_read_wkc
+from ethercat_probe import broadcast_read_wkc, datagram_wkc
 
 
 def links():
@@ -55,6 +55,20 @@ def test_the_capture_and_summary_are_written_when_the_network_stops(vecat_networ
     vecat_network.stop()
     assert os.path.getsize(vecat_network.pcap) > 0
     assert "frames received" in vecat_network.output()
+
+
+def test_the_report_on_the_master_is_silent_for_a_master_that_breaks_no_rule(vecat_network):
+    assert broadcast_read_wkc(vecat_network.iface) == 2
+    assert vecat_network.report_findings() == []
+
+
+def test_the_report_on_the_master_names_the_rule_a_master_broke(vecat_network):
+    # APWR of the AL status register (0x0130, read-only) of the first slave instead of AL control.
+    datagram_wkc(vecat_network.iface, 2, 0, 0x0130, b"\x02\x00")
+    findings = vecat_network.report_findings()
+    assert [f["rule"] for f in findings] == ["read-only-write"], findings
+    assert findings[0]["severity"] == "warning"
+    assert "0x0130" in findings[0]["message"]
 
 
 def test_a_failing_test_leaves_no_interface_and_no_vecat_behind(tmp_path):

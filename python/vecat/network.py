@@ -8,6 +8,7 @@ import socket
 import subprocess
 import tempfile
 import time
+import xml.etree.ElementTree as ElementTree
 
 _counter = itertools.count(1)
 
@@ -35,7 +36,8 @@ class Network:
     """A line of virtual slaves served by `vecat run`.
 
     iface: the master's end of the veth pair (open it with your master); control: the fault-injection socket;
-    pcap: the capture of every frame in and out (written when the network stops); log: vecat's output.
+    pcap: the capture of every frame in and out and report: the report on the master (JUnit XML, see
+    docs/master-report.md), both written when the network stops; log: vecat's output.
     """
 
     def __init__(self, slaves=2, args=(), vecat=None, workdir=None, startup_timeout=20.0):
@@ -50,13 +52,14 @@ class Network:
         self.control = os.path.join(self.workdir, "control.sock")
         self.pcap = os.path.join(self.workdir, "capture.pcapng")
         self.log = os.path.join(self.workdir, "vecat.log")
+        self.report = os.path.join(self.workdir, "master-report.xml")
         self._proc = None
         _ip("link", "add", "name", self.iface, "type", "veth", "peer", "name", self.slave_iface)
         try:
             _ip("link", "set", "dev", self.iface, "up")
             _ip("link", "set", "dev", self.slave_iface, "up")
             cmd = [_vecat_binary(vecat), "run", "--iface", self.slave_iface, "--slaves", str(slaves),
-                   "--control", self.control, "--pcap", self.pcap, *args]
+                   "--control", self.control, "--pcap", self.pcap, "--report", self.report, *args]
             with open(self.log, "w") as log:
                 self._proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
             self._wait_ready(startup_timeout)
@@ -104,6 +107,19 @@ class Network:
 
     def clear(self, what="all"):
         return self.command(f"clear {what}")
+
+    def report_findings(self):
+        """The rules of the report on the master that the master broke, as dicts with the rule's id, its
+        severity ("error" or "warning") and what happened; [] when it broke none. Stops the network first
+        (the report is written when vecat stops)."""
+        self.stop()
+        findings = []
+        for case in ElementTree.parse(self.report).getroot().iter("testcase"):
+            failure = case.find("failure")
+            if failure is not None:
+                findings.append({"rule": case.get("name").split(":")[0], "severity": failure.get("type"),
+                                 "message": failure.get("message")})
+        return findings
 
     def stop(self):
         """Stops vecat (its summary and the capture are written) and removes the veth pair."""
