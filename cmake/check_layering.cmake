@@ -30,7 +30,8 @@ set(LAYER_telemetry_idl "")    # the telemetry IDL types compiled by idlc (with 
 set(LAYER_telemetry_types "")  # ... and idlc's generated sources
 set(LAYER_testing master cia402 faults telemetry serve)
 set(LAYER_esi device esc)
-set(LAYER_cli master telemetry cia402 faults esi serve esc report)
+set(LAYER_network cia402 esi)      # networks of mixed devices from a file
+set(LAYER_cli master telemetry cia402 faults esi serve esc report network)
 
 # ---------------------------------------------------------------------------------------------------------
 if(NOT SOURCE_DIR OR NOT LINKS)

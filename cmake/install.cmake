@@ -5,7 +5,7 @@
 include(CMakePackageConfigHelpers)
 
 set(VECAT_INSTALL_LIBS vecat_common vecat_protocol vecat_device vecat_esc vecat_coe vecat_twinsync_parameters vecat_twinsync vecat_motion vecat_cia402
-                       vecat_net vecat_serve vecat_report vecat_faults vecat_master vecat_telemetry vecat_testing vecat_esi)
+                       vecat_net vecat_serve vecat_report vecat_faults vecat_master vecat_telemetry vecat_testing vecat_esi vecat_network)
 if(VECAT_TELEMETRY)
   list(APPEND VECAT_INSTALL_LIBS vecat_telemetry_idl)
 endif()

@@ -19,7 +19,12 @@ using protocol::ParsedFrame;
 using protocol::Reg;
 
 void Segment::add(std::unique_ptr<Slave> s) {
+    add(std::move(s), {});
+}
+
+void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     slaves_.push_back(std::move(s));
+    own_factory_.push_back(std::move(own));
     cable_up_.push_back(1);
     halted_.push_back(0);
     last_run_ns_.push_back(0);
@@ -110,12 +115,14 @@ void Segment::set_firmware_halted(std::size_t i, bool halted) {
 }
 
 bool Segment::restart_slave(std::size_t i) {
-    if (!factory_ || i >= slaves_.size()) return false;
+    if (i >= slaves_.size()) return false;
+    const ApplicationFactory& factory = own_factory_[i] ? own_factory_[i] : factory_;
+    if (!factory) return false;
     const Slave& old = *slaves_[i];
     EscConfig cfg = old.esc().config();
     cfg.dc_drift_ppm = old.esc().dc().drift_ppm();  // the same oscillator after the restart
     const DeviceModel model = old.model();
-    auto fresh = std::make_unique<Slave>(model, cfg, factory_(*model.description));
+    auto fresh = std::make_unique<Slave>(model, cfg, factory(*model.description));
     slaves_[i] = std::move(fresh);
     update_links(i);
     return true;

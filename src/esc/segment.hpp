@@ -41,6 +41,9 @@ class Segment {
   public:
     Segment() = default;
     void add(std::unique_ptr<Slave> s);
+    // A slave with its own application factory (a network of mixed devices): restart_slave() rebuilds it
+    // with this one instead of the segment's.
+    void add(std::unique_ptr<Slave> s, ApplicationFactory own);
     std::size_t size() const { return slaves_.size(); }
     Slave& slave(std::size_t i) { return *slaves_[i]; }
     const Slave& slave(std::size_t i) const { return *slaves_[i]; }
@@ -130,6 +133,7 @@ class Segment {
     std::vector<std::uint8_t> cable_up_;  // cable k into slave k
     std::vector<std::uint8_t> halted_;
     ApplicationFactory factory_;
+    std::vector<ApplicationFactory> own_factory_;  // per slave, empty: factory_
     // Per slave: host time of its last firmware run. A frame runs the firmware of the slaves it addressed,
     // and of the others only when kMaxRunGapNs has passed (a cycle of several frames does not run every
     // slave once per frame).

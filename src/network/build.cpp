@@ -1,0 +1,197 @@
+#include "network/build.hpp"
+
+#include <fstream>
+#include <iterator>
+
+#include "cia402/drive.hpp"
+#include "coe/coe_application.hpp"
+#include "device/from_sii.hpp"
+#include "device/simple_devices.hpp"
+#include "esi/esi_reader.hpp"
+#include "protocol/sii.hpp"
+
+namespace vecat::network {
+
+namespace {
+
+// Port descriptor 0x0007 (ESC datasheet section II): two bits per port, 00 not implemented, 10 EBUS, 11 MII.
+constexpr std::uint8_t kPortMii = 0x3;
+constexpr std::uint8_t kPortEbus = 0x2;
+
+std::uint8_t descriptor(std::uint8_t ports, std::uint8_t kind = kPortMii) {
+    std::uint8_t d = 0;
+    for (unsigned p = 0; p < kPorts; ++p)
+        if ((ports >> p) & 1u) d = static_cast<std::uint8_t>(d | (kind << (2 * p)));
+    return d;
+}
+
+// The ports of an SII device from its General category (ETG.2010: one nibble per port, 0 not used, 1 MII,
+// 3 EBUS, 4 fast hot connect); two MII ports when the image has none.
+std::uint8_t sii_descriptor(const protocol::SiiInfo& sii) {
+    if (!sii.has_general || sii.physical_ports == 0) return descriptor(0b0011);
+    std::uint8_t d = 0;
+    for (unsigned p = 0; p < kPorts; ++p) {
+        const unsigned kind = (sii.physical_ports >> (4 * p)) & 0xF;
+        if (kind == 1 || kind == 4)
+            d = static_cast<std::uint8_t>(d | (kPortMii << (2 * p)));
+        else if (kind == 3)
+            d = static_cast<std::uint8_t>(d | (kPortEbus << (2 * p)));
+    }
+    return d;
+}
+
+void apply(device::DeviceDescription& d, const DeviceEntry& e) {
+    if (e.identity.vendor_id) d.identity.vendor_id = *e.identity.vendor_id;
+    if (e.identity.product_code) d.identity.product_code = *e.identity.product_code;
+    if (e.identity.revision) d.identity.revision = *e.identity.revision;
+    if (e.identity.serial) d.identity.serial = *e.identity.serial;
+    if (e.station_alias) d.station_alias = *e.station_alias;
+}
+
+// The overrides written into a dump: identity words 0x08-0x0F and the alias word 0x04, with the
+// configuration area's checksum (word 7) made again (ETG.2010).
+void patch(std::vector<std::uint8_t>& img, const DeviceEntry& e) {
+    if (img.size() < 0x20) return;
+    const auto put32 = [&](unsigned word, std::optional<std::uint32_t> v) {
+        if (v) st_le32(img.data() + 2 * word, *v);
+    };
+    put32(protocol::sii::VendorId, e.identity.vendor_id);
+    put32(protocol::sii::ProductCode, e.identity.product_code);
+    put32(protocol::sii::RevisionNo, e.identity.revision);
+    put32(protocol::sii::SerialNo, e.identity.serial);
+    if (e.station_alias) {
+        st_le16(img.data() + 2 * protocol::sii::StationAlias, *e.station_alias);
+        img[2 * protocol::sii::Checksum] = protocol::sii_config_crc(ConstBytes(img.data(), 14));
+    }
+}
+
+std::unique_ptr<esc::Application> process_image(const device::DeviceDescription& d) {
+    return std::make_unique<esc::ProcessImageApplication>(d.output_bytes(), d.input_bytes());
+}
+
+struct Made {
+    esc::DeviceModel model;
+    esc::ApplicationFactory factory;
+    esc::EscConfig esc;
+};
+
+Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::string>& notes) {
+    Made m;
+    device::DeviceDescription d;
+    bool drive = false;
+    switch (e.source) {
+        case Source::Drive:
+            d = device::default_drive();
+            drive = true;
+            break;
+        case Source::Esi: {
+            esi::DeviceSelector sel;
+            sel.type = e.esi_type;
+            sel.product_code = e.esi_product;
+            sel.revision = e.esi_revision;
+            try {
+                auto r = esi::import_esi_file(e.path, sel);
+                for (const auto& n : r.notes)
+                    notes.push_back(at + e.path + ": " + n);
+                for (const auto& n : esi::complete_for_emulation(r.desc))
+                    notes.push_back(at + e.path + ": " + n);
+                d = std::move(r.desc);
+            } catch (const std::exception& x) {
+                throw NetworkFileError(at + e.path + ": " + x.what());
+            }
+            drive = true;  // as vecat run --esi: the drive core behind the vendor's dictionary
+            break;
+        }
+        case Source::Sii: {
+            std::ifstream in(e.path, std::ios::binary);
+            if (!in) throw NetworkFileError(at + e.path + ": cannot be read");
+            std::vector<std::uint8_t> img((std::istreambuf_iterator<char>(in)),
+                                          std::istreambuf_iterator<char>());
+            const protocol::SiiInfo sii = protocol::parse_sii(img);
+            if (img.size() < 0x80 || !sii.checksum_ok || sii.identity.vendor_id == 0)
+                throw NetworkFileError(at + e.path + ": not an SII image (" + std::to_string(img.size()) +
+                                       " bytes, checksum " + (sii.checksum_ok ? "right" : "wrong") +
+                                       ", vendor " + std::to_string(sii.identity.vendor_id) + ")");
+            std::vector<std::string> n;
+            d = device::description_from_sii(sii, &n);
+            for (const auto& x : n)
+                notes.push_back(at + e.path + ": " + x);
+            d.eeprom_size_bytes = static_cast<std::uint32_t>(img.size());
+            apply(d, e);
+            patch(img, e);
+            m.model = esc::DeviceModel::of(d);
+            m.model.sii_image = std::make_shared<const std::vector<std::uint8_t>>(std::move(img));
+            m.esc.port_descriptor = sii_descriptor(sii);
+            if (d.mailbox_protocols & device::mbx_proto::CoE)
+                m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
+                    return std::unique_ptr<esc::Application>(
+                        std::make_unique<coe::CoeApplication>(dd, objects));
+                };
+            else
+                m.factory = process_image;
+            return m;
+        }
+        case Source::Coupler:
+            d = device::coupler();
+            break;
+        case Source::Junction:
+            d = device::junction();
+            break;
+        case Source::DigitalIn:
+            d = device::digital_input_terminal(e.channels ? e.channels : 8);
+            break;
+        case Source::DigitalOut:
+            d = device::digital_output_terminal(e.channels ? e.channels : 8);
+            break;
+        case Source::AnalogIn:
+            d = device::analog_input_terminal(e.channels ? e.channels : 4);
+            break;
+        case Source::AnalogOut:
+            d = device::analog_output_terminal(e.channels ? e.channels : 4);
+            break;
+    }
+    apply(d, e);
+    m.model = esc::DeviceModel::of(d);
+    m.esc.port_descriptor = descriptor(
+        default_ports(e.source), e.source == Source::Drive || e.source == Source::Esi ? kPortMii : kPortEbus);
+    if (drive)
+        m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
+            return std::unique_ptr<esc::Application>(std::make_unique<cia402::Drive>(dd, objects));
+        };
+    else
+        m.factory = process_image;
+    return m;
+}
+
+}  // namespace
+
+std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept {
+    std::uint8_t ports = 0;
+    for (unsigned p = 0; p < kPorts; ++p)
+        if ((cfg.port_descriptor >> (2 * p)) & 0x3) ports = static_cast<std::uint8_t>(ports | (1u << p));
+    return ports;
+}
+
+BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
+    BuiltNetwork b;
+    b.segment = std::make_unique<esc::Segment>();
+    std::vector<std::uint8_t> ports;
+    for (const DeviceEntry& e : f.devices) {
+        const std::string at = file + ":" + std::to_string(e.line) + ": " + e.name + ": ";
+        Made m = make_device(e, at, b.notes);
+        ports.push_back(ports_of(m.esc));
+        b.segment->add(std::make_unique<esc::Slave>(m.model, m.esc, m.factory(*m.model.description)),
+                       m.factory);
+    }
+    // The cabling against the ports each device turned out to have.
+    for (std::size_t i = 0; i < f.devices.size(); ++i)
+        for (unsigned p = 1; p < kPorts; ++p)
+            if (const int c = f.children[i][p]; c >= 0 && !((ports[i] >> p) & 1u)) {
+                const DeviceEntry& child = f.devices[static_cast<std::size_t>(c)];
+                throw NetworkFileError(file + ":" + std::to_string(child.line) + ": " + child.name + ": " +
+                                       f.devices[i].name + " has no port " + std::to_string(p));
+            }
+    return b;
+}
+
+}  // namespace vecat::network

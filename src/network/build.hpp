@@ -1,0 +1,28 @@
+// A checked network file (network_file.hpp) made into slaves: each device from its source (the vecat drive,
+// an ESI file, an SII dump, a built-in simple device) with its overrides, in the order the frame reaches
+// them, in one esc::Segment.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "esc/segment.hpp"
+#include "network/network_file.hpp"
+
+namespace vecat::network {
+
+struct BuiltNetwork {
+    std::unique_ptr<esc::Segment> segment;
+    std::vector<std::string> notes;  // "FILE:LINE: NAME: ..." what was guessed or left out per device
+};
+
+// Throws NetworkFileError ("FILE:LINE: ...") for a device that cannot be made (an ESI without the named
+// device, an SII dump that cannot be read, a port cabled that the device does not have). file: the name
+// used in the messages.
+BuiltNetwork build_network(const NetworkFile& f, const std::string& file);
+
+// The ports a device has (bit p: port p), as its ESC's port descriptor (0x0007) says.
+std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept;
+
+}  // namespace vecat::network

@@ -1,0 +1,314 @@
+#include "network/network_file.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace vecat::network {
+
+namespace {
+
+struct Kind {
+    std::string_view name;
+    Source source;
+};
+// The values of device: (built-in devices).
+constexpr Kind kBuiltIn[] = {
+    {"drive", Source::Drive},          {"coupler", Source::Coupler},        {"junction", Source::Junction},
+    {"digital-in", Source::DigitalIn}, {"digital-out", Source::DigitalOut}, {"analog-in", Source::AnalogIn},
+    {"analog-out", Source::AnalogOut},
+};
+
+bool is_io(Source s) {
+    return s == Source::DigitalIn || s == Source::DigitalOut || s == Source::AnalogIn ||
+           s == Source::AnalogOut;
+}
+
+class Reader {
+  public:
+    explicit Reader(std::string name) : name_(std::move(name)) {}
+
+    [[noreturn]] void fail(unsigned line, const std::string& what) const {
+        throw NetworkFileError(name_ + ":" + std::to_string(line) + ": " + what);
+    }
+    [[noreturn]] void fail(const YAML::Node& n, const std::string& what) const { fail(line(n), what); }
+    static unsigned line(const YAML::Node& n) { return static_cast<unsigned>(n.Mark().line + 1); }
+
+    std::string scalar(const YAML::Node& n, const std::string& key) const {
+        if (!n.IsScalar()) fail(n, key + ": expected a single value");
+        return n.as<std::string>();
+    }
+    // A number, decimal or 0x-hexadecimal, within [0, max].
+    std::uint64_t number(const YAML::Node& n, const std::string& key, std::uint64_t max) const {
+        const std::string s = scalar(n, key);
+        std::size_t used = 0;
+        std::uint64_t v = 0;
+        try {
+            const bool hex = s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X');
+            if (s.empty() || s[0] == '-' || s[0] == '+') throw std::invalid_argument(s);
+            v = std::stoull(hex ? s.substr(2) : s, &used, hex ? 16 : 10);
+            if (used != (hex ? s.size() - 2 : s.size())) throw std::invalid_argument(s);
+        } catch (const std::exception&) {
+            fail(n, key + ": \"" + s + "\" is not a number");
+        }
+        if (v > max) fail(n, key + ": " + s + " is larger than " + std::to_string(max));
+        return v;
+    }
+
+  private:
+    std::string name_;
+};
+
+void parse_upstream(const Reader& r, const YAML::Node& n, DeviceEntry& d) {
+    const std::string s = r.scalar(n, "upstream");
+    const auto colon = s.rfind(':');
+    d.upstream = s.substr(0, colon);
+    if (colon != std::string::npos) {
+        const std::string port = s.substr(colon + 1);
+        if (port.size() != 1 || port[0] < '1' || port[0] > '3')
+            r.fail(n, "upstream: the port after ':' is 1, 2 or 3 (port 0 of a device leads to the master)");
+        d.upstream_port = static_cast<unsigned>(port[0] - '0');
+    }
+    if (d.upstream.empty()) r.fail(n, "upstream: the name of a device, optionally :PORT");
+}
+
+void parse_identity(const Reader& r, const YAML::Node& n, IdentityOverride& id) {
+    if (!n.IsMap()) r.fail(n, "identity: a map of vendor, product, revision, serial");
+    for (const auto& item : n) {
+        const std::string key = r.scalar(item.first, "identity key");
+        const auto v = static_cast<std::uint32_t>(r.number(item.second, key, 0xFFFFFFFFu));
+        if (key == "vendor")
+            id.vendor_id = v;
+        else if (key == "product")
+            id.product_code = v;
+        else if (key == "revision")
+            id.revision = v;
+        else if (key == "serial")
+            id.serial = v;
+        else
+            r.fail(item.first, "identity: unknown key " + key + " (vendor, product, revision, serial)");
+    }
+}
+
+DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string& folder) {
+    if (!n.IsMap()) r.fail(n, "a device is a map (name:, and device:, esi: or sii:)");
+    DeviceEntry d;
+    d.line = Reader::line(n);
+    int sources = 0;
+    std::optional<unsigned> channels_line, esi_keys_line;
+    for (const auto& item : n) {
+        const std::string key = r.scalar(item.first, "key");
+        const YAML::Node& v = item.second;
+        if (key == "name") {
+            d.name = r.scalar(v, key);
+            const bool ok = !d.name.empty() && std::all_of(d.name.begin(), d.name.end(), [](char c) {
+                return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+            });
+            if (!ok) r.fail(v, "name: letters, digits, '_', '-' and '.' only");
+        } else if (key == "device") {
+            ++sources;
+            const std::string k = r.scalar(v, key);
+            const auto* it = std::find_if(std::begin(kBuiltIn), std::end(kBuiltIn),
+                                          [&](const Kind& b) { return b.name == k; });
+            if (it == std::end(kBuiltIn))
+                r.fail(v, "device: unknown device " + k +
+                              " (drive, coupler, junction, digital-in, digital-out, analog-in, analog-out)");
+            d.source = it->source;
+        } else if (key == "esi" || key == "sii") {
+            ++sources;
+            d.source = key == "esi" ? Source::Esi : Source::Sii;
+            d.path = r.scalar(v, key);
+            if (d.path.empty()) r.fail(v, key + ": the path of a file");
+            if (std::filesystem::path(d.path).is_relative())
+                d.path = (std::filesystem::path(folder) / d.path).string();
+        } else if (key == "type") {
+            d.esi_type = r.scalar(v, key);
+            esi_keys_line = Reader::line(v);
+        } else if (key == "product") {
+            d.esi_product = static_cast<std::uint32_t>(r.number(v, key, 0xFFFFFFFFu));
+            esi_keys_line = Reader::line(v);
+        } else if (key == "revision") {
+            d.esi_revision = static_cast<std::uint32_t>(r.number(v, key, 0xFFFFFFFFu));
+            esi_keys_line = Reader::line(v);
+        } else if (key == "channels") {
+            d.channels = static_cast<unsigned>(r.number(v, key, kMaxChannels));
+            if (d.channels == 0) r.fail(v, "channels: at least 1");
+            channels_line = Reader::line(v);
+        } else if (key == "upstream") {
+            parse_upstream(r, v, d);
+        } else if (key == "cable_delay_ns") {
+            d.cable_delay_ns = static_cast<std::uint32_t>(r.number(v, key, 1'000'000));
+        } else if (key == "alias") {
+            d.station_alias = static_cast<std::uint16_t>(r.number(v, key, 0xFFFF));
+        } else if (key == "identity") {
+            parse_identity(r, v, d.identity);
+        } else {
+            r.fail(item.first, "unknown key " + key +
+                                   " (name, device, esi, sii, type, product, revision, channels, upstream, "
+                                   "cable_delay_ns, alias, identity)");
+        }
+    }
+    if (d.name.empty()) r.fail(d.line, "a device without name:");
+    if (sources != 1) r.fail(d.line, d.name + ": give exactly one of device:, esi: and sii:");
+    if (esi_keys_line && d.source != Source::Esi)
+        r.fail(*esi_keys_line, d.name + ": type:, product: and revision: select a device of an esi: file");
+    if (channels_line && !is_io(d.source))
+        r.fail(*channels_line, d.name + ": channels: is for the built-in I/O terminals");
+    return d;
+}
+
+// Each device's ports in the order a frame passes them (ESC datasheet section I, frame processing order
+// with four ports: 0 -> 3 -> 1 -> 2).
+constexpr unsigned kOrder[] = {3, 1, 2};
+
+}  // namespace
+
+std::string_view to_string(Source s) noexcept {
+    switch (s) {
+        case Source::Drive:
+            return "drive";
+        case Source::Esi:
+            return "esi";
+        case Source::Sii:
+            return "sii";
+        case Source::Coupler:
+            return "coupler";
+        case Source::Junction:
+            return "junction";
+        case Source::DigitalIn:
+            return "digital-in";
+        case Source::DigitalOut:
+            return "digital-out";
+        case Source::AnalogIn:
+            return "analog-in";
+        case Source::AnalogOut:
+            return "analog-out";
+    }
+    return "?";
+}
+
+std::uint8_t default_ports(Source s) noexcept {
+    switch (s) {
+        case Source::Coupler:
+            return 0b1011;
+        case Source::Junction:
+        case Source::Esi:
+        case Source::Sii:
+            return 0b1111;
+        default:
+            return 0b0011;
+    }
+}
+
+NetworkFile parse_network(const std::string& yaml_text, const std::string& name, const std::string& folder) {
+    const Reader r(name);
+    YAML::Node root;
+    try {
+        root = YAML::Load(yaml_text);
+    } catch (const YAML::ParserException& x) {
+        r.fail(static_cast<unsigned>(x.mark.line + 1), x.msg);
+    } catch (const YAML::Exception& x) {
+        throw NetworkFileError(name + ": " + x.what());
+    }
+    if (!root.IsMap()) throw NetworkFileError(name + ": a network file is a map with devices:");
+    NetworkFile f;
+    f.folder = folder;
+    YAML::Node list;
+    for (const auto& item : root) {
+        const std::string key = r.scalar(item.first, "key");
+        if (key != "devices") r.fail(item.first, "unknown key " + key + " (devices)");
+        list = item.second;
+    }
+    if (!list || !list.IsSequence() || list.size() == 0)
+        throw NetworkFileError(name + ": devices: a list of at least one device");
+    std::vector<bool> explicit_upstream;
+    for (const auto& n : list) {
+        f.devices.push_back(parse_device(r, n, folder));
+        explicit_upstream.push_back(n["upstream"].IsDefined());
+    }
+
+    // Names, then each device's upstream: the device before it in the list (port 1) unless given.
+    std::map<std::string, std::size_t> by_name;
+    for (std::size_t i = 0; i < f.devices.size(); ++i) {
+        const auto [it, fresh] = by_name.emplace(f.devices[i].name, i);
+        if (!fresh)
+            r.fail(f.devices[i].line, "a second device named " + f.devices[i].name +
+                                          " (the first is on line " +
+                                          std::to_string(f.devices[it->second].line) + ")");
+    }
+    const std::size_t n = f.devices.size();
+    f.parent.assign(n, -1);
+    f.children.assign(n, {-1, -1, -1, -1});
+    if (explicit_upstream[0])
+        r.fail(f.devices[0].line,
+               f.devices[0].name + ": the first device is cabled to the master: no upstream:");
+    for (std::size_t i = 1; i < n; ++i) {
+        DeviceEntry& d = f.devices[i];
+        if (!explicit_upstream[i]) d.upstream = f.devices[i - 1].name;
+        const auto it = by_name.find(d.upstream);
+        if (it == by_name.end()) r.fail(d.line, d.name + ": upstream: no device named " + d.upstream);
+        if (it->second == i) r.fail(d.line, d.name + ": cabled to itself");
+        const DeviceEntry& up = f.devices[it->second];
+        if (!((default_ports(up.source) >> d.upstream_port) & 1u))
+            r.fail(d.line, d.name + ": " + up.name + " (" + std::string(to_string(up.source)) +
+                               ") has no port " + std::to_string(d.upstream_port));
+        int& slot = f.children[it->second][d.upstream_port];
+        if (slot >= 0)
+            r.fail(d.line, d.name + ": port " + std::to_string(d.upstream_port) + " of " + up.name +
+                               " is already cabled to " + f.devices[static_cast<std::size_t>(slot)].name +
+                               " (line " + std::to_string(f.devices[static_cast<std::size_t>(slot)].line) +
+                               (explicit_upstream[i] ? ")" : "); give upstream: NAME:PORT"));
+        slot = static_cast<int>(i);
+        f.parent[i] = static_cast<int>(it->second);
+    }
+    // A tree: every device leads to the first one (the master's) through its upstream devices.
+    for (std::size_t i = 0; i < n; ++i) {
+        std::size_t at = i, steps = 0;
+        while (f.parent[at] >= 0 && steps <= n) {
+            at = static_cast<std::size_t>(f.parent[at]);
+            ++steps;
+        }
+        if (steps > n) r.fail(f.devices[i].line, f.devices[i].name + ": its upstream cables form a loop");
+    }
+
+    // The order the frame reaches them: depth first from the master, ports 3, 1, 2 of each device.
+    std::vector<std::size_t> order;
+    std::vector<std::size_t> stack{0};
+    while (!stack.empty()) {
+        const std::size_t at = stack.back();
+        stack.pop_back();
+        order.push_back(at);
+        for (auto p = std::rbegin(kOrder); p != std::rend(kOrder); ++p)
+            if (const int c = f.children[at][*p]; c >= 0) stack.push_back(static_cast<std::size_t>(c));
+    }
+    std::vector<int> position(n, -1);
+    for (std::size_t k = 0; k < order.size(); ++k)
+        position[order[k]] = static_cast<int>(k);
+    NetworkFile out;
+    out.folder = f.folder;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+        const std::size_t i = order[k];
+        out.devices.push_back(f.devices[i]);
+        out.parent.push_back(f.parent[i] < 0 ? -1 : position[static_cast<std::size_t>(f.parent[i])]);
+        std::array<int, kPorts> ch{-1, -1, -1, -1};
+        for (unsigned p = 0; p < kPorts; ++p)
+            if (f.children[i][p] >= 0) ch[p] = position[static_cast<std::size_t>(f.children[i][p])];
+        out.children.push_back(ch);
+    }
+    return out;
+}
+
+NetworkFile read_network_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw NetworkFileError(path + ": cannot be read");
+    std::stringstream s;
+    s << in.rdbuf();
+    const auto folder = std::filesystem::path(path).parent_path();
+    return parse_network(s.str(), path, folder.empty() ? "." : folder.string());
+}
+
+}  // namespace vecat::network

@@ -1,0 +1,91 @@
+// The network description file (vecat run --network FILE): the devices of a machine and how their ports
+// are cabled, a tree rooted at the master. YAML; examples in examples/networks/, the format in
+// docs/network-file.md. This part only reads and checks the file; build.hpp makes the slaves.
+//
+//   devices:
+//     - name: coupler
+//       device: coupler              # built in: drive, coupler, junction, digital-in, digital-out,
+//     - name: io1                    #   analog-in, analog-out
+//       device: digital-out
+//       channels: 8
+//       upstream: coupler:3          # this device's port 0 is cabled to port 3 of coupler
+//     - name: axis                   # without upstream: the device before it in the list, port 1
+//       esi: drives/vendor.xml       # or sii: dumps/el2004.bin
+//       type: VENDOR-DRIVE-1
+//
+// Every problem is reported with the line of the file it is on; nothing half-checked is returned.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace vecat::network {
+
+// Where a device comes from.
+enum class Source : std::uint8_t {
+    Drive,       // the built-in vecat CiA 402 drive
+    Esi,         // a device of a vendor ESI file (type / product / revision)
+    Sii,         // a raw SII EEPROM dump, with the process data its categories describe
+    Coupler,     // built in: EK1100-like coupler without PDI
+    Junction,    // built in: EK1122-like 4-port junction without PDI
+    DigitalIn,   // built in: digital input terminal
+    DigitalOut,  // built in: digital output terminal
+    AnalogIn,    // built in: analog input terminal (16-bit channels)
+    AnalogOut,   // built in: analog output terminal (16-bit channels)
+};
+std::string_view to_string(Source s) noexcept;
+
+inline constexpr unsigned kPorts = 4;
+inline constexpr unsigned kMaxChannels = 64;
+inline constexpr std::uint32_t kDefaultCableDelayNs = 500;  // esc::Segment::hop_delay_ns
+
+struct IdentityOverride {
+    std::optional<std::uint32_t> vendor_id, product_code, revision, serial;
+};
+
+struct DeviceEntry {
+    unsigned line = 0;  // of the entry in the file
+    std::string name;
+    Source source = Source::Drive;
+    std::string path;  // esi: / sii: file, relative paths resolved against the file's folder
+    std::optional<std::string> esi_type;
+    std::optional<std::uint32_t> esi_product, esi_revision;
+    unsigned channels = 0;  // built-in I/O terminals (0: the kind's default)
+    // Cabling: this device's port 0 to port upstream_port of upstream (empty: the master).
+    std::string upstream;
+    unsigned upstream_port = 1;
+    std::uint32_t cable_delay_ns = kDefaultCableDelayNs;  // of the cable into port 0
+    std::optional<std::uint16_t> station_alias;
+    IdentityOverride identity;
+};
+
+// The checked file. devices are in the order the frame reaches them (the first is cabled to the master,
+// then depth first through each device's ports in the ESC's order 0 -> 3 -> 1 -> 2): the slaves' positions.
+struct NetworkFile {
+    std::string folder;  // of the file, for relative paths
+    std::vector<DeviceEntry> devices;
+    std::vector<int> parent;  // per device: index of its upstream device, -1: the master
+    std::vector<std::array<int, kPorts>> children;  // per device and port: the device cabled there, -1: none
+};
+
+class NetworkFileError : public std::runtime_error {
+  public:
+    using std::runtime_error::runtime_error;
+};
+
+// Reads and checks a file, or the text of one (folder: where relative paths start). Throws NetworkFileError
+// with "FILE:LINE: what is wrong".
+NetworkFile read_network_file(const std::string& path);
+NetworkFile parse_network(const std::string& yaml_text, const std::string& name = "<network>",
+                          const std::string& folder = ".");
+
+// The ports a device of this source has (bit p: port p), before its SII or ESI is read: a drive and the
+// I/O terminals 0 and 1, the coupler 0, 1 and 3 (E-bus), the junction all four. ESI and SII devices: all
+// four here; the build checks the cabling against the ports the device describes.
+std::uint8_t default_ports(Source s) noexcept;
+
+}  // namespace vecat::network

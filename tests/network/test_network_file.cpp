@@ -1,0 +1,228 @@
+// Network files (src/network): the reader and its checks (every refusal names the line), the order the
+// frame reaches the devices, and networks of mixed devices built and brought to OP by the project master.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "device/simple_devices.hpp"
+#include "master/master.hpp"
+#include "network/build.hpp"
+#include "network/network_file.hpp"
+#include "serve/in_process_link.hpp"
+#include "shared_data.hpp"
+
+namespace vecat::network {
+namespace {
+
+std::string names(const NetworkFile& f) {
+    std::string s;
+    for (const auto& d : f.devices)
+        s += (s.empty() ? "" : " ") + d.name;
+    return s;
+}
+
+// The message of the refusal of text ("" if it was accepted).
+std::string refusal(const std::string& text) {
+    try {
+        parse_network(text, "net.yaml");
+    } catch (const NetworkFileError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(NetworkFile, ALineNeedsNoCabling) {
+    const auto f = parse_network(R"(
+devices:
+  - name: a
+    device: drive
+  - name: b
+    device: drive
+  - name: c
+    device: digital-in
+    channels: 4
+)");
+    EXPECT_EQ(names(f), "a b c");
+    EXPECT_EQ(f.parent, (std::vector<int>{-1, 0, 1}));
+    EXPECT_EQ(f.children[0][1], 1);
+    EXPECT_EQ(f.devices[2].channels, 4u);
+    EXPECT_EQ(f.devices[2].source, Source::DigitalIn);
+}
+
+TEST(NetworkFile, ATreeIsOrderedAsTheFramePassesThePorts) {
+    // coupler: port 3 (E-bus) before port 1; the junction: 3, then 1, then 2 (ESC processing order).
+    const auto f = parse_network(R"(
+devices:
+  - name: coupler
+    device: coupler
+  - name: out-rj45
+    device: junction
+    upstream: coupler:1
+  - name: j-port2
+    device: drive
+    upstream: out-rj45:2
+  - name: j-port1
+    device: drive
+    upstream: out-rj45:1
+  - name: ebus1
+    device: digital-out
+    upstream: coupler:3
+  - name: ebus2
+    device: digital-in
+  - name: j-port3
+    device: analog-in
+    upstream: out-rj45:3
+    cable_delay_ns: 120
+)");
+    EXPECT_EQ(names(f), "coupler ebus1 ebus2 out-rj45 j-port3 j-port1 j-port2");
+    EXPECT_EQ(f.parent, (std::vector<int>{-1, 0, 1, 0, 3, 3, 3}));
+    EXPECT_EQ(f.children[0][3], 1);
+    EXPECT_EQ(f.children[0][1], 3);
+    EXPECT_EQ(f.children[3][2], 6);
+    EXPECT_EQ(f.devices[4].cable_delay_ns, 120u);
+    EXPECT_EQ(f.devices[1].cable_delay_ns, kDefaultCableDelayNs);
+}
+
+TEST(NetworkFile, EveryRefusalNamesTheLine) {
+    const std::pair<const char*, const char*> cases[] = {
+        {"devices:\n  - name: a\n    device: drive\n  - name: a\n    device: drive\n",
+         "net.yaml:4: a second device named a (the first is on line 2)"},
+        {"devices:\n  - name: a\n    device: drive\n  - name: b\n    device: drive\n    upstream: x\n",
+         "net.yaml:4: b: upstream: no device named x"},
+        {"devices:\n  - name: a\n    device: junction\n  - name: b\n    device: drive\n  - name: c\n    "
+         "device: drive\n"
+         "    upstream: a:1\n",
+         "net.yaml:6: c: port 1 of a is already cabled to b (line 4)"},
+        {"devices:\n  - name: a\n    device: drive\n  - name: b\n    device: drive\n    upstream: c\n  - "
+         "name: c\n"
+         "    device: drive\n    upstream: b\n",
+         "its upstream cables form a loop"},
+        {"devices:\n  - name: a\n    device: drive\n    colour: red\n", "net.yaml:4: unknown key colour"},
+        {"devices:\n  - name: a\n    device: toaster\n", "net.yaml:3: device: unknown device toaster"},
+        {"devices:\n  - name: a\n    device: drive\n    upstream: b\n",
+         "net.yaml:2: a: the first device is cabled to the master"},
+        {"devices:\n  - name: a\n    device: drive\n    channels: 4\n",
+         "net.yaml:4: a: channels: is for the built-in I/O terminals"},
+        {"devices:\n  - name: a\n    device: digital-in\n    channels: lots\n",
+         "net.yaml:4: channels: \"lots\" is not a number"},
+        {"devices:\n  - name: a\n    device: digital-in\n    channels: 65\n", "is larger than 64"},
+        {"devices:\n  - name: a\n    device: drive\n  - name: b\n    device: drive\n    upstream: a:4\n",
+         "net.yaml:6: upstream: the port after ':' is 1, 2 or 3"},
+        {"devices:\n  - name: a\n    device: drive\n  - name: b\n    device: drive\n    upstream: a:3\n",
+         "net.yaml:4: b: a (drive) has no port 3"},
+        {"devices:\n  - name: a\n    device: drive\n    type: X\n",
+         "net.yaml:4: a: type:, product: and revision:"},
+        {"devices:\n  - name: a\n    device: drive\n    esi: x.xml\n", "net.yaml:2: a: give exactly one of"},
+        {"devices:\n  - name: a\n", "net.yaml:2: a: give exactly one of"},
+        {"devices:\n  - device: drive\n", "net.yaml:2: a device without name:"},
+        {"devices: [\n", "net.yaml:"},
+        {"devices: []\n", "devices: a list of at least one device"},
+        {"- a\n- b\n", "a network file is a map with devices:"},
+        {"devices:\n  - name: a\n    device: drive\n    identity: {vendor: 1, colour: 2}\n",
+         "identity: unknown key colour"},
+    };
+    for (const auto& [text, expected] : cases) {
+        const std::string got = refusal(text);
+        EXPECT_NE(got.find(expected), std::string::npos) << "file:\n" << text << "\nrefused with: " << got;
+    }
+}
+
+TEST(NetworkFile, RelativePathsStartAtTheFilesFolder) {
+    const auto f = parse_network("devices:\n  - name: a\n    sii: dumps/x.bin\n", "n", "/etc/machine");
+    EXPECT_EQ(f.devices[0].path, "/etc/machine/dumps/x.bin");
+    EXPECT_EQ(f.devices[0].source, Source::Sii);
+}
+
+// A mixed line brought to OP by the project master behind an in-process link.
+struct Served {
+    explicit Served(const std::string& text)
+        : built(build_network(parse_network(text), "net.yaml")), link(*built.segment), master(link) {}
+    BuiltNetwork built;
+    net::InProcessLink link;
+    master::Master master;
+};
+
+TEST(Network, BuiltInDevicesAndDrivesReachOpWithTheExpectedWorkingCounter) {
+    Served s(R"(
+devices:
+  - name: coupler
+    device: coupler
+    alias: 7
+  - name: drive
+    device: drive
+    identity: {serial: 0x1234}
+  - name: di
+    device: digital-in
+    channels: 12
+  - name: do
+    device: digital-out
+  - name: ai
+    device: analog-in
+    channels: 2
+  - name: ao
+    device: analog-out
+)");
+    ASSERT_EQ(s.built.segment->size(), 6u);
+    std::string why;
+    ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
+    const auto& sl = s.master.slaves();
+    EXPECT_EQ(sl[0].sii.identity.product_code, device::simple_product::Coupler);
+    EXPECT_EQ(sl[0].sii.station_alias, 7);
+    EXPECT_EQ(sl[1].sii.identity.serial, 0x1234u);
+    EXPECT_EQ(sl[2].sii.identity.product_code, device::simple_product::DigitalIn | 12);
+    EXPECT_EQ(sl[2].in_bytes, 2u);
+    EXPECT_EQ(sl[3].out_bytes, 1u);
+    EXPECT_EQ(sl[4].in_bytes, 4u);
+    EXPECT_EQ(sl[5].out_bytes, 8u);
+    // drive: outputs and inputs (3); each terminal one direction (2 for outputs, 1 for inputs).
+    EXPECT_EQ(s.master.expected_wkc(), 3 + 1 + 2 + 1 + 2);
+    for (int i = 0; i < 100; ++i)
+        ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
+    // The outputs of the digital output terminal reach its process image.
+    s.master.outputs(3)[0] = 0xA5;
+    s.master.exchange_process_data();
+    auto& app = dynamic_cast<esc::ProcessImageApplication&>(s.built.segment->slave(3).app());
+    s.built.segment->tick(s.link.now_ns());
+    EXPECT_EQ(app.outputs()[0], 0xA5);
+}
+
+TEST(Network, ADeviceFromAnSiiDumpServesTheDumpAndItsProcessData) {
+    VECAT_REQUIRE_SHARED_DATA("sii");
+    const std::string sii = test::shared_data("sii/");
+    Served s("devices:\n  - name: coupler\n    sii: " + sii +
+             "beckhoff-ek1100.bin\n  - name: out\n    sii: " + sii +
+             "beckhoff-el2004.bin\n  - name: akd\n    sii: " + sii + "kollmorgen-akd.bin\n    alias: 0x42\n");
+    std::string why;
+    ASSERT_TRUE(s.master.startup(protocol::AlState::PreOp, &why)) << why;
+    const auto& sl = s.master.slaves();
+    ASSERT_EQ(sl.size(), 3u);
+    EXPECT_EQ(sl[0].sii.identity.vendor_id, 2u);  // Beckhoff
+    EXPECT_NE(sl[0].sii.device_name().find("EK1100"), std::string::npos) << sl[0].sii.device_name();
+    EXPECT_NE(sl[1].sii.device_name().find("EL2004"), std::string::npos) << sl[1].sii.device_name();
+    EXPECT_EQ(sl[2].sii.station_alias, 0x42);
+    EXPECT_TRUE(sl[2].sii.checksum_ok);
+    // The dump itself is what the ESC serves, but for the alias and its checksum.
+    std::ifstream f(sii + "beckhoff-el2004.bin", std::ios::binary);
+    const std::vector<std::uint8_t> dump((std::istreambuf_iterator<char>(f)),
+                                         std::istreambuf_iterator<char>());
+    EXPECT_EQ(s.built.segment->slave(1).esc().eeprom(), dump);
+}
+
+TEST(Network, AnUnreadableSiiDumpIsRefusedWithItsLine) {
+    const auto junk = std::filesystem::temp_directory_path() / "vecat-not-an-sii.bin";
+    std::ofstream(junk) << "hello";
+    try {
+        build_network(parse_network("devices:\n  - name: a\n    device: drive\n  - name: b\n    sii: " +
+                                    junk.string() + "\n"),
+                      "net.yaml");
+        ADD_FAILURE() << "accepted";
+    } catch (const NetworkFileError& e) {
+        EXPECT_NE(std::string(e.what()).find("net.yaml:4: b: "), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("not an SII image"), std::string::npos) << e.what();
+    }
+    std::filesystem::remove(junk);
+}
+
+}  // namespace
+}  // namespace vecat::network
