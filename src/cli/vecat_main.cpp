@@ -29,6 +29,7 @@
 #include "net/privileges.hpp"
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
+#include "network/build.hpp"
 #include "report/master_checks.hpp"
 #include "serve/server.hpp"
 
@@ -123,6 +124,7 @@ struct RunOptions {
     vecat::net::RealtimeOptions rt;
     std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
     std::string downstream;
+    std::string network_path;  // --network: the devices and their cabling from a file
     std::string report_path;   // --report: JUnit XML of the checks on the master
     bool report_fail = false;  // --report-fail: exit 3 when a check failed
 };
@@ -132,8 +134,8 @@ struct RunOptions {
 int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* ready = nullptr,
             std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
-                 sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, report_path,
-                 report_fail] = o;
+                 sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, network_path,
+                 report_path, report_fail] = o;
     std::string why;
     for (const std::string& i : {iface, downstream}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -148,10 +150,28 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         fmt::print(stderr, "vecat: --downstream must be another interface than --iface\n");
         return 2;
     }
-    auto loaded = load_device(esi_path, sel, true);
-    if (!loaded) return 1;
-    const auto& dev = *loaded;
-    auto seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
+    std::unique_ptr<vecat::esc::Segment> seg;
+    std::string served;  // what the start line names
+    if (!network_path.empty()) {
+        try {
+            auto built =
+                vecat::network::build_network(vecat::network::read_network_file(network_path), network_path);
+            for (const auto& n : built.notes)
+                fmt::print(stderr, "vecat: {}\n", n);
+            seg = std::move(built.segment);
+        } catch (const vecat::network::NetworkFileError& e) {
+            fmt::print(stderr, "vecat: {}\n", e.what());
+            return 1;
+        }
+        served = fmt::format("network {} ({} devices)", network_path, seg->size());
+    } else {
+        auto loaded = load_device(esi_path, sel, true);
+        if (!loaded) return 1;
+        const auto& dev = *loaded;
+        seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
+        served = fmt::format("{} x \"{}\" (vendor 0x{:08X}, product 0x{:08X})", slaves, dev.name,
+                             dev.identity.vendor_id, dev.identity.product_code);
+    }
     if (!param_dir.empty() && !attach_parameter_stores(*seg, param_dir, log)) return 1;
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
@@ -177,8 +197,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     auto faults = vecat::cli::start_fault_session(*seg, fault_opts, faults_ok);
     if (!faults_ok) return 1;
     if (!ready) install_signals();
-    fmt::print(log, "vecat: {} x \"{}\" on {} (vendor 0x{:08X}, product 0x{:08X}); Ctrl-C stops\n", slaves,
-               dev.name, iface, dev.identity.vendor_id, dev.identity.product_code);
+    fmt::print(log, "vecat: {} on {}; Ctrl-C stops\n", served, iface);
     std::fflush(log);  // a program that starts vecat run reads this line to know it serves
     vecat::net::ServeOptions opt;
     opt.busy_poll = busy;
@@ -241,6 +260,36 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         if (report_fail && !checks->findings().empty()) return kReportFailed;
     }
     return 0;
+}
+
+// vecat network check: the devices in the order the frame reaches them, where each is cabled, what was
+// guessed; exit 1 with the file's line when something is wrong.
+int cmd_network_check(const std::string& file) {
+    try {
+        const auto f = vecat::network::read_network_file(file);
+        const auto built = vecat::network::build_network(f, file);
+        fmt::print("{}: {} devices\n", file, f.devices.size());
+        for (std::size_t i = 0; i < f.devices.size(); ++i) {
+            const auto& d = f.devices[i];
+            const auto& desc = built.segment->slave(i).description();
+            const std::string up =
+                f.parent[i] < 0
+                    ? "the master"
+                    : fmt::format("{} port {}", f.devices[static_cast<std::size_t>(f.parent[i])].name,
+                                  d.upstream_port);
+            fmt::print(
+                "  {:>3}  {:<16} {:<11} vendor 0x{:08X} product 0x{:08X} rev 0x{:08X}  \"{}\"  port 0 to "
+                "{}\n",
+                i, d.name, vecat::network::to_string(d.source), desc.identity.vendor_id,
+                desc.identity.product_code, desc.identity.revision, desc.name, up);
+        }
+        for (const auto& n : built.notes)
+            fmt::print("note: {}\n", n);
+        return 0;
+    } catch (const vecat::network::NetworkFileError& e) {
+        fmt::print(stderr, "{}\n", e.what());
+        return 1;
+    }
 }
 
 int cmd_esi_generate(const std::string& out, const std::string& esi_path,
@@ -359,6 +408,12 @@ int main(int argc, char** argv) {
              "TWINsync between drives 1 and 2 preset: off (configure it by CoE), gantry (P2580 29/30), "
              "position (PCON 7/8) or speed (SCON 5/6); drive 2 is then controlled through TWINsync")
             ->transform(CLI::CheckedTransformer(presets, CLI::ignore_case));
+        c->add_option(
+             "--network", ro.network_path,
+             "Serve the devices and cabling of this network file (docs/network-file.md) instead of a "
+             "line of drives")
+            ->excludes(c->get_option("--slaves"))
+            ->excludes(c->get_option("--twinsync"));
         c->add_option("--pcap", ro.pcap_path, "Write every frame in and out to this pcapng file");
         c->add_option("--report", ro.report_path,
                       "Check what the master does against the rules of the EtherCAT specifications and write "
@@ -439,6 +494,12 @@ int main(int argc, char** argv) {
     esi_chk->add_option("--schema", check_xsd, "EtherCATInfo.xsd to validate against (\"\" skips)");
     add_esi_options(esi_chk, false);
 
+    auto* network = app.add_subcommand("network", "Network files: devices and their cabling");
+    network->require_subcommand(1);
+    auto* network_chk = network->add_subcommand(
+        "check", "Read a network file, make its devices and list them, or say what is wrong");
+    std::string network_file;
+    network_chk->add_option("file", network_file, "Network file (YAML)")->required();
     auto* scope = vecat::cli::add_scope_command(app);
 
     CLI11_PARSE(app, argc, argv);
@@ -447,6 +508,11 @@ int main(int argc, char** argv) {
     if (product != 0) sel.product_code = product;
     ro.esi_path = esi_path;
     ro.sel = sel;
+    if (!ro.network_path.empty() && !esi_path.empty()) {
+        fmt::print(stderr,
+                   "vecat: --network and --esi exclude each other (a network file names its ESI files)\n");
+        return 2;
+    }
     if (*run) return cmd_run(ro, g_stop);
     if (*exec) {
         ro.iface = eo.slave_interface;
@@ -458,6 +524,7 @@ int main(int argc, char** argv) {
     }
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
+    if (*network_chk) return cmd_network_check(network_file);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return vecat::cli::run_demo(demo_opt);

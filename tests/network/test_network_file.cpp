@@ -224,5 +224,21 @@ TEST(Network, AnUnreadableSiiDumpIsRefusedWithItsLine) {
     std::filesystem::remove(junk);
 }
 
+TEST(Network, EveryExampleFileBuilds) {
+    unsigned n = 0;
+    for (const auto& e : std::filesystem::directory_iterator(std::string(VECAT_SOURCE_DIR) + "/examples/networks")) {
+        if (e.path().extension() != ".yaml") continue;
+        const auto f = read_network_file(e.path().string());
+        // The example of real devices needs ../shared beside the clone.
+        bool shared = false;
+        for (const auto& d : f.devices)
+            shared |= d.path.find("shared/data") != std::string::npos;
+        if (shared && !std::filesystem::exists(test::shared_data("sii"))) continue;
+        EXPECT_NO_THROW(build_network(f, e.path().string())) << e.path();
+        ++n;
+    }
+    EXPECT_GE(n, 2u);
+}
+
 }  // namespace
 }  // namespace vecat::network

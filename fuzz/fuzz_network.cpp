@@ -1,0 +1,34 @@
+// Fuzz target: the network file reader (network::parse_network: YAML, the devices' keys, the cabling
+// checks, the order of the tree). Input: the text of a file.
+// Invariants: the text is accepted or refused with a NetworkFileError that names a line ("NAME:LINE: ...")
+// or the file; nothing else is thrown. An accepted file is a tree: one device on the master, every other one
+// with a parent before it in the order, its port cabled to it and to nothing else.
+#include <cstdint>
+#include <string>
+
+#include "fuzz_support.hpp"
+#include "network/network_file.hpp"
+
+using namespace vecat;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    const std::string text(reinterpret_cast<const char*>(data), size);
+    network::NetworkFile f;
+    try {
+        f = network::parse_network(text, "fuzz.yaml", "/nonexistent");
+    } catch (const network::NetworkFileError& e) {
+        VECAT_FUZZ_CHECK(std::string(e.what()).rfind("fuzz.yaml:", 0) == 0);
+        return 0;
+    }
+    const std::size_t n = f.devices.size();
+    VECAT_FUZZ_CHECK(n > 0 && f.parent.size() == n && f.children.size() == n);
+    VECAT_FUZZ_CHECK(f.parent[0] == -1);
+    for (std::size_t i = 1; i < n; ++i) {
+        const int p = f.parent[i];
+        VECAT_FUZZ_CHECK(p >= 0 && static_cast<std::size_t>(p) < i);
+        const unsigned port = f.devices[i].upstream_port;
+        VECAT_FUZZ_CHECK(port >= 1 && port < network::kPorts);
+        VECAT_FUZZ_CHECK(f.children[static_cast<std::size_t>(p)][port] == static_cast<int>(i));
+    }
+    return 0;
+}
