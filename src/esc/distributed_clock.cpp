@@ -1,5 +1,7 @@
 #include "esc/distributed_clock.hpp"
 
+#include "esc/esc.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -226,15 +228,21 @@ void DistributedClock::after_read(std::uint16_t lo, std::uint16_t hi) {
     }
 }
 
-void DistributedClock::after_write(std::uint16_t lo, std::uint16_t hi, std::uint64_t port0_ns,
-                                   std::uint64_t port1_ns, bool port1_open, std::uint8_t activation_before) {
+void DistributedClock::after_write(std::uint16_t lo, std::uint16_t hi, const FrameTiming& t,
+                                   std::uint8_t open_ports, std::uint8_t activation_before) {
+    const std::uint64_t port0_ns = t.port0_ns;
     if (overlaps(lo, hi, addr(Reg::DcRecvTimePort0), 4)) {
         // Write to receive time port 0: every port latches the local time this frame passed it
-        // (ETG.1000.4 9.1); the processing unit latches the whole 64 bits in 0x0918.
+        // (ETG.1000.4 9.1); the processing unit latches the whole 64 bits in 0x0918. A closed port sees no
+        // frame and keeps its time.
         const std::uint64_t t0 = local_time(port0_ns);
         st_le32(&regs_[addr(Reg::DcRecvTimePort0)], static_cast<std::uint32_t>(t0));
-        if (port1_open)
-            st_le32(&regs_[addr(Reg::DcRecvTimePort1)], static_cast<std::uint32_t>(local_time(port1_ns)));
+        const std::uint64_t back[4] = {0, t.port1_ns, t.port2_ns, t.port3_ns};
+        constexpr Reg regs[4] = {Reg::DcRecvTimePort0, Reg::DcRecvTimePort1, Reg::DcRecvTimePort2,
+                                 Reg::DcRecvTimePort3};
+        for (unsigned p = 1; p < 4; ++p)
+            if ((open_ports >> p) & 1u)
+                st_le32(&regs_[addr(regs[p])], static_cast<std::uint32_t>(local_time(back[p])));
         st_le64(&regs_[addr(Reg::DcRecvTimeEcatPu)], t0);
     }
     if (overlaps(lo, hi, addr(Reg::DcSystemTimeOffset), 8)) {

@@ -78,10 +78,11 @@ class DistributedClock {
     // Bytes of a system time write (ARMW/FRMW/APWR... on 0x0910); byte_mask says which of the 8 bytes came.
     void system_time_written(const std::array<std::uint8_t, 8>& value, std::uint8_t byte_mask,
                              std::uint64_t host_ns);
-    // Side effects of an ECAT write of [lo, hi] (already stored with the write masks applied).
-    // before holds the register bytes 0x0980..0x0981 before the write (the SYNC unit may belong to the PDI).
-    void after_write(std::uint16_t lo, std::uint16_t hi, std::uint64_t port0_ns, std::uint64_t port1_ns,
-                     bool port1_open, std::uint8_t activation_before);
+    // Side effects of an ECAT write of [lo, hi] (already stored with the write masks applied), in the frame
+    // t; open_ports (bit p): the ports the frame came back through, whose receive times a latch sets.
+    // activation_before holds 0x0981 before the write (the SYNC unit may belong to the PDI).
+    void after_write(std::uint16_t lo, std::uint16_t hi, const FrameTiming& t, std::uint8_t open_ports,
+                     std::uint8_t activation_before);
     // Port 1 receive time of the last latch, set when the frame came back through port 1 later than the
     // write was processed (chained segments: the frame returns from another process).
     void latch_port1_receive_time(std::uint64_t host_ns);

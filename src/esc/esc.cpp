@@ -123,9 +123,40 @@ void Esc::reload_eeprom() {
     update_dl_status();
 }
 
+namespace {
+// DL control loop setting of a port (0x0100 bits 8+2p..9+2p; ESC datasheet section II).
+enum class Loop : std::uint8_t { Auto = 0, AutoClose = 1, Open = 2, Closed = 3 };
+}  // namespace
+
+bool Esc::port_open(unsigned port) const {
+    if (port > 3 || ((cfg_.port_descriptor >> (2 * port)) & 0x3) == 0) return false;
+    switch (static_cast<Loop>((mem_[addr(Reg::DlControl) + 1] >> (2 * port)) & 0x3)) {
+        case Loop::Auto:
+            return port_link(port);
+        case Loop::AutoClose:
+            return port_link(port) && !((auto_closed_ >> port) & 1u);
+        case Loop::Open:
+            return true;
+        case Loop::Closed:
+            return false;
+    }
+    return false;
+}
+
+std::uint8_t Esc::open_ports() const {
+    std::uint8_t m = 0;
+    for (unsigned p = 0; p < 4; ++p)
+        if (port_open(p)) m = static_cast<std::uint8_t>(m | (1u << p));
+    return m;
+}
+
 void Esc::set_port_link(unsigned port, bool up) {
     if (port > 3) return;
-    if (!up && port_link(port)) saturating_inc(mem_[addr(Reg::LostLinkCounter) + port]);
+    if (!up && port_link(port)) {
+        saturating_inc(mem_[addr(Reg::LostLinkCounter) + port]);
+        // Auto close: closed at the link loss, opened again only by the master (a write of the setting).
+        auto_closed_ = static_cast<std::uint8_t>(auto_closed_ | (1u << port));
+    }
     if (up)
         link_mask_ = static_cast<std::uint8_t>(link_mask_ | (1u << port));
     else
@@ -141,8 +172,7 @@ void Esc::update_dl_status() {
         const bool implemented = ((cfg_.port_descriptor >> (2 * p)) & 0x3) != 0;
         if (implemented && port_link(p))
             v |= static_cast<std::uint16_t>(dl_status::link(p) | dl_status::communication(p));
-        else
-            v |= dl_status::loop_closed(p);
+        if (!port_open(p)) v |= dl_status::loop_closed(p);
     }
     st_le16(&mem_[addr(Reg::DlStatus)], v);
 }
@@ -460,8 +490,8 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
         if (systime_bytes) dc_.system_time_written(systime, systime_bytes, t.port0_ns);
         after_register_write(static_cast<std::uint16_t>(reg_lo), static_cast<std::uint16_t>(reg_hi), t);
         if (overlaps(reg_lo, reg_hi, kDcFirst, kDcSize))
-            dc_.after_write(static_cast<std::uint16_t>(reg_lo), static_cast<std::uint16_t>(reg_hi),
-                            t.port0_ns, t.port1_ns, port_link(1), activation_before);
+            dc_.after_write(static_cast<std::uint16_t>(reg_lo), static_cast<std::uint16_t>(reg_hi), t,
+                            open_ports(), activation_before);
     }
     return counted;
 }
@@ -530,6 +560,11 @@ bool Esc::sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, st
 
 void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTiming& /*t*/) {
     if (overlaps(lo, hi, addr(Reg::AlControl), 2)) set_al_event(al_event::AlControl);
+    if (overlaps(lo, hi, addr(Reg::DlControl) + 1, 1)) {
+        // Writing "auto close" again opens a port that has its link back.
+        auto_closed_ = static_cast<std::uint8_t>(auto_closed_ & ~link_mask_);
+        update_dl_status();
+    }
     if (overlaps(lo, hi, addr(Reg::RxErrorCounter), 12))
         std::memset(&mem_[addr(Reg::RxErrorCounter)], 0, 12);  // any write clears 0x0300-0x030B
     if (overlaps(lo, hi, addr(Reg::EcatProcessingUnitErrorCounter), 1))

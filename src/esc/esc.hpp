@@ -31,9 +31,13 @@ struct EscConfig {
 };
 
 // Where the frame is on the line when it reaches this ESC (nanoseconds on the host clock).
+// The frame passes an ESC's ports in the order 0 -> 3 -> 1 -> 2 (ESC datasheet section I, frame
+// processing): it arrives at port 0 and comes back through each open port after the devices behind it.
 struct FrameTiming {
     std::uint64_t port0_ns = 0;  // arrival at port 0 (forward direction)
     std::uint64_t port1_ns = 0;  // arrival back at port 1 (return direction), if port 1 is open
+    std::uint64_t port2_ns = 0;  // ... at port 2
+    std::uint64_t port3_ns = 0;  // ... at port 3
 };
 
 struct EscCounters {
@@ -61,6 +65,10 @@ class Esc {
     // that goes down counts in the lost link counter (0x0310 + port), as in the ports' auto modes.
     void set_port_link(unsigned port, bool up);
     bool port_link(unsigned port) const { return (link_mask_ >> port) & 1u; }
+    // Whether a frame leaves through the port (to the device cabled there) or the port loops it back to the
+    // next one: DL control loop setting (0x0100 bits 8+2p..9+2p: auto, auto close, open, closed) and link
+    // (ESC datasheet section II, 0x0100 and 0x0110). An unimplemented port is always closed.
+    bool port_open(unsigned port) const;
 
     // ---- PDI side (the slave application)
     std::uint32_t al_events() const { return ld_le32(&mem_[protocol::addr(protocol::Reg::AlEventRequest)]); }
@@ -175,6 +183,7 @@ class Esc {
 
     void refresh_dynamic_registers(std::uint16_t first, std::uint16_t last, const FrameTiming& t);
     void after_register_write(std::uint16_t first, std::uint16_t last, const FrameTiming& t);
+    std::uint8_t open_ports() const;  // bit p: port_open(p)
     void update_sm(unsigned i);
     void update_sm_status(unsigned i);
     void update_fmmu(unsigned i);
@@ -196,6 +205,7 @@ class Esc {
     std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;
     std::uint64_t fmmu_log_first_bit_ = ~std::uint64_t{0}, fmmu_log_last_bit_ = 0;
     std::uint32_t repeat_bits_ = 0;
+    std::uint8_t auto_closed_ = 0;  // ports that "auto close" closed at a link loss, until the master reopens
     std::uint8_t link_mask_ = 0x01;
     std::uint8_t written_sii_cmd_ = 0;
     bool sm_activation_event_ = false;

@@ -22,22 +22,132 @@ void Segment::add(std::unique_ptr<Slave> s) {
     add(std::move(s), {});
 }
 
+namespace {
+// The ports after port 0 in the order a frame passes them (ESC datasheet section I, frame processing).
+constexpr unsigned kPortOrder[] = {3, 1, 2};
+}  // namespace
+
 void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
+    const std::size_t i = slaves_.size();
     slaves_.push_back(std::move(s));
     own_factory_.push_back(std::move(own));
     cable_up_.push_back(1);
     halted_.push_back(0);
     last_run_ns_.push_back(0);
     latched_.push_back(0);
-    // Port 1 of every slave but the last one has a link to its successor.
-    for (std::size_t i = 0; i < slaves_.size(); ++i)
-        update_links(i);
+    // A line: port 0 of the new slave to port 1 of the one before.
+    parent_.push_back(static_cast<int>(i) - 1);
+    parent_port_.push_back(i ? 1 : 0);
+    delay_.push_back(0);
+    child_.push_back({-1, -1, -1, -1});
+    if (i) child_[i - 1][1] = static_cast<int>(i);
+    reached_.push_back(0);
+    timing_.push_back({});
+    stack_.reserve(slaves_.size());
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        update_links(k);
+}
+
+bool Segment::set_topology(const std::vector<int>& parents, const std::vector<std::uint8_t>& ports,
+                           const std::vector<std::uint32_t>& delays_ns, std::string* why) {
+    const std::size_t n = slaves_.size();
+    const auto fail = [&](const std::string& w) {
+        if (why) *why = w;
+        return false;
+    };
+    if (parents.size() != n || ports.size() != n || delays_ns.size() != n) return fail("one entry per slave");
+    std::vector<std::array<int, 4>> child(n, {-1, -1, -1, -1});
+    for (std::size_t k = 0; k < n; ++k) {
+        const int p = parents[k];
+        if ((k == 0) != (p < 0)) return fail("slave 0, and only it, is cabled to the master");
+        if (p < 0) continue;
+        if (static_cast<std::size_t>(p) >= k || ports[k] < 1 || ports[k] > 3)
+            return fail("slave " + std::to_string(k) + ": bad parent or port");
+        int& slot = child[static_cast<std::size_t>(p)][ports[k]];
+        if (slot >= 0) return fail("slave " + std::to_string(k) + ": port cabled twice");
+        slot = static_cast<int>(k);
+    }
+    // Depth first, ports 3, 1, 2: the order must be the slaves' own.
+    std::vector<std::size_t> order, todo{0};
+    while (n && !todo.empty()) {
+        const std::size_t at = todo.back();
+        todo.pop_back();
+        order.push_back(at);
+        for (auto p = std::rbegin(kPortOrder); p != std::rend(kPortOrder); ++p)
+            if (const int c = child[at][*p]; c >= 0) todo.push_back(static_cast<std::size_t>(c));
+    }
+    for (std::size_t k = 0; k < order.size(); ++k)
+        if (order[k] != k) return fail("the slaves are not in the order the frame reaches them");
+    parent_ = parents;
+    parent_port_.assign(ports.begin(), ports.end());
+    parent_port_[0] = 0;
+    delay_ = delays_ns;
+    child_ = std::move(child);
+    for (std::size_t k = 0; k < n; ++k)
+        update_links(k);
+    return true;
 }
 
 void Segment::update_links(std::size_t i) {
     Esc& e = slaves_[i]->esc();
     e.set_port_link(0, cable(i));
-    e.set_port_link(1, i + 1 < slaves_.size() ? cable(i + 1) : downstream_);
+    for (unsigned p = 1; p < 4; ++p) {
+        const int c = child_[i][p];
+        // The last slave's free port 1 leads to the next segment (chained segments), if anywhere.
+        const bool up =
+            c >= 0 ? cable(static_cast<std::size_t>(c)) : (p == 1 && i + 1 == slaves_.size() && downstream_);
+        if (up || e.port_link(p)) e.set_port_link(p, up);
+    }
+}
+
+std::size_t Segment::refresh_reached() const {
+    std::size_t m = 0;
+    for (std::size_t k = 0; k < slaves_.size(); ++k) {
+        const int p = parent_[k];
+        const bool r =
+            cable(k) && (p < 0 || (reached_[static_cast<std::size_t>(p)] &&
+                                   slaves_[static_cast<std::size_t>(p)]->esc().port_open(parent_port_[k])));
+        reached_[k] = r ? 1 : 0;
+        m += r;
+    }
+    return m;
+}
+
+std::size_t Segment::route(std::uint64_t now_ns) {
+    stack_.clear();
+    if (slaves_.empty() || !reached_[0]) return slaves_.size();
+    timing_[0] = FrameTiming{now_ns, 0, 0, 0};
+    stack_.push_back({0, 0, now_ns});
+    std::size_t visited = 1;  // slaves the frame has passed (depth first: positions 0..visited-1)
+    while (!stack_.empty()) {
+        Visit& v = stack_.back();
+        if (v.next < 3) {
+            const unsigned p = kPortOrder[v.next++];
+            if (!slaves_[v.slave]->esc().port_open(p)) continue;  // the port loops the frame back at once
+            const int c = child_[v.slave][p];
+            if (c < 0 || !reached_[static_cast<std::size_t>(c)]) {
+                // Open without a device behind it (a port forced open without link): the frame is gone. A
+                // free port 1 of the last slave leads to the next segment instead.
+                if (!(p == 1 && v.slave + 1 == slaves_.size() && downstream_)) return visited;
+                continue;
+            }
+            const auto k = static_cast<std::size_t>(c);
+            const std::uint64_t at = v.t + cable_delay(k);
+            timing_[k] = FrameTiming{at, 0, 0, 0};
+            stack_.push_back({k, 0, at});  // capacity reserved in add(): v stays valid until here
+            ++visited;
+        } else {
+            const std::size_t k = v.slave;
+            const std::uint64_t out = v.t;
+            stack_.pop_back();
+            if (stack_.empty()) break;
+            Visit& up = stack_.back();
+            up.t = out + cable_delay(k);
+            FrameTiming& t = timing_[up.slave];
+            (parent_port_[k] == 1 ? t.port1_ns : parent_port_[k] == 2 ? t.port2_ns : t.port3_ns) = up.t;
+        }
+    }
+    return slaves_.size();
 }
 
 void Segment::set_downstream_link(bool up) {
@@ -99,15 +209,11 @@ void Segment::set_cable(std::size_t k, bool connected) {
     if (k >= cable_up_.size()) return;
     cable_up_[k] = connected ? 1 : 0;
     update_links(k);
-    if (k > 0) update_links(k - 1);
+    if (parent_[k] >= 0) update_links(static_cast<std::size_t>(parent_[k]));
 }
 
 std::size_t Segment::reachable() const {
-    if (slaves_.empty() || !cable(0)) return 0;
-    std::size_t m = 1;
-    while (m < slaves_.size() && cable(m))
-        ++m;
-    return m;
+    return refresh_reached();
 }
 
 void Segment::set_firmware_halted(std::size_t i, bool halted) {
@@ -163,11 +269,13 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
     ++counters_.frames;
     // Slaves the frame reaches, and whether it crosses the damaged cable on its way.
     const std::size_t m = reachable();
-    const bool hit = damage.kind != FrameDamage::Kind::None && damage.cable < m;
+    const bool hit =
+        damage.kind != FrameDamage::Kind::None && damage.cable < slaves_.size() && reached_[damage.cable];
     if (m == 0) {
         ++counters_.lost;  // no link at the master's cable: the frame goes nowhere
         return false;
     }
+    bool gone = false;  // left through an open port without a device behind it
     if (pf.error == FrameError::NotCommands) {
         // Other EtherCAT frame types pass the ESCs unprocessed.
     } else if (pf.error != FrameError::None) {
@@ -175,8 +283,12 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
         slaves_.front()->esc().count_invalid_frame(0);
         return false;
     } else {
-        // An outbound frame damaged on cable c is processed by the slaves before c only.
-        const std::size_t intact = hit && !damage.returning ? damage.cable : m;
+        // The frame's way through the ports: the slaves it passes, and when (same delay per cable both
+        // ways; a closed port loops it back at once), so masters compute exact delays and topology.
+        const std::size_t passed = route(now_ns);
+        gone = passed < slaves_.size();
+        // An outbound frame damaged on the cable into slave c is processed by the slaves before c only.
+        const std::size_t intact = std::min(hit && !damage.returning ? damage.cable : slaves_.size(), passed);
         // SYNC pulses that fell due before this frame arrived happen first (the server may be late).
         for (std::size_t k = 0; k < slaves_.size(); ++k)
             if (slaves_[k]->esc().dc().next_pulse_host_ns() <= now_ns) run(k, now_ns);
@@ -189,15 +301,11 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
             if (latch_pos < pf.count) std::fill(latched_.begin(), latched_.end(), std::uint8_t{0});
         }
         for (std::size_t k = 0; k < intact; ++k) {
-            FrameTiming t;
-            t.port0_ns = now_ns + k * hop_delay_ns;
-            // Back at port 1 after the slaves behind it (same delay per hop both ways; the last slave loops
-            // the frame back through its closed port 1 without delay), so masters compute exact delays.
-            t.port1_ns = now_ns + (2 * (m - 1) - k) * hop_delay_ns;
+            if (!reached_[k]) continue;
             Esc& esc = slaves_[k]->esc();
             bool addressed = false;
             for (std::size_t i = 0; i < pf.count; ++i) {
-                const bool took = esc.process(pf.datagram(frame, i), t);
+                const bool took = esc.process(pf.datagram(frame, i), timing_[k]);
                 addressed |= took;
                 if (i == latch_pos && took) latched_[k] = 1;
             }
@@ -217,6 +325,10 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
     }
     if (hit) {
         if (damage.kind == FrameDamage::Kind::Corrupted) count_corruption(damage, m);
+        ++counters_.lost;
+        return false;
+    }
+    if (gone) {
         ++counters_.lost;
         return false;
     }

@@ -3,9 +3,11 @@
 // the loop on its port 1).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "common/bytes.hpp"
@@ -72,12 +74,25 @@ class Segment {
 
     const SegmentCounters& counters() const { return counters_; }
 
+    // ---- Topology: a tree of ESCs (network files). add() makes a line: slave k's port 0 is cabled to port 1
+    // of slave k-1. set_topology() cables slave k's port 0 to port ports[k] (1..3) of slave parents[k] (-1:
+    // the master; only slave 0) through a cable of delays_ns[k] (0: hop_delay_ns). The slaves must be in
+    // the order a frame reaches them: depth first from the master, each ESC's ports in the order
+    // 0 -> 3 -> 1 -> 2 (ESC datasheet section I). Returns false, changing nothing, otherwise.
+    bool set_topology(const std::vector<int>& parents, const std::vector<std::uint8_t>& ports,
+                      const std::vector<std::uint32_t>& delays_ns, std::string* why = nullptr);
+    int parent(std::size_t i) const { return i < parent_.size() ? parent_[i] : -1; }
+    unsigned parent_port(std::size_t i) const { return i < parent_port_.size() ? parent_port_[i] : 0; }
+    // A frame from the master reaches slave i (cables connected, every port on the way open), as of the
+    // last frame or the last call of reachable(), which looks again.
+    bool reached(std::size_t i) const { return i < reached_.size() && reached_[i] != 0; }
+
     // ---- Line faults (fault injection, see src/faults)
     // Connects or disconnects cable k (see FrameDamage): both ports lose their link (DL status, lost link
     // counter) and frames turn back at the last slave before the break.
     void set_cable(std::size_t k, bool connected);
     bool cable(std::size_t k) const { return k < cable_up_.size() && cable_up_[k] != 0; }
-    // Slaves a frame reaches from the master.
+    // How many slaves a frame reaches from the master now (and reached(i) tells which).
     std::size_t reachable() const;
     // Firmware stopped (hang, or no power): the ESC still forwards and answers, while the AL state, the
     // mailbox and the process data of the application freeze.
@@ -113,6 +128,26 @@ class Segment {
     void count_corruption(const FrameDamage& d, std::size_t reached);
     void update_links(std::size_t i);
     void return_receive_times(const protocol::ParsedFrame& pf, Bytes frame);
+    // Which slaves a frame reaches (reached_), and how many.
+    std::size_t refresh_reached() const;
+    // The frame's way through the tree: the time it reaches each slave's port 0 and comes back through its
+    // ports (timing_). Returns how many slaves (in order) the frame passes: all of them, or fewer when it
+    // leaves through an open port without a device behind it (lost there).
+    std::size_t route(std::uint64_t now_ns);
+    std::uint64_t cable_delay(std::size_t k) const { return delay_[k] ? delay_[k] : hop_delay_ns; }
+
+    std::vector<int> parent_;                // per slave: the slave its port 0 is cabled to, -1: master
+    std::vector<std::uint8_t> parent_port_;  // ... at this port of it
+    std::vector<std::uint32_t> delay_;       // ... through a cable of this delay (0: hop_delay_ns)
+    std::vector<std::array<int, 4>> child_;  // per slave and port: the slave cabled there, -1: none
+    mutable std::vector<std::uint8_t> reached_;
+    std::vector<FrameTiming> timing_;
+    struct Visit {
+        std::size_t slave;
+        unsigned next;    // ports of kPortOrder visited
+        std::uint64_t t;  // the frame's time at this slave so far
+    };
+    std::vector<Visit> stack_;
 
     // The receive-time latch last sent downstream, until it returns (one slot: masters wait for the reply
     // of the latch frame; a newer latch replaces an unanswered one). Its working counter on return tells

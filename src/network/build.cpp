@@ -183,6 +183,16 @@ BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
         b.segment->add(std::make_unique<esc::Slave>(m.model, m.esc, m.factory(*m.model.description)),
                        m.factory);
     }
+    // The cabling: the segment routes the frame through the tree.
+    std::vector<std::uint8_t> up_ports;
+    std::vector<std::uint32_t> delays;
+    for (const DeviceEntry& e : f.devices) {
+        up_ports.push_back(static_cast<std::uint8_t>(e.upstream_port));
+        delays.push_back(e.cable_delay_ns);
+    }
+    std::string why;
+    if (!b.segment->set_topology(f.parent, up_ports, delays, &why))
+        throw NetworkFileError(file + ": " + why);  // the reader's order is the segment's: not expected
     // The cabling against the ports each device turned out to have.
     for (std::size_t i = 0; i < f.devices.size(); ++i)
         for (unsigned p = 1; p < kPorts; ++p)

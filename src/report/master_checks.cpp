@@ -92,20 +92,27 @@ MasterChecks::MasterChecks(const esc::Segment& seg) : seg_(seg), track_(seg.size
 
 template <class F>
 void MasterChecks::for_each_addressed(DatagramView d, F&& f) const {
-    const std::size_t n = std::min(seg_.reachable(), track_.size());
+    const std::size_t n = track_.size();
     switch (d.command()) {
         case Command::APRD:
         case Command::APWR:
         case Command::APRW:
-        case Command::ARMW:
-            // Auto-increment: the slave at position p sees ADP + p, and is addressed when that is 0.
-            if (const std::size_t p = static_cast<std::uint16_t>(0u - d.adp()); p < n) f(p);
+        case Command::ARMW: {
+            // Auto-increment: the p-th slave the frame reaches sees ADP + p, and is addressed when that is 0.
+            std::size_t p = static_cast<std::uint16_t>(0u - d.adp());
+            for (std::size_t i = 0; i < n; ++i)
+                if (seg_.reached(i) && p-- == 0) {
+                    f(i);
+                    return;
+                }
             return;
+        }
         case Command::FPRD:
         case Command::FPWR:
         case Command::FPRW:
         case Command::FRMW:
             for (std::size_t i = 0; i < n; ++i) {
+                if (!seg_.reached(i)) continue;
                 const esc::Esc& e = seg_.slave(i).esc();
                 // The station alias addresses too when DL control enables it (0x0100 bit 24).
                 const bool alias = (e.peek(addr(Reg::DlControl) + 3) & 0x01) != 0;
@@ -117,7 +124,7 @@ void MasterChecks::for_each_addressed(DatagramView d, F&& f) const {
         case Command::BWR:
         case Command::BRW:
             for (std::size_t i = 0; i < n; ++i)
-                f(i);
+                if (seg_.reached(i)) f(i);
             return;
         default:
             return;
@@ -140,6 +147,7 @@ void MasterChecks::on_request(ConstBytes frame, std::uint64_t now_ns) {
     const std::size_t len = std::min(frame.size(), buf_.size());
     std::memcpy(buf_.data(), frame.data(), len);
     const Bytes b(buf_.data(), len);
+    seg_.reachable();  // which slaves the frame reaches (Segment::reached)
     const protocol::ParsedFrame pf = protocol::parse_frame(b);
     if (pf.error != protocol::FrameError::None) return;
     for (std::size_t k = 0; k < pf.count; ++k) {

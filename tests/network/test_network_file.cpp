@@ -224,9 +224,114 @@ TEST(Network, AnUnreadableSiiDumpIsRefusedWithItsLine) {
     std::filesystem::remove(junk);
 }
 
+// A junction with a branch on each port (as examples/networks/junction-tree.yaml): positions 0 junction,
+// 1 on port 3, 2-3 on port 1, 4 on port 2; every cable 500 ns unless given.
+constexpr const char* kTree = R"(
+devices:
+  - name: junction
+    device: junction
+  - name: p3
+    device: drive
+    upstream: junction:3
+  - name: p1
+    device: digital-out
+    upstream: junction:1
+    cable_delay_ns: 200
+  - name: p1b
+    device: analog-out
+  - name: p2
+    device: drive
+    upstream: junction:2
+)";
+
+std::uint16_t brd_wkc(master::Master& m) {
+    std::uint8_t b[2] = {};
+    return m.brd(0x0000, b).value_or(0xFFFF);
+}
+
+TEST(NetworkPorts, TheFramePassesTheTreeAndEachPortLatchesItsReceiveTime) {
+    Served s(kTree);
+    auto& m = s.master;
+    ASSERT_EQ(brd_wkc(m), 5);
+    std::uint8_t z[4] = {};
+    ASSERT_EQ(m.bwr(protocol::addr(protocol::Reg::DcRecvTimePort0), z).value_or(0), 5);
+    std::uint8_t t[16] = {};
+    ASSERT_EQ(m.aprd(0, protocol::addr(protocol::Reg::DcRecvTimePort0), t).value_or(0), 1);
+    const auto at = [&](unsigned p) { return ld_le32(t + 4 * p) - ld_le32(t); };
+    // Port 3 first: 500 ns there and back; port 1: then 200 + 500 to the second terminal and back; port 2
+    // last.
+    EXPECT_EQ(at(3), 1000u);
+    EXPECT_EQ(at(1), 1000u + 2 * (200 + 500));
+    EXPECT_EQ(at(2), 1000u + 1400 + 1000);
+    // Every port of the junction has a link and is open (DL status: link bits 4-7, no loop closed).
+    std::uint8_t dl[2] = {};
+    ASSERT_EQ(m.aprd(0, protocol::addr(protocol::Reg::DlStatus), dl).value_or(0), 1);
+    EXPECT_EQ(ld_le16(dl) & 0xF0, 0xF0);
+    EXPECT_EQ(ld_le16(dl) & 0x5500, 0);
+    // Auto-increment addressing follows the order: position 2 is the first terminal on port 1.
+    std::uint8_t id[4] = {};
+    ASSERT_EQ(m.aprd(2, protocol::addr(protocol::Reg::Type), id).value_or(0), 1);
+    EXPECT_EQ(s.built.segment->slave(2).description().identity.product_code,
+              device::simple_product::DigitalOut | 8);
+}
+
+// DL control 0x0101: the loop setting of ports 0-3, two bits each (0 auto, 1 auto close, 2 open, 3 closed).
+void set_loop(master::Master& m, unsigned port, unsigned setting) {
+    std::uint8_t v[1] = {static_cast<std::uint8_t>(setting << (2 * port))};
+    ASSERT_EQ(m.apwr(0, protocol::addr(protocol::Reg::DlControl) + 1, v).value_or(0), 1);
+}
+bool loop_closed(master::Master& m, unsigned port) {
+    std::uint8_t dl[2] = {};
+    m.aprd(0, protocol::addr(protocol::Reg::DlStatus), dl);
+    return (ld_le16(dl) >> (8 + 2 * port)) & 1u;
+}
+
+TEST(NetworkPorts, EveryLoopSettingOnEveryPort) {
+    Served s(kTree);
+    auto& m = s.master;
+    auto& seg = *s.built.segment;
+    // Slaves behind each port of the junction.
+    const std::pair<unsigned, std::uint16_t> behind[] = {{1, 2}, {2, 1}, {3, 1}};
+    for (const auto& [port, n] : behind) {
+        SCOPED_TRACE("port " + std::to_string(port));
+        set_loop(m, port, 3);  // closed: the frame turns back at the junction
+        EXPECT_EQ(brd_wkc(m), 5 - n);
+        EXPECT_TRUE(loop_closed(m, port));
+        set_loop(m, port, 2);  // open (it has a link)
+        EXPECT_EQ(brd_wkc(m), 5);
+        EXPECT_FALSE(loop_closed(m, port));
+        set_loop(m, port, 0);  // auto: open while the link is there
+        EXPECT_EQ(brd_wkc(m), 5);
+        // Auto: the cable into the branch breaks and comes back, the port follows the link.
+        const std::size_t first = port == 3 ? 1 : port == 1 ? 2 : 4;  // the slave cabled to the port
+        seg.set_cable(first, false);
+        EXPECT_EQ(brd_wkc(m), 5 - n);
+        EXPECT_TRUE(loop_closed(m, port));
+        seg.set_cable(first, true);
+        EXPECT_EQ(brd_wkc(m), 5);
+        // Auto close: closed at the link loss, and it stays closed when the link is back...
+        set_loop(m, port, 1);
+        seg.set_cable(first, false);
+        seg.set_cable(first, true);
+        EXPECT_EQ(brd_wkc(m), 5 - n);
+        EXPECT_TRUE(loop_closed(m, port));
+        // ... until the master writes the setting again.
+        set_loop(m, port, 1);
+        EXPECT_EQ(brd_wkc(m), 5);
+        // Open without a link: the frame leaves through the port and is lost.
+        set_loop(m, port, 2);
+        seg.set_cable(first, false);
+        EXPECT_EQ(brd_wkc(m), 0xFFFF) << "no reply";
+        seg.set_cable(first, true);
+        EXPECT_EQ(brd_wkc(m), 5);
+        set_loop(m, port, 0);
+    }
+}
+
 TEST(Network, EveryExampleFileBuilds) {
     unsigned n = 0;
-    for (const auto& e : std::filesystem::directory_iterator(std::string(VECAT_SOURCE_DIR) + "/examples/networks")) {
+    for (const auto& e :
+         std::filesystem::directory_iterator(std::string(VECAT_SOURCE_DIR) + "/examples/networks")) {
         if (e.path().extension() != ".yaml") continue;
         const auto f = read_network_file(e.path().string());
         // The example of real devices needs ../shared beside the clone.
