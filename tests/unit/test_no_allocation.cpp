@@ -20,6 +20,8 @@
 #include "lock_counter.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
+#include "network/build.hpp"
+#include "report/master_checks.hpp"
 #include "serve/server.hpp"
 #include "test_support.hpp"
 
@@ -71,6 +73,54 @@ TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
     }
     EXPECT_EQ(test::allocations() - before, 0u);
     EXPECT_EQ(test::lock_calls() - locks_before, 0u);
+}
+
+// A tree of mixed devices (network file: coupler, I/O terminals on its E-bus, a junction with drives and
+// terminals on its ports), watched by the report on the master: cycles of process data through it
+// allocate nothing and take no lock.
+TEST(NoAllocation, MixedNetworkTreeWithTheReportOnTheMaster) {
+    auto built = network::build_network(network::parse_network(R"(
+devices:
+  - name: coupler
+    device: coupler
+  - name: di
+    device: digital-in
+    upstream: coupler:3
+  - name: ao
+    device: analog-out
+  - name: junction
+    device: junction
+    upstream: coupler:1
+  - name: d1
+    device: drive
+    upstream: junction:3
+  - name: do
+    device: digital-out
+    upstream: junction:1
+  - name: d2
+    device: drive
+    upstream: junction:2
+)"),
+                                        "tree");
+    net::InProcessLink link(*built.segment);
+    report::MasterChecks checks(*built.segment);
+    link.set_observer(&checks);
+    master::Master m(link);
+    link.set_time(1'000'000'000);
+    ASSERT_TRUE(m.startup(protocol::AlState::Op));
+    for (int i = 0; i < 10; ++i)
+        ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+    const auto before = test::allocations();
+    const auto locks_before = test::lock_calls();
+    for (int i = 0; i < 10000; ++i) {
+        const std::uint64_t t = 1'001'000'000ull + static_cast<std::uint64_t>(i) * 1'000'000;  // 1 ms cycles
+        link.set_time(t);
+        built.segment->tick(t);
+        ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+    }
+    EXPECT_EQ(test::allocations() - before, 0u);
+    EXPECT_EQ(test::lock_calls() - locks_before, 0u);
+    EXPECT_TRUE(checks.findings().empty()) << report::summary(checks);
 }
 
 // The drive's servo steps in every mode (profile planning, homing, interpolation, mechanics) allocate
