@@ -33,6 +33,7 @@
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
+#include "network/build.hpp"
 #include "protocol/registers.hpp"
 #include "serve/server.hpp"
 
@@ -116,6 +117,7 @@ struct Options {
     bool dc = true;
     bool with_reflector = false;  // soak: every cycle also sends the frames to the reflector
     std::int64_t tick_us = net::ServeOptions{}.tick_us;
+    std::string network;  // a network file instead of a line of drives
 };
 
 // The drives are enabled (6, 7, 15) in CSP and hold the position they had, so that every cycle runs the
@@ -224,8 +226,17 @@ int run(const Options& o) {
     const std::uint64_t late_ns = o.late_us ? o.late_us * 1000ull : std::max<std::uint64_t>(period_ns / 2, 1);
     const CpuSplit cpu = parse_cpu(o.cpu);
 
-    auto dev = device::default_drive();
-    auto seg = cia402::make_drive_segment(dev, o.slaves);
+    std::unique_ptr<esc::Segment> seg;
+    if (!o.network.empty()) {
+        try {
+            seg = network::build_network(network::read_network_file(o.network), o.network).segment;
+        } catch (const network::NetworkFileError& e) {
+            fmt::print(stderr, "vecat-roundtrip: {}\n", e.what());
+            return 1;
+        }
+    } else {
+        seg = cia402::make_drive_segment(device::default_drive(), o.slaves);
+    }
     net::RawSocket refl_sock("rt-r0"), vecat_sock("rt-v1");
     net::RawSocket m_refl_sock("rt-m0"), m_vecat_sock("rt-m1");
     m_refl_sock.set_busy_poll(o.busy);
@@ -269,7 +280,7 @@ int run(const Options& o) {
     int rc = 0;
     fmt::print(
         "vecat-roundtrip: {} mode, {} cycles, period {} us, {} slave(s), {} receive{}{}{}\n", o.mode, cycles,
-        o.period_us, o.slaves,
+        o.period_us, seg->size(),
         std::string(o.busy ? "busy-poll" : "blocking") + (o.rx_ring ? " (RX ring)" : ""),
         cpu.master >= 0 ? fmt::format(", master on CPU {}, servers on CPU {}", cpu.master, cpu.server) : "",
         o.fifo ? fmt::format(", SCHED_FIFO {}", o.fifo) : "", o.mlock ? ", memory locked" : "");
@@ -471,7 +482,11 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"latency", "soak"}));
     app.add_option("--cycles", o.cycles, "Cycles (default 20000 latency, 10000 soak)");
     app.add_option("--period-us", o.period_us, "Cycle period in us (0: back to back)");
-    app.add_option("--slaves", o.slaves, "Virtual drives on the line")->check(CLI::Range(1u, 512u));
+    auto* slaves =
+        app.add_option("--slaves", o.slaves, "Virtual drives on the line")->check(CLI::Range(1u, 512u));
+    app.add_option("--network", o.network,
+                   "Serve the devices of this network file instead of a line of drives")
+        ->excludes(slaves);
     app.add_flag("--busy-poll,!--blocking", o.busy, "Spin on the sockets (default: sleep in poll)");
     app.add_flag("--rx-ring", o.rx_ring,
                  "All four sockets receive through PACKET_MMAP rings (default: one recvmsg per frame)");
