@@ -69,6 +69,8 @@ class Esc {
     // next one: DL control loop setting (0x0100 bits 8+2p..9+2p: auto, auto close, open, closed) and link
     // (ESC datasheet section II, 0x0100 and 0x0110). An unimplemented port is always closed.
     bool port_open(unsigned port) const;
+    // Counted up whenever a link or a loop setting may have changed (the segment routes frames anew).
+    void set_port_change_counter(std::uint64_t* counter) { port_changes_ = counter; }
 
     // ---- PDI side (the slave application)
     std::uint32_t al_events() const { return ld_le32(&mem_[protocol::addr(protocol::Reg::AlEventRequest)]); }
@@ -205,6 +207,7 @@ class Esc {
     std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;
     std::uint64_t fmmu_log_first_bit_ = ~std::uint64_t{0}, fmmu_log_last_bit_ = 0;
     std::uint32_t repeat_bits_ = 0;
+    std::uint64_t* port_changes_ = nullptr;
     std::uint8_t auto_closed_ = 0;  // ports that "auto close" closed at a link loss, until the master reopens
     std::uint8_t link_mask_ = 0x01;
     std::uint8_t written_sii_cmd_ = 0;

@@ -44,6 +44,8 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     reached_.push_back(0);
     timing_.push_back({});
     stack_.reserve(slaves_.size());
+    slaves_.back()->esc().set_port_change_counter(&port_epoch_);
+    ++port_epoch_;
     for (std::size_t k = 0; k < slaves_.size(); ++k)
         update_links(k);
 }
@@ -83,6 +85,7 @@ bool Segment::set_topology(const std::vector<int>& parents, const std::vector<st
     parent_port_[0] = 0;
     delay_ = delays_ns;
     child_ = std::move(child);
+    ++port_epoch_;
     for (std::size_t k = 0; k < n; ++k)
         update_links(k);
     return true;
@@ -100,24 +103,28 @@ void Segment::update_links(std::size_t i) {
     }
 }
 
-std::size_t Segment::refresh_reached() const {
-    std::size_t m = 0;
+void Segment::refresh_route() const {
+    if (routed_epoch_ == port_epoch_ && routed_hop_ns_ == hop_delay_ns) return;
+    routed_epoch_ = port_epoch_;
+    routed_hop_ns_ = hop_delay_ns;
+    reached_count_ = 0;
     for (std::size_t k = 0; k < slaves_.size(); ++k) {
         const int p = parent_[k];
         const bool r =
             cable(k) && (p < 0 || (reached_[static_cast<std::size_t>(p)] &&
                                    slaves_[static_cast<std::size_t>(p)]->esc().port_open(parent_port_[k])));
         reached_[k] = r ? 1 : 0;
-        m += r;
+        reached_count_ += r;
     }
-    return m;
+    route();
 }
 
-std::size_t Segment::route(std::uint64_t now_ns) {
+void Segment::route() const {
+    passed_ = slaves_.size();
     stack_.clear();
-    if (slaves_.empty() || !reached_[0]) return slaves_.size();
-    timing_[0] = FrameTiming{now_ns, 0, 0, 0};
-    stack_.push_back({0, 0, now_ns});
+    if (slaves_.empty() || !reached_[0]) return;
+    timing_[0] = FrameTiming{};
+    stack_.push_back({0, 0, 0});
     std::size_t visited = 1;  // slaves the frame has passed (depth first: positions 0..visited-1)
     while (!stack_.empty()) {
         Visit& v = stack_.back();
@@ -128,7 +135,10 @@ std::size_t Segment::route(std::uint64_t now_ns) {
             if (c < 0 || !reached_[static_cast<std::size_t>(c)]) {
                 // Open without a device behind it (a port forced open without link): the frame is gone. A
                 // free port 1 of the last slave leads to the next segment instead.
-                if (!(p == 1 && v.slave + 1 == slaves_.size() && downstream_)) return visited;
+                if (!(p == 1 && v.slave + 1 == slaves_.size() && downstream_)) {
+                    passed_ = visited;
+                    return;
+                }
                 continue;
             }
             const auto k = static_cast<std::size_t>(c);
@@ -147,11 +157,11 @@ std::size_t Segment::route(std::uint64_t now_ns) {
             (parent_port_[k] == 1 ? t.port1_ns : parent_port_[k] == 2 ? t.port2_ns : t.port3_ns) = up.t;
         }
     }
-    return slaves_.size();
 }
 
 void Segment::set_downstream_link(bool up) {
     downstream_ = up;
+    ++port_epoch_;
     pending_latch_.valid = false;
     if (!slaves_.empty()) update_links(slaves_.size() - 1);
 }
@@ -208,12 +218,14 @@ void Segment::return_receive_times(const ParsedFrame& pf, Bytes frame) {
 void Segment::set_cable(std::size_t k, bool connected) {
     if (k >= cable_up_.size()) return;
     cable_up_[k] = connected ? 1 : 0;
+    ++port_epoch_;
     update_links(k);
     if (parent_[k] >= 0) update_links(static_cast<std::size_t>(parent_[k]));
 }
 
 std::size_t Segment::reachable() const {
-    return refresh_reached();
+    refresh_route();
+    return reached_count_;
 }
 
 void Segment::set_firmware_halted(std::size_t i, bool halted) {
@@ -230,6 +242,8 @@ bool Segment::restart_slave(std::size_t i) {
     const DeviceModel model = old.model();
     auto fresh = std::make_unique<Slave>(model, cfg, factory(*model.description));
     slaves_[i] = std::move(fresh);
+    slaves_[i]->esc().set_port_change_counter(&port_epoch_);
+    ++port_epoch_;
     update_links(i);
     return true;
 }
@@ -285,7 +299,7 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
     } else {
         // The frame's way through the ports: the slaves it passes, and when (same delay per cable both
         // ways; a closed port loops it back at once), so masters compute exact delays and topology.
-        const std::size_t passed = route(now_ns);
+        const std::size_t passed = passed_;  // reachable() above worked the route out
         gone = passed < slaves_.size();
         // An outbound frame damaged on the cable into slave c is processed by the slaves before c only.
         const std::size_t intact = std::min(hit && !damage.returning ? damage.cable : slaves_.size(), passed);
@@ -303,9 +317,12 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
         for (std::size_t k = 0; k < intact; ++k) {
             if (!reached_[k]) continue;
             Esc& esc = slaves_[k]->esc();
+            const FrameTiming& rel = timing_[k];
+            const FrameTiming t{now_ns + rel.port0_ns, now_ns + rel.port1_ns, now_ns + rel.port2_ns,
+                                now_ns + rel.port3_ns};
             bool addressed = false;
             for (std::size_t i = 0; i < pf.count; ++i) {
-                const bool took = esc.process(pf.datagram(frame, i), timing_[k]);
+                const bool took = esc.process(pf.datagram(frame, i), t);
                 addressed |= took;
                 if (i == latch_pos && took) latched_[k] = 1;
             }

@@ -42,6 +42,9 @@ using ApplicationFactory = std::function<std::unique_ptr<Application>(const devi
 class Segment {
   public:
     Segment() = default;
+    // The ESCs count their port changes into the segment (port_epoch_): it stays where it was made.
+    Segment(const Segment&) = delete;
+    Segment& operator=(const Segment&) = delete;
     void add(std::unique_ptr<Slave> s);
     // A slave with its own application factory (a network of mixed devices): restart_slave() rebuilds it
     // with this one instead of the segment's.
@@ -128,12 +131,13 @@ class Segment {
     void count_corruption(const FrameDamage& d, std::size_t reached);
     void update_links(std::size_t i);
     void return_receive_times(const protocol::ParsedFrame& pf, Bytes frame);
-    // Which slaves a frame reaches (reached_), and how many.
-    std::size_t refresh_reached() const;
-    // The frame's way through the tree: the time it reaches each slave's port 0 and comes back through its
-    // ports (timing_). Returns how many slaves (in order) the frame passes: all of them, or fewer when it
-    // leaves through an open port without a device behind it (lost there).
-    std::size_t route(std::uint64_t now_ns);
+    // The frame's way through the tree, worked out again when a port, cable or the topology changed
+    // (port_epoch_): which slaves it reaches (reached_, reached_count_), when it reaches each slave's port 0
+    // and comes back through its ports relative to its arrival at the first one (timing_), and how many
+    // slaves in order it passes (passed_: all, or fewer when it leaves through an open port without a
+    // device behind it and is lost there).
+    void refresh_route() const;
+    void route() const;
     std::uint64_t cable_delay(std::size_t k) const { return delay_[k] ? delay_[k] : hop_delay_ns; }
 
     std::vector<int> parent_;                // per slave: the slave its port 0 is cabled to, -1: master
@@ -141,13 +145,18 @@ class Segment {
     std::vector<std::uint32_t> delay_;       // ... through a cable of this delay (0: hop_delay_ns)
     std::vector<std::array<int, 4>> child_;  // per slave and port: the slave cabled there, -1: none
     mutable std::vector<std::uint8_t> reached_;
-    std::vector<FrameTiming> timing_;
+    mutable std::vector<FrameTiming> timing_;
+    mutable std::size_t reached_count_ = 0;
+    mutable std::size_t passed_ = 0;
+    std::uint64_t port_epoch_ = 1;             // counted up by the ESCs and by cabling changes
+    mutable std::uint64_t routed_epoch_ = 0;   // ... when the route was worked out
+    mutable std::uint64_t routed_hop_ns_ = 0;  // ... with this hop_delay_ns
     struct Visit {
         std::size_t slave;
         unsigned next;    // ports of kPortOrder visited
         std::uint64_t t;  // the frame's time at this slave so far
     };
-    std::vector<Visit> stack_;
+    mutable std::vector<Visit> stack_;
 
     // The receive-time latch last sent downstream, until it returns (one slot: masters wait for the reply
     // of the latch frame; a newer latch replaces an unanswered one). Its working counter on return tells
