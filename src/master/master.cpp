@@ -248,6 +248,12 @@ bool Master::read_slave_information() {
         auto dl = read16(s.station, ra(Reg::DlStatus));
         if (!dl) return false;
         s.dl_status = *dl;
+        // Open with communication: DL status bits 9+2p..8+2p = 10b (ESC datasheet section II, 0x0110).
+        s.open_ports = 0;
+        for (unsigned p = 0; p < 4; ++p)
+            if ((s.dl_status & protocol::dl_status::communication(p)) &&
+                !(s.dl_status & protocol::dl_status::loop_closed(p)))
+                s.open_ports = static_cast<std::uint8_t>(s.open_ports | (1u << p));
         // The outcome of reset_slaves()' INIT request (SOEM's ecx_config_init reads it per slave too): a
         // master learns a state request's result from the AL status before it requests the next state.
         if (!read_al_status(s.station).ok) return false;
@@ -272,7 +278,31 @@ bool Master::read_slave_information() {
                 s.in_bytes = bits(s.sii.tx_pdos, static_cast<std::uint8_t>(i));
         }
     }
+    compute_topology();
     return true;
+}
+
+void Master::compute_topology() {
+    constexpr unsigned kOrder[] = {3, 1, 2};
+    // Per slave: the open ports after port 0 not yet given to a slave, in the frame's order.
+    std::vector<std::vector<unsigned>> free(slaves_.size());
+    std::vector<std::size_t> path;  // slaves from the first to the current one that may have ports left
+    for (std::size_t i = 0; i < slaves_.size(); ++i) {
+        SlaveInfo& s = slaves_[i];
+        for (unsigned p : kOrder)
+            if ((s.open_ports >> p) & 1u) free[i].push_back(p);
+        s.parent = -1;
+        s.parent_port = 0;
+        while (!path.empty() && free[path.back()].empty())
+            path.pop_back();
+        if (!path.empty()) {
+            const std::size_t up = path.back();
+            s.parent = static_cast<int>(up);
+            s.parent_port = free[up].front();
+            free[up].erase(free[up].begin());
+        }
+        path.push_back(i);
+    }
 }
 
 bool Master::configure_mailboxes() {
@@ -473,6 +503,39 @@ bool Master::configure_dc() {
     return configure_dc(ns > kEpoch2000 ? ns - kEpoch2000 : ns);
 }
 
+namespace {
+
+constexpr unsigned kPortOrder[] = {3, 1, 2};
+
+// A slave's round trip: from its arrival at port 0 to the return through its last open port (0 for a slave
+// whose other ports are closed), from its latched receive times.
+std::int64_t round_trip(const SlaveInfo& x) {
+    std::int64_t last = 0;
+    for (unsigned p : kPortOrder)
+        if ((x.open_ports >> p) & 1u) last = static_cast<std::int32_t>(x.dc_port_time[p] - x.dc_port_time[0]);
+    return last;
+}
+
+}  // namespace
+
+// The time from the parent's arrival at port 0 until the frame leaves it through port `port`: the return
+// time of the open port before it in the order 3, 1, 2 (0 when it is the first).
+std::int64_t Master::departure(const SlaveInfo& up, unsigned port) {
+    std::int64_t t = 0;
+    for (unsigned p : kPortOrder) {
+        if (p == port) break;
+        if ((up.open_ports >> p) & 1u) t = static_cast<std::int32_t>(up.dc_port_time[p] - up.dc_port_time[0]);
+    }
+    return t;
+}
+
+// The cable between a slave and its parent: half of what the frame's way out and back through the parent's
+// port takes beyond the slave's own round trip.
+std::int64_t Master::cable_delay(const SlaveInfo& up, const SlaveInfo& s) {
+    const std::int64_t back = static_cast<std::int32_t>(up.dc_port_time[s.parent_port] - up.dc_port_time[0]);
+    return (back - departure(up, s.parent_port) - round_trip(s)) / 2;
+}
+
 bool Master::configure_dc(std::uint64_t master_time_ns) {
     dc_ref_ = 0;
     std::uint8_t zero[4] = {};
@@ -489,18 +552,18 @@ bool Master::configure_dc(std::uint64_t master_time_ns) {
         for (unsigned p = 0; p < 4; ++p)
             s.dc_port_time[p] = ld_le32(times + 4 * p);
         s.dc_recv_time = ld_le64(pu);
-        // Delay on a line: half the difference between the parent's loop time (port 0 -> port 1 back) and
-        // this slave's own, plus the parent's delay. Port 1 open when DL status shows communication on it.
-        auto loop_time = [](const SlaveInfo& x) -> std::int64_t {
-            const bool port1 = (x.dl_status & protocol::dl_status::communication(1)) != 0;
-            return port1 ? static_cast<std::int32_t>(x.dc_port_time[1] - x.dc_port_time[0]) : 0;
-        };
-        if (!parent) {
+        // Propagation delay (ETG.1000.4, DC): the frame leaves the parent towards this slave when it comes
+        // back through the parent's open port before this one (or at its arrival at port 0), and it is back
+        // at the parent's port after twice the cable and this slave's own round trip through its ports.
+        if (s.parent < 0 || !parent) {
             s.dc_delay_ns = 0;
             dc_ref_ = s.station;
         } else {
-            const std::int64_t d = (loop_time(*parent) - loop_time(s)) / 2;
-            s.dc_delay_ns = parent->dc_delay_ns + static_cast<std::uint32_t>(d > 0 ? d : 0);
+            const SlaveInfo& up = slaves_[static_cast<std::size_t>(s.parent)];
+            const std::int64_t d = up.has_dc ? cable_delay(up, s) : 0;
+            s.dc_delay_ns = (up.has_dc ? up.dc_delay_ns : parent->dc_delay_ns) +
+                            static_cast<std::uint32_t>(d > 0 ? d : 0) +
+                            (up.has_dc ? departure(up, s.parent_port) : 0);
             if (!write32(s.station, ra(Reg::DcSystemTimeDelay), s.dc_delay_ns)) return false;
         }
         // Offset: the system time of every slave reads the master's time at the moment the latching frame

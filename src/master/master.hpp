@@ -44,6 +44,11 @@ struct SlaveInfo {
     std::size_t out_offset = 0;  // in the process image
     std::size_t in_offset = 0;
     std::uint8_t mailbox_counter = 0;  // last mailbox counter used (1..7), kept per slave like real masters
+    // Topology, from the DL status of every slave (compute_topology): the ports open with communication
+    // (bit p), the slave whose port parent_port this slave's port 0 is cabled to (-1: the master).
+    std::uint8_t open_ports = 0;
+    int parent = -1;
+    unsigned parent_port = 0;
     // Distributed clocks (configure_dc)
     bool has_dc = false;
     std::array<std::uint32_t, 4> dc_port_time{};  // receive times latched by the BWR 0x0900
@@ -117,7 +122,11 @@ class Master {
     int count_slaves();   // BRD 0x0000 working counter
     bool reset_slaves();  // default register values, like SOEM's ecx_set_slaves_to_default
     bool assign_station_addresses(std::uint16_t first = 0x1001);
-    bool read_slave_information();  // ESC info, DL status and the whole SII of every slave
+    bool read_slave_information();  // ESC info, DL status, topology and the whole SII of every slave
+    // Parents and ports from the DL status read (as SOEM's ecx_config_init): the frame passes each ESC's
+    // open ports in the order 0 -> 3 -> 1 -> 2, so slave i hangs on the nearest slave before it that still
+    // has an open port left, at the next of its ports in that order.
+    void compute_topology();
     std::optional<std::uint32_t> read_sii_dword(std::uint16_t station, std::uint32_t word);
     std::optional<std::vector<std::uint8_t>> read_sii_image(std::uint16_t station);
     bool configure_mailboxes();  // SM0/SM1 from the SII
@@ -175,6 +184,8 @@ class Master {
     MasterOptions& options() { return opt_; }
 
   private:
+    static std::int64_t departure(const SlaveInfo& up, unsigned port);
+    static std::int64_t cable_delay(const SlaveInfo& up, const SlaveInfo& s);
     std::size_t build_frame(std::span<DatagramRequest> dgs);
     bool wait_reply(std::span<DatagramRequest> dgs);
 

@@ -275,6 +275,31 @@ TEST(NetworkPorts, TheFramePassesTheTreeAndEachPortLatchesItsReceiveTime) {
               device::simple_product::DigitalOut | 8);
 }
 
+TEST(NetworkPorts, TheProjectMasterComputesTheTreeAndItsDelaysAsTheFileDescribesThem) {
+    const auto f = parse_network(kTree);
+    auto built = build_network(f, "tree");
+    net::InProcessLink link(*built.segment);
+    master::MasterOptions o;
+    o.dc.enable = true;
+    o.dc.sync0_cycle_ns = 0;
+    o.dc.static_drift_frames = 10;
+    master::Master m(link, o);
+    std::string why;
+    ASSERT_TRUE(m.startup(protocol::AlState::PreOp, &why)) << why;
+    ASSERT_TRUE(m.configure_dc());
+    const auto& sl = m.slaves();
+    ASSERT_EQ(sl.size(), f.devices.size());
+    for (std::size_t i = 0; i < sl.size(); ++i) {
+        EXPECT_EQ(sl[i].parent, f.parent[i]) << f.devices[i].name;
+        if (f.parent[i] >= 0) EXPECT_EQ(sl[i].parent_port, f.devices[i].upstream_port) << f.devices[i].name;
+    }
+    // Propagation delays from the reference clock (the junction): the frame's arrival at each device, from
+    // the cable delays of the file and the branches it passes first.
+    const std::uint32_t expected[] = {0, 500, 1000 + 200, 1000 + 200 + 500, 1000 + 1400 + 500};
+    for (std::size_t i = 0; i < sl.size(); ++i)
+        EXPECT_NEAR(sl[i].dc_delay_ns, expected[i], 10) << f.devices[i].name;
+}
+
 // DL control 0x0101: the loop setting of ports 0-3, two bits each (0 auto, 1 auto close, 2 open, 3 closed).
 void set_loop(master::Master& m, unsigned port, unsigned setting) {
     std::uint8_t v[1] = {static_cast<std::uint8_t>(setting << (2 * port))};
