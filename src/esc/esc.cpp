@@ -330,7 +330,7 @@ void Esc::logical(DatagramView d, bool do_read, bool do_write, const FrameTiming
 // Memory access with ECAT semantics
 
 int Esc::sm_covering(std::uint32_t a) const {
-    std::uint32_t m = sm_active_mask_;
+    std::uint32_t m = sm_guard_mask_;
     while (m) {
         const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
         m &= m - 1;
@@ -342,7 +342,7 @@ int Esc::sm_covering(std::uint32_t a) const {
 
 std::uint32_t Esc::next_sm_start(std::uint32_t a) const {
     std::uint32_t best = static_cast<std::uint32_t>(mem_.size());
-    std::uint32_t m = sm_active_mask_;
+    std::uint32_t m = sm_guard_mask_;
     while (m) {
         const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
         m &= m - 1;
@@ -355,7 +355,7 @@ std::uint8_t* Esc::ecat_write_target(std::uint32_t a) {
     if (a >= mem_.size()) return nullptr;
     if (a >= kRegisterSpaceSize) {
         const int i = sm_covering(a);
-        if (i >= 0 && !sm_[i].mailbox && sm_[i].ecat_writes)
+        if (i >= 0 && sm_[i].active && !sm_[i].mailbox && sm_[i].ecat_writes)
             return &mem_[sm_[i].start + static_cast<std::size_t>(sm_[i].buf_ecat) * sm_[i].length +
                          (a - sm_[i].start)];
     }
@@ -386,8 +386,9 @@ bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_i
             const int s = sm_covering(cur);
             if (s >= 0) {
                 run = std::min<std::size_t>(rem, sm_[s].start + sm_[s].length - cur);
-                counted |=
-                    sm_ecat_read(static_cast<unsigned>(s), cur - sm_[s].start, dst + pos, run, or_into);
+                if (!sm_[s].locked)  // locked: the frame keeps its data, nothing is counted
+                    counted |=
+                        sm_ecat_read(static_cast<unsigned>(s), cur - sm_[s].start, dst + pos, run, or_into);
             } else {
                 run = std::min<std::size_t>(rem, next_sm_start(cur) - cur);
                 copy_out(dst + pos, &mem_[cur], run, or_into);
@@ -442,7 +443,8 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
             const int s = sm_covering(cur);
             if (s >= 0) {
                 run = std::min<std::size_t>(rem, sm_[s].start + sm_[s].length - cur);
-                counted |= sm_ecat_write(static_cast<unsigned>(s), cur - sm_[s].start, src + pos, run);
+                if (!sm_[s].locked)
+                    counted |= sm_ecat_write(static_cast<unsigned>(s), cur - sm_[s].start, src + pos, run);
             } else {
                 run = std::min<std::size_t>(rem, next_sm_start(cur) - cur);
                 std::memcpy(&mem_[cur], src + pos, run);
@@ -602,13 +604,20 @@ void Esc::update_sm(unsigned i) {
     const bool valid =
         mode_ok && dir_ok && length > 0 && start >= kRegisterSpaceSize && start + span <= mem_.size();
     const bool active = c.enabled() && !c.pdi_deactivated() && valid;
-    const bool changed = active != s.active || start != s.start || length != s.length || control != s.control;
+    // Deactivated by the PDI while the master has it enabled: the whole area stays locked (ESC datasheet
+    // section I 8.7; register 0x0807 bit 0 "SyncManager locks access to memory area"). Only a SyncManager
+    // the master disabled (0x0806 bit 0 = 0) leaves plain memory behind.
+    const bool locked = c.enabled() && c.pdi_deactivated() && length > 0 && start >= kRegisterSpaceSize &&
+                        start + length <= mem_.size();
+    const bool changed = active != s.active || locked != s.locked || start != s.start || length != s.length ||
+                         control != s.control;
     const bool repeat = c.repeat_request();
     static_assert(kMaxSms <= 32);
     const bool was_repeat = (repeat_bits_ >> i) & 1u;
     s.valid = valid;
     if (changed) {
         s.active = active;
+        s.locked = locked;
         s.start = start;
         s.length = length;
         s.control = control;
@@ -633,10 +642,10 @@ void Esc::update_sm(unsigned i) {
         sm_activation_event_ = true;
         set_al_event(al_event::SmActivation);
     }
-    if (active)
-        sm_active_mask_ |= 1u << i;
+    if (active || locked)
+        sm_guard_mask_ |= 1u << i;
     else
-        sm_active_mask_ &= ~(1u << i);
+        sm_guard_mask_ &= ~(1u << i);
     update_sm_status(i);
 }
 

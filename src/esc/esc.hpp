@@ -136,6 +136,9 @@ class Esc {
   private:
     struct SmState {
         bool active = false;  // enabled by ECAT, not deactivated by PDI, config valid
+        // Enabled by ECAT but deactivated by the PDI: the area is read/write protected (ESC datasheet
+        // section I 8.7), no access is counted.
+        bool locked = false;
         bool valid = false;
         std::uint16_t start = 0, length = 0;
         std::uint8_t control = 0;
@@ -169,7 +172,7 @@ class Esc {
     bool ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t);
     bool sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into);
     bool sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n);
-    int sm_covering(std::uint32_t a) const;  // -1 if none
+    int sm_covering(std::uint32_t a) const;  // an active or locked SM guarding this byte; -1 if none
     std::uint32_t next_sm_start(std::uint32_t a) const;
     std::uint8_t* ecat_write_target(std::uint32_t a);  // where an ECAT write of this byte lands
 
@@ -190,7 +193,7 @@ class Esc {
     protocol::WriteMaskTable wmask_;
     std::array<SmState, protocol::kMaxSms> sm_{};
     std::array<FmmuState, protocol::kMaxFmmus> fmmu_{};
-    std::uint32_t sm_active_mask_ = 0;
+    std::uint32_t sm_guard_mask_ = 0;  // active or locked SMs: the ones that control their memory area
     // Active FMMUs that read / write, and the logical bit range all active FMMUs cover together (a
     // logical datagram outside it is rejected without looking at each FMMU).
     std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;

@@ -146,3 +146,28 @@ TEST_F(EscOnly, SyncManagerOutsideRamIsIgnored) {
     EXPECT_FALSE(esc.sm_config(2).valid);
     EXPECT_EQ(write(0x2FF0, {1}), 1);  // plain memory
 }
+
+// ESC datasheet section I 8.7: a SyncManager the PDI deactivated (0x0807 bit 0) while the master has it
+// enabled keeps its whole area read/write protected; the working counter shows it.
+TEST_F(EscOnly, SyncManagerDeactivatedByThePdiLocksItsArea) {
+    sm(2, 0x1000, 4, 0x64);
+    esc.pdi_deactivate_sm(2, true);
+    EXPECT_EQ(write(0x1000, {7, 7, 7, 7}), 0);
+    std::vector<std::uint8_t> r{0xAA, 0xAA, 0xAA, 0xAA};
+    EXPECT_EQ(read(0x1000, r), 0);
+    EXPECT_EQ(r[0], 0xAA);  // nothing placed in the frame
+    EXPECT_EQ(esc.peek(0x1000), 0);
+    // A datagram that also covers memory outside the area counts for that part only.
+    std::vector<std::uint8_t> wide(8);
+    EXPECT_EQ(read(0x0FFC, wide), 1);
+    // The mailbox SMs as in INIT: configured and enabled by the master, deactivated by the firmware.
+    sm(1, 0x1100, 8, 0x22);
+    esc.pdi_deactivate_sm(1, true);
+    std::vector<std::uint8_t> mbx(8);
+    EXPECT_EQ(read(0x1100, mbx), 0);
+    // Activated again by the PDI: a buffered SM works as before; disabled by the master: plain memory.
+    esc.pdi_deactivate_sm(2, false);
+    EXPECT_EQ(write(0x1000, {1, 2, 3, 4}), 1);
+    EXPECT_EQ(write(sm_addr(1) + 6, {0x00}), 1);
+    EXPECT_EQ(read(0x1100, mbx), 1);
+}
