@@ -435,10 +435,13 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
                         static_cast<std::uint8_t>(systime_bytes | (1u << (ad - addr(Reg::DcSystemTime))));
                 }
                 mem_[ad] = static_cast<std::uint8_t>((mem_[ad] & ~m) | (v & m));
+                // Counted when one byte lies in a register the master may write, even if its value is
+                // ignored (reserved bits, SM configuration locked); read-only and absent registers are
+                // not written (ESC datasheet section I 2.4, section II 1).
+                counted |= wmask_.writable(static_cast<std::uint16_t>(ad));
             }
             reg_lo = std::min(reg_lo, cur);
             reg_hi = std::max(reg_hi, cur + static_cast<std::uint32_t>(run) - 1);
-            counted = true;
         } else if (cur < mem_.size()) {
             const int s = sm_covering(cur);
             if (s >= 0) {
@@ -451,8 +454,7 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
                 counted = true;
             }
         } else {
-            run = std::min<std::size_t>(rem, 0x10000 - cur);
-            counted = true;  // unimplemented memory: accepted and ignored
+            run = std::min<std::size_t>(rem, 0x10000 - cur);  // past the process RAM: nothing to write
         }
         pos += run;
     }
