@@ -411,6 +411,8 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
     std::array<std::uint8_t, 8> systime{};
     std::uint8_t systime_bytes = 0;
     const std::uint8_t activation_before = mem_[addr(Reg::DcActivation)];
+    const bool al_control_refused = al_control_refuses_writes();
+    bool al_control_written = false;
     std::size_t pos = 0;
     while (pos < n) {
         const std::uint32_t cur = static_cast<std::uint32_t>(a) + static_cast<std::uint32_t>(pos);
@@ -422,6 +424,10 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
             for (std::size_t k = 0; k < run; ++k) {
                 const std::uint32_t ad = cur + static_cast<std::uint32_t>(k);
                 std::uint8_t m = wmask_.mask[ad];
+                if (ad - addr(Reg::AlControl) < 2u) {
+                    if (al_control_refused) continue;  // still unread by the PDI: not written, not counted
+                    al_control_written = true;
+                }
                 if (ad >= 0x0800 && ad < sm_addr(cfg_.sm_count) && (ad & 7) < 5 &&
                     (mem_[(ad & ~7u) + sm::Activate] & sm::ActEnable))
                     m = 0;  // SyncManager configuration is locked while the SM is enabled
@@ -457,6 +463,10 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
             run = std::min<std::size_t>(rem, 0x10000 - cur);  // past the process RAM: nothing to write
         }
         pos += run;
+    }
+    if (al_control_written) {
+        al_control_unread_ = true;
+        set_al_event(al_event::AlControl);
     }
     if (reg_lo <= reg_hi) {
         if (sii_cmd_written) sii_command(written_sii_cmd_);
@@ -532,8 +542,11 @@ bool Esc::sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, st
 // ---------------------------------------------------------------------------------------------
 // Register side effects
 
+bool Esc::al_control_refuses_writes() const {
+    return al_control_unread_ && !(mem_[addr(Reg::EscConfiguration)] & protocol::esc_config::DeviceEmulation);
+}
+
 void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTiming& /*t*/) {
-    if (overlaps(lo, hi, addr(Reg::AlControl), 2)) set_al_event(al_event::AlControl);
     if (overlaps(lo, hi, addr(Reg::RxErrorCounter), 12))
         std::memset(&mem_[addr(Reg::RxErrorCounter)], 0, 12);  // any write clears 0x0300-0x030B
     if (overlaps(lo, hi, addr(Reg::EcatProcessingUnitErrorCounter), 1))
@@ -745,6 +758,7 @@ bool Esc::pdi_buffer_write(unsigned i, ConstBytes in) {
 
 std::uint16_t Esc::pdi_read_al_control() {
     clear_al_event(al_event::AlControl);
+    al_control_unread_ = false;  // the "mailbox" is empty again: the master may write
     return ld_le16(&mem_[addr(Reg::AlControl)]);
 }
 

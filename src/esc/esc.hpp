@@ -170,6 +170,7 @@ class Esc {
     // Accesses with full ECAT semantics (masks, SyncManagers, side effects); true if any byte counted.
     bool ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_into, const FrameTiming& t);
     bool ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t);
+    bool al_control_refuses_writes() const;
     bool sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into);
     bool sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n);
     int sm_covering(std::uint32_t a) const;  // an active or locked SM guarding this byte; -1 if none
@@ -201,6 +202,9 @@ class Esc {
     std::uint32_t repeat_bits_ = 0;
     std::uint8_t link_mask_ = 0x01;
     std::uint8_t written_sii_cmd_ = 0;
+    // AL control written by the master and not yet read by the PDI: without device emulation the
+    // register then refuses further writes (ESC datasheet section II 0x0120, "behaves like a mailbox").
+    bool al_control_unread_ = false;
     bool sm_activation_event_ = false;
     bool wd_armed_ = false;
     std::uint64_t wd_last_trigger_ns_ = 0;

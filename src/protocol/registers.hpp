@@ -131,6 +131,13 @@ constexpr std::uint16_t communication(unsigned port) {
 }
 }  // namespace dl_status
 
+// ESC configuration bits (0x0141, loaded from the high byte of SII word 0).
+namespace esc_config {
+// The ESC itself copies AL control to AL status (simple devices without a µController); off, AL control
+// behaves as a mailbox towards the PDI (ESC datasheet section II 0x0120).
+inline constexpr std::uint8_t DeviceEmulation = 0x01;
+}  // namespace esc_config
+
 // SII control/status bits (0x0502).
 namespace sii_ctrl {
 inline constexpr std::uint16_t WriteEnable = 0x0001;

@@ -171,3 +171,38 @@ TEST_F(EscOnly, SyncManagerDeactivatedByThePdiLocksItsArea) {
     EXPECT_EQ(write(sm_addr(1) + 6, {0x00}), 1);
     EXPECT_EQ(read(0x1100, mbx), 1);
 }
+
+// ESC datasheet section II 0x0120: without device emulation (0x0141 bit 0 = 0) AL control behaves like a
+// mailbox: once written by the master it takes no further write until the PDI has read it.
+TEST_F(EscOnly, AlControlIsAMailboxWithoutDeviceEmulation) {
+    ASSERT_EQ(esc.peek(addr(Reg::EscConfiguration)) & esc_config::DeviceEmulation, 0);
+    EXPECT_EQ(write(addr(Reg::AlControl), {0x02, 0x00}), 1);
+    EXPECT_EQ(write(addr(Reg::AlControl), {0x04, 0x00}), 0);  // not read yet: refused
+    EXPECT_EQ(write(addr(Reg::AlControl) + 1, {0x00}), 0);    // either byte
+    EXPECT_EQ(esc.peek16(addr(Reg::AlControl)), 0x0002);
+    // A datagram that also covers other writable registers counts for them.
+    EXPECT_EQ(write(addr(Reg::AlControl), std::vector<std::uint8_t>(25, 0)), 1);  // up to 0x0138
+    EXPECT_EQ(esc.peek16(addr(Reg::AlControl)), 0x0002);
+    EXPECT_EQ(esc.pdi_read_al_control(), 0x0002);
+    EXPECT_EQ(write(addr(Reg::AlControl), {0x04, 0x00}), 1);
+    EXPECT_EQ(esc.peek16(addr(Reg::AlControl)), 0x0004);
+}
+
+TEST(AlControl, AlwaysWritableWithDeviceEmulation) {
+    auto dev = device::default_drive();
+    dev.pdi_control = 0x0104;  // digital I/O PDI, device emulation (as an EL2004's SII word 0)
+    Esc esc{EscConfig{}, build_sii_image(dev)};
+    ASSERT_NE(esc.peek(addr(Reg::EscConfiguration)) & esc_config::DeviceEmulation, 0);
+    std::array<std::uint8_t, 16> buf{};
+    for (std::uint8_t state : {0x02, 0x04}) {
+        buf.fill(0);
+        buf[0] = static_cast<std::uint8_t>(Command::APWR);
+        st_le16(&buf[4], addr(Reg::AlControl));
+        st_le16(&buf[6], 2);
+        buf[10] = state;
+        DatagramView d(buf.data());
+        esc.process(d, FrameTiming{1000, 2000});
+        EXPECT_EQ(d.wkc(), 1);
+        EXPECT_EQ(esc.peek(addr(Reg::AlControl)), state);
+    }
+}
