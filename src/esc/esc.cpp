@@ -111,6 +111,9 @@ void Esc::reload_eeprom() {
         eeprom_.size() >= 16 && sii_config_crc(ConstBytes(eeprom_.data(), 14)) == eeprom_[2 * sii::Checksum];
     if (crc_ok) {
         st_le16(&mem_[addr(Reg::PdiControl)], word(sii::PdiControl));
+        // The digital output register exists with a digital I/O PDI only (section II 0x0F00).
+        for (unsigned k = 0; k < protocol::kDigitalOutputSize; ++k)
+            wmask_.set(addr(Reg::DigitalOutputData) + k, 0xFF, has_digital_io());
         st_le16(&mem_[addr(Reg::PdiConfiguration)], word(sii::PdiConfig));
         st_le16(&mem_[addr(Reg::ExtendedPdiConfiguration)], word(sii::PdiConfig2));
         st_le16(&mem_[addr(Reg::StationAlias)], word(sii::StationAlias));
@@ -428,6 +431,15 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
                     if (al_control_refused) continue;  // still unread by the PDI: not written, not counted
                     al_control_written = true;
                 }
+                if (ad - addr(Reg::DigitalOutputData) < protocol::kDigitalOutputSize && has_digital_io()) {
+                    // A SyncManager on the digital output register guards it like RAM.
+                    if (const int si = sm_covering(ad); si >= 0) {
+                        const auto i = static_cast<unsigned>(si);
+                        if (!sm_[i].locked && sm_ecat_write(i, ad - sm_[i].start, src + pos + k, 1))
+                            counted = true;
+                        continue;
+                    }
+                }
                 if (ad >= 0x0800 && ad < sm_addr(cfg_.sm_count) && (ad & 7) < 5 &&
                     (mem_[(ad & ~7u) + sm::Activate] & sm::ActEnable))
                     m = 0;  // SyncManager configuration is locked while the SM is enabled
@@ -482,6 +494,11 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
 
 bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into) {
     SmState& s = sm_[i];
+    if (s.single) {  // no buffer mechanism: the memory, in either direction
+        copy_out(dst, &mem_[s.start + off], n, or_into);
+        if (!s.ecat_writes) set_al_event(al_event::sm(i));
+        return true;
+    }
     if (s.ecat_writes) return false;  // the master may not read a buffer it writes
     const std::uint8_t* src;
     if (s.mailbox) {
@@ -511,6 +528,19 @@ bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size
 
 bool Esc::sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n) {
     SmState& s = sm_[i];
+    if (s.single) {  // no buffer mechanism; the watchdog trigger and the event still work (section I 8.5)
+        std::memcpy(&mem_[s.start + off], src, n);
+        if (!s.ecat_writes) return true;
+        if (s.control & sm::CtrlWatchdog) {
+            wd_armed_ = true;
+            wd_last_trigger_ns_ = last_host_ns_;
+            mem_[addr(Reg::WatchdogStatusProcessData)] |= 0x01;
+        }
+        s.ever_written = true;
+        ++s.complete_writes;
+        set_al_event(al_event::sm(i));
+        return true;
+    }
     if (!s.ecat_writes) return false;
     if (s.mailbox) {
         if (s.mbx_full) return false;  // full mailbox: refused, not counted (masters retry)
@@ -615,15 +645,15 @@ void Esc::update_sm(unsigned i) {
     const bool dir_ok =
         (control & sm::CtrlDirMask) == sm::CtrlDirRead || (control & sm::CtrlDirMask) == sm::CtrlDirWrite;
     const bool mailbox = c.mailbox();
-    const std::size_t span = mailbox ? length : 3u * length;
+    const bool single = !mailbox && length == 1;
+    const std::size_t span = mailbox || single ? length : 3u * length;
     const bool valid =
-        mode_ok && dir_ok && length > 0 && start >= kRegisterSpaceSize && start + span <= mem_.size();
+        mode_ok && dir_ok && length > 0 && sm_area_exists(start, static_cast<std::uint32_t>(span));
     const bool active = c.enabled() && !c.pdi_deactivated() && valid;
     // Deactivated by the PDI while the master has it enabled: the whole area stays locked (ESC datasheet
     // section I 8.7; register 0x0807 bit 0 "SyncManager locks access to memory area"). Only a SyncManager
     // the master disabled (0x0806 bit 0 = 0) leaves plain memory behind.
-    const bool locked = c.enabled() && c.pdi_deactivated() && length > 0 && start >= kRegisterSpaceSize &&
-                        start + length <= mem_.size();
+    const bool locked = c.enabled() && c.pdi_deactivated() && length > 0 && sm_area_exists(start, length);
     const bool changed = active != s.active || locked != s.locked || start != s.start || length != s.length ||
                          control != s.control;
     const bool repeat = c.repeat_request();
@@ -637,6 +667,7 @@ void Esc::update_sm(unsigned i) {
         s.length = length;
         s.control = control;
         s.mailbox = mailbox;
+        s.single = single;
         s.ecat_writes = c.ecat_writes();
         s.mbx_full = false;
         s.ecat_reading = false;
@@ -662,6 +693,16 @@ void Esc::update_sm(unsigned i) {
     else
         sm_guard_mask_ &= ~(1u << i);
     update_sm_status(i);
+}
+
+bool Esc::has_digital_io() const {
+    return protocol::pdi_is_digital_io(mem_[addr(Reg::PdiControl)]);
+}
+
+bool Esc::sm_area_exists(std::uint32_t start, std::uint32_t span) const {
+    if (start >= kRegisterSpaceSize) return start + span <= mem_.size();
+    const std::uint32_t dout = addr(Reg::DigitalOutputData);
+    return has_digital_io() && start >= dout && start + span <= dout + protocol::kDigitalOutputSize;
 }
 
 void Esc::update_sm_status(unsigned i) {
@@ -728,6 +769,12 @@ bool Esc::pdi_mailbox_put(unsigned i, ConstBytes data) {
 bool Esc::pdi_buffer_read(unsigned i, Bytes out) {
     SmState& s = sm_[i];
     if (i >= cfg_.sm_count || !s.active || s.mailbox || !s.ecat_writes) return false;
+    if (s.single) {
+        clear_al_event(al_event::sm(i));
+        if (!s.ever_written || out.empty()) return false;
+        out[0] = mem_[s.start];
+        return true;
+    }
     if (s.buf_next != SmState::kNone) {
         s.buf_pdi = s.buf_next;
         s.buf_next = SmState::kNone;
@@ -743,6 +790,10 @@ bool Esc::pdi_buffer_read(unsigned i, Bytes out) {
 bool Esc::pdi_buffer_write(unsigned i, ConstBytes in) {
     SmState& s = sm_[i];
     if (i >= cfg_.sm_count || !s.active || s.mailbox || s.ecat_writes) return false;
+    if (s.single) {
+        if (!in.empty()) mem_[s.start] = in[0];
+        return true;
+    }
     std::uint8_t* dst = &mem_[s.start + static_cast<std::size_t>(s.buf_pdi) * s.length];
     const std::size_t n = std::min<std::size_t>(in.size(), s.length);
     std::memcpy(dst, in.data(), n);

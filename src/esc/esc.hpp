@@ -143,6 +143,9 @@ class Esc {
         std::uint16_t start = 0, length = 0;
         std::uint8_t control = 0;
         bool mailbox = false;
+        // Buffered mode of 1 byte: no buffer mechanism, accesses pass to the memory (section I 8.5); the
+        // SyncManagers on the digital output register are these.
+        bool single = false;
         bool ecat_writes = false;
         // mailbox
         bool mbx_full = false;
@@ -171,6 +174,10 @@ class Esc {
     bool ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_into, const FrameTiming& t);
     bool ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t);
     bool al_control_refuses_writes() const;
+    // Where a SyncManager of span bytes may lie: in the process RAM, or on the digital output register
+    // of an ESC with a digital I/O PDI.
+    bool sm_area_exists(std::uint32_t start, std::uint32_t span) const;
+    bool has_digital_io() const;
     bool sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into);
     bool sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n);
     int sm_covering(std::uint32_t a) const;  // an active or locked SM guarding this byte; -1 if none

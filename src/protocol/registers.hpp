@@ -97,6 +97,8 @@ enum class Reg : std::uint16_t {
     DcLatch0NegativeEdge = 0x09B8,
     DcLatch1PositiveEdge = 0x09C0,
     DcLatch1NegativeEdge = 0x09C8,
+    DigitalOutputData = 0x0F00,  // 4 bytes, ESCs with a digital I/O PDI
+    UserRam = 0x0F80,
     ProcessRam = 0x1000,
 };
 
@@ -130,6 +132,15 @@ constexpr std::uint16_t communication(unsigned port) {
     return static_cast<std::uint16_t>(0x0200u << (2 * port));
 }
 }  // namespace dl_status
+
+inline constexpr std::uint16_t kDigitalOutputSize = 4;
+
+// PDI types (0x0140, loaded from the low byte of SII word 0; ESC datasheet section II 0x0140) that drive
+// the digital I/O: 0x01 4 digital inputs, 0x02 4 digital outputs, 0x03 2 in/2 out, 0x04 digital I/O. The
+// ESC then has the digital output register 0x0F00-0x0F03.
+constexpr bool pdi_is_digital_io(std::uint8_t pdi_control) noexcept {
+    return pdi_control >= 0x01 && pdi_control <= 0x04;
+}
 
 // ESC configuration bits (0x0141, loaded from the high byte of SII word 0).
 namespace esc_config {
@@ -246,7 +257,7 @@ inline constexpr WritableArea kWritableAreas[] = {
     {0x0503, 1, "SII EEPROM command", 0x00},
     {0x0900, 4, "Receive time port 0: a write latches the receive times", 0x00},
     {0x0910, 8, "System time: a write feeds the time control loop", 0x00},
-    {0x0F80, 128, "User RAM", 0xFF},
+    {addr(Reg::UserRam), 128, "User RAM", 0xFF},
 };
 
 // Per-byte ECAT write masks for the whole register space, and which bytes the master may write at all,
@@ -258,9 +269,11 @@ struct WriteMaskTable {
     constexpr bool writable(std::uint16_t a) const {
         return a < kRegisterSpaceSize && ((writable_bits[a / 8] >> (a % 8)) & 1u) != 0;
     }
-    constexpr void set(unsigned a, std::uint8_t m) {
-        mask[a] = m;
-        writable_bits[a / 8] = static_cast<std::uint8_t>(writable_bits[a / 8] | (1u << (a % 8)));
+    constexpr void set(unsigned a, std::uint8_t m, bool is_writable = true) {
+        mask[a] = is_writable ? m : 0;
+        const auto bit = static_cast<std::uint8_t>(1u << (a % 8));
+        writable_bits[a / 8] =
+            static_cast<std::uint8_t>(is_writable ? writable_bits[a / 8] | bit : writable_bits[a / 8] & ~bit);
     }
 };
 

@@ -580,4 +580,47 @@ TEST(EsiRun, EachVendorDeviceReachesOpWithItsDefaultPdos) {
 }
 
 }  // namespace
+namespace {
+// A simple digital output terminal as Beckhoff describes an EL2004: no mailbox, a digital I/O PDI with
+// device emulation (ConfigData 0x0104...), one 1-byte SyncManager on the ESC's digital output register
+// 0x0F00 (watchdog trigger, ControlByte 0x44) and four 1-bit outputs.
+std::string digital_output_terminal_esi() {
+    std::string pdos;
+    for (int ch = 0; ch < 4; ++ch)
+        pdos += R"(<RxPdo Fixed="1" Sm="0"><Index>#x160)" + std::to_string(ch) + "</Index><Name>Channel " +
+                std::to_string(ch + 1) + "</Name><Entry><Index>#x70" + std::to_string(ch) +
+                R"(0</Index><SubIndex>1</SubIndex><BitLen>1</BitLen><Name>Output</Name>)" +
+                "<DataType>BOOL</DataType></Entry></RxPdo>";
+    return R"(<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x2</Id><Name>V</Name></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x07d43052" RevisionNo="#x00100000">EL2004</Type><Name>4Ch. Dig. Output</Name>
+<Fmmu>Outputs</Fmmu><Sm ControlByte="#x44" StartAddress="#x0f00" Enable="1">Outputs</Sm>)" +
+           pdos + R"(<Eeprom><ByteSize>128</ByteSize><ConfigData>0401000000000000</ConfigData></Eeprom>
+</Device></Devices></Descriptions></EtherCATInfo>)";
+}
+}  // namespace
+
+// Digital outputs on the ESC's digital output register: a 1-byte SyncManager at 0x0F00 is accepted when the
+// ESC has that register (digital I/O PDI), its buffer mechanism is off (ESC datasheet section I 8.5, "single
+// byte buffer length ... digital output PDI") and the outputs land in 0x0F00.
+TEST(EsiEmulation, DigitalOutputsOnTheDigitalOutputRegisterReachOp) {
+    auto r = esi::import_esi_text(digital_output_terminal_esi());
+    esi::complete_for_emulation(r.desc);
+    ASSERT_EQ(r.desc.pdi_control, 0x0104);
+    auto seg = coe::make_coe_segment(r.desc, 1);
+    net::InProcessLink link(*seg);
+    link.set_time(1'000'000'000);
+    master::Master m(link);
+    std::string why;
+    ASSERT_TRUE(m.startup(protocol::AlState::Op, &why))
+        << why << " AL status code 0x" << std::hex << static_cast<unsigned>(seg->slave(0).status_code());
+    auto& esc = seg->slave(0).esc();
+    EXPECT_EQ(esc.sm_config(0).start, 0x0F00);
+    EXPECT_TRUE(esc.sm_config(0).valid);
+    m.outputs(0)[0] = 0x0A;
+    EXPECT_EQ(m.exchange_process_data(), m.expected_wkc());
+    EXPECT_EQ(esc.peek(0x0F00), 0x0A);
+    EXPECT_EQ(seg->slave(0).state(), protocol::AlState::Op);
+}
+
 }  // namespace vecat

@@ -206,3 +206,44 @@ TEST(AlControl, AlwaysWritableWithDeviceEmulation) {
         EXPECT_EQ(esc.peek(addr(Reg::AlControl)), state);
     }
 }
+
+// ESC datasheet section I 8.5: a buffered SyncManager of 1 byte has no buffer mechanism (accesses pass to
+// the memory, the watchdog trigger still works); on an ESC with a digital I/O PDI such SyncManagers guard
+// the digital output register 0x0F00-0x0F03. Without that PDI there is no such register.
+TEST(SingleByteSyncManager, OnTheDigitalOutputRegisterOfADigitalIoEsc) {
+    for (const std::uint16_t pdi : {std::uint16_t{0x0005}, std::uint16_t{0x0104}}) {
+        auto dev = device::default_drive();
+        dev.pdi_control = pdi;
+        Esc esc{EscConfig{}, build_sii_image(dev)};
+        auto dg = [&](Command cmd, std::uint16_t ado, std::vector<std::uint8_t> data) {
+            std::array<std::uint8_t, 64> buf{};
+            buf[0] = static_cast<std::uint8_t>(cmd);
+            st_le16(&buf[4], ado);
+            st_le16(&buf[6], static_cast<std::uint16_t>(data.size()));
+            std::copy(data.begin(), data.end(), buf.begin() + 10);
+            DatagramView d(buf.data());
+            esc.process(d, FrameTiming{1000, 2000});
+            return d.wkc();
+        };
+        const bool dio = pdi == 0x0104;
+        EXPECT_EQ(dg(Command::APWR, sm_addr(2), {0x00, 0x0F, 1, 0, 0x44, 0, 1, 0}), 1);
+        EXPECT_EQ(esc.sm_config(2).valid, dio) << pdi;
+        EXPECT_EQ(dg(Command::APWR, 0x0F00, {0x0A}), dio ? 1 : 0) << pdi;
+        EXPECT_EQ(esc.peek(0x0F00), dio ? 0x0A : 0) << pdi;
+        if (!dio) continue;
+        EXPECT_EQ(esc.sm_buffer_writes(2), 1u);
+        EXPECT_EQ(esc.peek(0x0440) & 1, 1);  // watchdog triggered
+        std::array<std::uint8_t, 1> out{};
+        EXPECT_TRUE(esc.pdi_buffer_read(2, out));
+        EXPECT_EQ(out[0], 0x0A);
+        EXPECT_EQ(dg(Command::APRD, 0x0F00, {0}), 1);  // readable: no buffer in the way
+        // Deactivated by the PDI: locked like any SyncManager area.
+        esc.pdi_deactivate_sm(2, true);
+        EXPECT_EQ(dg(Command::APWR, 0x0F00, {0x05}), 0);
+        EXPECT_EQ(esc.peek(0x0F00), 0x0A);
+        // Disabled by the master: the plain register.
+        EXPECT_EQ(dg(Command::APWR, sm_addr(2) + 6, {0}), 1);
+        EXPECT_EQ(dg(Command::APWR, 0x0F00, {0x05}), 1);
+        EXPECT_EQ(esc.peek(0x0F00), 0x05);
+    }
+}
