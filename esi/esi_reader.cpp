@@ -446,7 +446,10 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
         device::SyncManagerConfig c;
         c.start = static_cast<std::uint16_t>(attr_or(s, "StartAddress", 0));
         c.control = static_cast<std::uint8_t>(attr_or(s, "ControlByte", 0));
+        // Enable is the SII byte; Virtual and OpOnly are its bits 2 and 3 (ETG.2000 Sm, ETG.2010 SyncM).
         c.enable = static_cast<std::uint8_t>(attr_or(s, "Enable", 0));
+        if (bool_attr(s, "Virtual")) c.enable |= device::sm_enable::Virtual;
+        if (bool_attr(s, "OpOnly")) c.enable |= device::sm_enable::OpOnly;
         c.length = static_cast<std::uint16_t>(
             attr_or(s, "DefaultSize", attr_or(s, "MaxSize", attr_or(s, "MinSize", 0))));
         c.type = sm_type(txt(s), c.control);

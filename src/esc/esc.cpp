@@ -547,6 +547,8 @@ bool Esc::sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, st
         std::memcpy(&mem_[s.start + off], src, n);
         if (off + n == s.length) {
             s.mbx_full = true;
+            s.ever_written = true;
+            ++s.complete_writes;
             set_al_event(al_event::sm(i));
             update_sm_status(i);
         }
@@ -768,7 +770,17 @@ bool Esc::pdi_mailbox_put(unsigned i, ConstBytes data) {
 
 bool Esc::pdi_buffer_read(unsigned i, Bytes out) {
     SmState& s = sm_[i];
-    if (i >= cfg_.sm_count || !s.active || s.mailbox || !s.ecat_writes) return false;
+    if (i >= cfg_.sm_count || !s.active || !s.ecat_writes) return false;
+    if (s.mailbox) {  // 1-buffer mode: a complete buffer is taken, the last one stays readable
+        if (s.mbx_full) {
+            s.mbx_full = false;
+            clear_al_event(al_event::sm(i));
+            update_sm_status(i);
+        }
+        if (!s.ever_written) return false;
+        std::memcpy(out.data(), &mem_[s.start], std::min<std::size_t>(out.size(), s.length));
+        return true;
+    }
     if (s.single) {
         clear_al_event(al_event::sm(i));
         if (!s.ever_written || out.empty()) return false;
@@ -789,7 +801,8 @@ bool Esc::pdi_buffer_read(unsigned i, Bytes out) {
 
 bool Esc::pdi_buffer_write(unsigned i, ConstBytes in) {
     SmState& s = sm_[i];
-    if (i >= cfg_.sm_count || !s.active || s.mailbox || s.ecat_writes) return false;
+    if (i >= cfg_.sm_count || !s.active || s.ecat_writes) return false;
+    if (s.mailbox) return pdi_mailbox_put(i, in);  // 1-buffer mode: only once the master read the last
     if (s.single) {
         if (!in.empty()) mem_[s.start] = in[0];
         return true;
@@ -802,6 +815,16 @@ bool Esc::pdi_buffer_write(unsigned i, ConstBytes in) {
     s.buf_pdi = static_cast<std::uint8_t>(3 - s.buf_next - s.buf_ecat);
     update_sm_status(i);
     return true;
+}
+
+void Esc::pdi_write_memory(std::uint16_t a, ConstBytes in) {
+    if (a < kRegisterSpaceSize || a >= mem_.size()) return;  // the process RAM only
+    std::memcpy(&mem_[a], in.data(), std::min<std::size_t>(in.size(), mem_.size() - a));
+}
+
+void Esc::pdi_read_memory(std::uint16_t a, Bytes out) const {
+    if (a >= mem_.size()) return;
+    std::memcpy(out.data(), &mem_[a], std::min<std::size_t>(out.size(), mem_.size() - a));
 }
 
 // ---------------------------------------------------------------------------------------------

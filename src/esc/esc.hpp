@@ -96,12 +96,16 @@ class Esc {
     bool sm_repeat_request(unsigned i) const;
     void pdi_set_repeat_ack(unsigned i, bool ack);
 
-    // Buffered (3-buffer) SyncManagers.
+    // Process data SyncManagers: buffered (3 buffers), 1 byte (no buffers) or 1-buffer (mailbox) mode.
     // Latest complete buffer written by the master (ECAT-write SM). Returns false if none was ever written.
     bool pdi_buffer_read(unsigned i, Bytes out);
     std::uint64_t sm_buffer_writes(unsigned i) const { return sm_[i].complete_writes; }
     // Publishes a new buffer for the master to read (ECAT-read SM).
     bool pdi_buffer_write(unsigned i, ConstBytes in);
+    // Process data without a SyncManager (the master left it off, or it is virtual): the FMMU reads and
+    // writes the memory. Writes reach the process RAM only.
+    void pdi_write_memory(std::uint16_t a, ConstBytes in);
+    void pdi_read_memory(std::uint16_t a, Bytes out) const;
 
     // Time: runs the watchdogs. Call regularly with the host clock in ns.
     void tick(std::uint64_t now_ns);

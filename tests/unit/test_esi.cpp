@@ -624,3 +624,89 @@ TEST(EsiEmulation, DigitalOutputsOnTheDigitalOutputRegisterReachOp) {
 }
 
 }  // namespace vecat
+
+namespace vecat {
+namespace {
+// A device with one 16-bit output and one 16-bit input, its process data SyncManagers declared as sms.
+std::string process_data_esi(const std::string& sms) {
+    return R"(<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x1234</Id><Name>V</Name></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x77" RevisionNo="#x1">PD</Type><Name>PD</Name><Fmmu>Outputs</Fmmu><Fmmu>Inputs</Fmmu>)" +
+           sms + R"(<RxPdo Fixed="1" Sm="0"><Index>#x1600</Index><Name>Out</Name><Entry><Index>#x7000</Index>
+<SubIndex>1</SubIndex><BitLen>16</BitLen><Name>Value</Name><DataType>UINT</DataType></Entry></RxPdo>
+<TxPdo Fixed="1" Sm="1"><Index>#x1A00</Index><Name>In</Name><Entry><Index>#x6000</Index>
+<SubIndex>1</SubIndex><BitLen>16</BitLen><Name>Value</Name><DataType>UINT</DataType></Entry></TxPdo>
+</Device></Devices></Descriptions></EtherCATInfo>)";
+}
+
+struct DeclaredSms {
+    const char* what;
+    std::string sms;
+};
+
+void PrintTo(const DeclaredSms& d, std::ostream* os) {
+    *os << d.what;
+}
+
+class ProcessDataSyncManagers : public ::testing::TestWithParam<DeclaredSms> {};
+}  // namespace
+
+// The process data SyncManager checks follow what the device's own ESI declares (ETG.2000 Sm; the SII vecat
+// generates from it carries it in the SyncM category, ETG.2010): 1-buffer mode (ControlByte 0x26/0x22),
+// Enable="0" (the master leaves it off; the FMMU reads the memory), Virtual="1" (no hardware SyncManager).
+// The device reaches OP with the project master (which activates the SMs as the SII's enable byte says, as
+// SOEM does) and its process data flows both ways.
+TEST_P(ProcessDataSyncManagers, TheDeviceReachesOpAndExchanges) {
+    auto r = esi::import_esi_text(process_data_esi(GetParam().sms));
+    esi::complete_for_emulation(r.desc);
+    auto seg = coe::make_coe_segment(r.desc, 1);
+    net::InProcessLink link(*seg);
+    link.set_time(1'000'000'000);
+    master::Master m(link);
+    std::string why;
+    ASSERT_TRUE(m.startup(protocol::AlState::Op, &why))
+        << GetParam().what << ": " << why << ", AL status code 0x" << std::hex
+        << static_cast<unsigned>(seg->slave(0).status_code());
+    auto& od = dynamic_cast<coe::CoeApplication&>(seg->slave(0).app()).dictionary();
+    od.find(0x6000, 1)->set(std::uint16_t{0x1234});
+    st_le16(m.outputs(0).data(), 0xBEEF);
+    for (int i = 0; i < 4; ++i)
+        EXPECT_EQ(m.exchange_process_data(), m.expected_wkc()) << GetParam().what;
+    EXPECT_EQ(ld_le16(m.inputs(0).data()), 0x1234) << GetParam().what;
+    EXPECT_EQ(od.find(0x7000, 1)->get<std::uint16_t>(), 0xBEEF) << GetParam().what;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Declared, ProcessDataSyncManagers,
+    ::testing::Values(
+        DeclaredSms{"buffered",
+                    R"(<Sm StartAddress="#x1100" ControlByte="#x64" DefaultSize="2" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x20" DefaultSize="2" Enable="1">Inputs</Sm>)"},
+        DeclaredSms{"1-buffer mode",
+                    R"(<Sm StartAddress="#x1100" ControlByte="#x26" DefaultSize="2" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x22" DefaultSize="2" Enable="1">Inputs</Sm>)"},
+        DeclaredSms{"inputs Enable=0",
+                    R"(<Sm StartAddress="#x1100" ControlByte="#x64" DefaultSize="2" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x20" DefaultSize="2" Enable="0">Inputs</Sm>)"},
+        DeclaredSms{"virtual inputs",
+                    R"(<Sm StartAddress="#x1100" ControlByte="#x64" DefaultSize="2" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x20" DefaultSize="2" Enable="0" Virtual="1">Inputs</Sm>)"}),
+    [](const auto& info) {
+        std::string n = info.param.what;
+        for (auto& c : n)
+            if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+        return n;
+    });
+
+TEST(EsiReader, VirtualAndOpOnlyAreBitsOfTheSiiEnableByte) {
+    const auto r = esi::import_esi_text(process_data_esi(
+        R"(<Sm StartAddress="#x0f00" ControlByte="#x44" Enable="1" OpOnly="1">Outputs</Sm>
+<Sm StartAddress="#x0998" ControlByte="#x00" Enable="0" Virtual="1">Inputs</Sm>)"));
+    ASSERT_EQ(r.desc.sync_managers.size(), 2u);
+    EXPECT_EQ(r.desc.sync_managers[0].enable, 0x09);  // as the EL2004's SII
+    EXPECT_EQ(r.desc.sync_managers[1].enable, 0x04);  // as the EL2262's virtual input SM
+    const auto again = esi::import_esi_text(esi::write_esi(r.desc));
+    EXPECT_EQ(again.desc.sync_managers[0].enable, 0x09);
+    EXPECT_EQ(again.desc.sync_managers[1].enable, 0x04);
+}
+}  // namespace vecat
