@@ -710,3 +710,67 @@ TEST(EsiReader, VirtualAndOpOnlyAreBitsOfTheSiiEnableByte) {
     EXPECT_EQ(again.desc.sync_managers[1].enable, 0x04);
 }
 }  // namespace vecat
+
+namespace vecat {
+namespace {
+// One product in two revisions, and another product.
+std::string two_revisions_esi() {
+    auto device = [](const char* type, const char* product, const char* revision, const char* name) {
+        return std::string(R"(<Device><Type ProductCode=")") + product + R"(" RevisionNo=")" + revision +
+               R"(">)" + type + "</Type><Name>" + name + "</Name></Device>";
+    };
+    return R"(<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x2</Id><Name>V</Name></Vendor><Descriptions><Devices>)" +
+           device("EL9999", "#x27074052", "#x00100000", "rev 16") +
+           device("EL9999", "#x27074052", "#x00110000", "rev 17") +
+           device("EL8888", "#x22b83052", "#x00100000", "other") + "</Devices></Descriptions></EtherCATInfo>";
+}
+}  // namespace
+
+// --device/--product take the first revision unless --revision picks another; a revision the file does not
+// have is an error naming the ones it has.
+TEST(EsiReader, TheRevisionPicksOneOfSeveral) {
+    esi::DeviceSelector sel;
+    sel.product_code = 0x27074052;
+    EXPECT_EQ(esi::import_esi_text(two_revisions_esi(), sel).desc.name, "rev 16");
+    sel.revision = 0x00110000;
+    EXPECT_EQ(esi::import_esi_text(two_revisions_esi(), sel).desc.name, "rev 17");
+    sel.product_code.reset();
+    sel.type = "EL9999";
+    EXPECT_EQ(esi::import_esi_text(two_revisions_esi(), sel).desc.identity.revision, 0x00110000u);
+    sel.revision = 0x00120000;
+    try {
+        esi::import_esi_text(two_revisions_esi(), sel);
+        ADD_FAILURE() << "no error";
+    } catch (const esi::EsiError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("0x00120000"), std::string::npos) << what;
+        EXPECT_NE(what.find("0x00100000"), std::string::npos) << what;  // the revisions EL9999 has
+        EXPECT_NE(what.find("0x00110000"), std::string::npos) << what;
+        EXPECT_EQ(what.find("EL8888"), std::string::npos) << what;  // not another product's
+    }
+}
+}  // namespace vecat
+
+namespace vecat {
+// vecat sii generate / run / exec --esi FILE --product P --revision R: the option reaches the selector.
+TEST(EsiCommandLine, RevisionOptionPicksTheRevision) {
+    const auto esi_path = temp_file("revisions.xml", two_revisions_esi());
+    const auto sii_path = esi_path + ".bin";
+    const std::string cmd = std::string(VECAT_BINARY) + " sii generate --esi " + esi_path +
+                            " --product 0x27074052 --revision 0x00110000 -o " + sii_path + " 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    std::ifstream f(sii_path, std::ios::binary);
+    const std::vector<std::uint8_t> img((std::istreambuf_iterator<char>(f)),
+                                        std::istreambuf_iterator<char>());
+    ASSERT_GE(img.size(), 32u);
+    EXPECT_EQ(ld_le32(&img[2 * protocol::sii::RevisionNo]), 0x00110000u);
+    const std::string out =
+        test::run_capture(std::string(VECAT_BINARY) + " sii generate --esi " + esi_path +
+                          " --device EL9999 --revision 0x00120000 -o " + sii_path + " 2>&1");
+    EXPECT_NE(out.find("its revisions are"), std::string::npos) << out;
+    EXPECT_NE(out.find("0x00110000"), std::string::npos) << out;
+    std::filesystem::remove(esi_path);
+    std::filesystem::remove(sii_path);
+}
+}  // namespace vecat
