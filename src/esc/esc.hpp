@@ -169,6 +169,8 @@ class Esc {
     };
 
     bool addressed_fixed(std::uint16_t adp) const;
+    // Copies memory into a datagram, or ORs it in (broadcast reads).
+    static void copy_out(std::uint8_t* dst, const std::uint8_t* src, std::size_t n, bool or_into);
     void physical(protocol::DatagramView d, std::uint16_t ado, bool do_read, bool do_write, bool or_read,
                   const FrameTiming& t, unsigned& wkc_add);
     void logical(protocol::DatagramView d, bool do_read, bool do_write, const FrameTiming& t,

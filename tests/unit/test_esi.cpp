@@ -691,8 +691,8 @@ INSTANTIATE_TEST_SUITE_P(
         DeclaredSms{"virtual inputs",
                     R"(<Sm StartAddress="#x1100" ControlByte="#x64" DefaultSize="2" Enable="1">Outputs</Sm>
 <Sm StartAddress="#x1180" ControlByte="#x20" DefaultSize="2" Enable="0" Virtual="1">Inputs</Sm>)"}),
-    [](const auto& info) {
-        std::string n = info.param.what;
+    [](const auto& p) {
+        std::string n = p.param.what;
         for (auto& c : n)
             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
         return n;

@@ -194,7 +194,7 @@ TEST(AlControl, AlwaysWritableWithDeviceEmulation) {
     Esc esc{EscConfig{}, build_sii_image(dev)};
     ASSERT_NE(esc.peek(addr(Reg::EscConfiguration)) & esc_config::DeviceEmulation, 0);
     std::array<std::uint8_t, 16> buf{};
-    for (std::uint8_t state : {0x02, 0x04}) {
+    for (const std::uint8_t state : {std::uint8_t{0x02}, std::uint8_t{0x04}}) {
         buf.fill(0);
         buf[0] = static_cast<std::uint8_t>(Command::APWR);
         st_le16(&buf[4], addr(Reg::AlControl));
