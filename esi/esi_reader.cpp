@@ -4,6 +4,8 @@
 #include "esi/esi_reader.hpp"
 
 #include <fmt/core.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cstring>
@@ -300,6 +302,32 @@ pugi::xml_node select_device(pugi::xml_node devices, const DeviceSelector& sel) 
     return {};
 }
 
+// What the file has of the asked device, so that the message names what could be picked: the devices of
+// the asked type or product code (all revisions), or every device when none of them matches.
+std::string no_match_message(pugi::xml_node devices, const DeviceSelector& sel) {
+    std::string asked;
+    if (sel.type) asked += fmt::format(" type {}", *sel.type);
+    if (sel.product_code) asked += fmt::format(" product code 0x{:08X}", *sel.product_code);
+    if (sel.revision) asked += fmt::format(" revision 0x{:08X}", *sel.revision);
+    auto line = [](pugi::xml_node t) {
+        return fmt::format("{} (product code 0x{:08X}, revision 0x{:08X})", txt(t),
+                           static_cast<std::uint32_t>(attr_or(t, "ProductCode", 0)),
+                           static_cast<std::uint32_t>(attr_or(t, "RevisionNo", 0)));
+    };
+    std::vector<std::string> same, all;
+    for (auto dev : devices.children("Device")) {
+        auto t = dev.child("Type");
+        all.push_back(line(t));
+        const bool type_ok = !sel.type || txt(t) == *sel.type;
+        const bool product_ok = !sel.product_code || attr_or(t, "ProductCode", -1) == *sel.product_code;
+        if (type_ok && product_ok) same.push_back(line(t));
+    }
+    if (all.empty()) return "no Device in the ESI file";
+    const bool revisions = sel.revision && !same.empty();
+    return fmt::format("no Device with{} in the ESI file; {}: {}", asked,
+                       revisions ? "its revisions are" : "it has", fmt::join(revisions ? same : all, ", "));
+}
+
 void load(pugi::xml_document& doc, const std::string& xml) {
     const auto r = doc.load_buffer(xml.data(), xml.size());
     if (!r) throw EsiError(fmt::format("not an XML document: {} at byte {}", r.description(), r.offset));
@@ -402,7 +430,7 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
     const auto root = doc.child("EtherCATInfo");
     const auto descs = root.child("Descriptions");
     const auto dev = select_device(descs.child("Devices"), sel);
-    if (!dev) throw EsiError("no matching Device in the ESI file");
+    if (!dev) throw EsiError(no_match_message(descs.child("Devices"), sel));
 
     ImportResult r;
     auto& d = r.desc;
@@ -446,7 +474,10 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
         device::SyncManagerConfig c;
         c.start = static_cast<std::uint16_t>(attr_or(s, "StartAddress", 0));
         c.control = static_cast<std::uint8_t>(attr_or(s, "ControlByte", 0));
+        // Enable is the SII byte; Virtual and OpOnly are its bits 2 and 3 (ETG.2000 Sm, ETG.2010 SyncM).
         c.enable = static_cast<std::uint8_t>(attr_or(s, "Enable", 0));
+        if (bool_attr(s, "Virtual")) c.enable |= device::sm_enable::Virtual;
+        if (bool_attr(s, "OpOnly")) c.enable |= device::sm_enable::OpOnly;
         c.length = static_cast<std::uint16_t>(
             attr_or(s, "DefaultSize", attr_or(s, "MaxSize", attr_or(s, "MinSize", 0))));
         c.type = sm_type(txt(s), c.control);

@@ -289,7 +289,10 @@ std::string write_esi(const device::DeviceDescription& d) {
         sm.append_attribute("DefaultSize").set_value(s.length);
         sm.append_attribute("StartAddress").set_value(hex(s.start, 4).c_str());
         sm.append_attribute("ControlByte").set_value(hex(s.control, 2).c_str());
-        sm.append_attribute("Enable").set_value(s.enable);
+        namespace se = device::sm_enable;
+        sm.append_attribute("Enable").set_value(s.enable & ~(se::Virtual | se::OpOnly));
+        if (s.enable & se::Virtual) sm.append_attribute("Virtual").set_value("1");
+        if (s.enable & se::OpOnly) sm.append_attribute("OpOnly").set_value("1");
         sm.text().set(sm_text(s.type));
     }
     for (const auto& p : d.rx_pdos)

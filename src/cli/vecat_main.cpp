@@ -388,10 +388,14 @@ int main(int argc, char** argv) {
         "killed.");
     std::string esi_path, device_type;
     std::uint32_t product = 0;
+    std::optional<std::uint32_t> revision;
     auto add_esi_options = [&](CLI::App* c, bool esi_option) {
         if (esi_option) c->add_option("--esi", esi_path, "Emulate a device described by this ESI file");
         c->add_option("--device", device_type, "Device of the ESI file by its Type name");
         c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
+        c->add_option("--revision", revision,
+                      "Revision of that device (0x... accepted); without it the file's first one. An error "
+                      "names the revisions the file has");
     };
     const std::map<std::string, vecat::cia402::TwinsyncPreset> presets = {
         {"off", vecat::cia402::TwinsyncPreset::None},
@@ -506,6 +510,7 @@ int main(int argc, char** argv) {
     vecat::esi::DeviceSelector sel;
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
+    sel.revision = revision;
     ro.esi_path = esi_path;
     ro.sel = sel;
     if (!ro.network_path.empty() && !esi_path.empty()) {

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "common/bits.hpp"
+#include "protocol/registers.hpp"
 
 namespace vecat::coe {
 namespace {
@@ -13,11 +14,17 @@ constexpr unsigned kEscRamEnd = 0x3000;  // process RAM 0x1000..0x2FFF (8 KiB)
 unsigned max_sm_bytes(const device::DeviceDescription& desc, device::SmType type) {
     const auto* sm = desc.sm_of_type(type);
     if (!sm) return 0;
-    unsigned next = kEscRamEnd;
+    // Below the process RAM a SyncManager lies on the digital output register 0x0F00-0x0F03, one byte
+    // without buffers each (ESC datasheet section I 8.5).
+    const bool digital_outputs = sm->start < protocol::kRegisterSpaceSize;
+    unsigned next = digital_outputs
+                        ? protocol::addr(protocol::Reg::DigitalOutputData) + protocol::kDigitalOutputSize
+                        : kEscRamEnd;
     for (const auto& s : desc.sync_managers)
         if (s.start > sm->start && s.start < next) next = s.start;
+    if (next <= sm->start) return 0;
     // A buffered SyncManager occupies three buffers of its length.
-    return next > sm->start ? (next - sm->start) / 3 : 0;
+    return digital_outputs ? std::min(next - sm->start, 1u) : (next - sm->start) / 3;
 }
 
 std::uint32_t u32_of(ConstBytes b) {

@@ -19,11 +19,13 @@ using Identity = protocol::SiiIdentity;
 // SII SyncM category type byte (ETG.2010 Table 8).
 enum class SmType : std::uint8_t { Unused = 0, MailboxOut = 1, MailboxIn = 2, Outputs = 3, Inputs = 4 };
 
+namespace sm_enable = protocol::sii::sm_enable;  // the SII enable byte's bits
+
 struct SyncManagerConfig {
     std::uint16_t start = 0;
     std::uint16_t length = 0;
     std::uint8_t control = 0;
-    std::uint8_t enable = 0;  // SII "enable synch manager" byte: bit 0 enable
+    std::uint8_t enable = 0;  // sm_enable bits
     SmType type = SmType::Unused;
 };
 

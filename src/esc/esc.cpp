@@ -1,6 +1,7 @@
-// The ESC silicon as one unit (about 800 lines): a datagram's way through the register space, the FMMUs,
-// the SyncManagers and the SII interface is one piece of logic that each part must see whole; the DC unit
-// (distributed_clock) and the wire layouts (src/protocol) are already apart.
+// The ESC silicon as one unit (about 650 lines): a datagram's way through the register space, the FMMUs
+// and the SII interface is one piece of logic that each part must see whole. The SyncManagers (their
+// state, their ECAT accesses and the PDI side) are in esc_sync_managers.cpp, the DC unit in
+// distributed_clock, the wire layouts in src/protocol. The access rules are listed in README.md.
 #include "esc/esc.hpp"
 
 #include <algorithm>
@@ -43,15 +44,6 @@ constexpr std::uint16_t kDcSize = 0x0100;
 
 bool overlaps(std::uint32_t lo, std::uint32_t hi, std::uint32_t a, std::uint32_t len) {
     return lo < a + len && hi >= a;  // hi inclusive
-}
-
-// Copies memory into a datagram, or ORs it in (broadcast reads).
-void copy_out(std::uint8_t* dst, const std::uint8_t* src, std::size_t n, bool or_into) {
-    if (or_into)
-        for (std::size_t k = 0; k < n; ++k)
-            dst[k] |= src[k];
-    else
-        std::memcpy(dst, src, n);
 }
 
 void saturating_inc(std::uint8_t& c) {
@@ -111,6 +103,9 @@ void Esc::reload_eeprom() {
         eeprom_.size() >= 16 && sii_config_crc(ConstBytes(eeprom_.data(), 14)) == eeprom_[2 * sii::Checksum];
     if (crc_ok) {
         st_le16(&mem_[addr(Reg::PdiControl)], word(sii::PdiControl));
+        // The digital output register exists with a digital I/O PDI only (section II 0x0F00).
+        for (unsigned k = 0; k < protocol::kDigitalOutputSize; ++k)
+            wmask_.set(addr(Reg::DigitalOutputData) + k, 0xFF, has_digital_io());
         st_le16(&mem_[addr(Reg::PdiConfiguration)], word(sii::PdiConfig));
         st_le16(&mem_[addr(Reg::ExtendedPdiConfiguration)], word(sii::PdiConfig2));
         st_le16(&mem_[addr(Reg::StationAlias)], word(sii::StationAlias));
@@ -198,6 +193,14 @@ void Esc::set_al_event(std::uint32_t bits) {
 }
 void Esc::clear_al_event(std::uint32_t bits) {
     st_le32(&mem_[addr(Reg::AlEventRequest)], ld_le32(&mem_[addr(Reg::AlEventRequest)]) & ~bits);
+}
+
+void Esc::copy_out(std::uint8_t* dst, const std::uint8_t* src, std::size_t n, bool or_into) {
+    if (or_into)
+        for (std::size_t k = 0; k < n; ++k)
+            dst[k] |= src[k];
+    else
+        std::memcpy(dst, src, n);
 }
 
 bool Esc::addressed_fixed(std::uint16_t adp) const {
@@ -360,33 +363,11 @@ void Esc::logical(DatagramView d, bool do_read, bool do_write, const FrameTiming
 // ---------------------------------------------------------------------------------------------
 // Memory access with ECAT semantics
 
-int Esc::sm_covering(std::uint32_t a) const {
-    std::uint32_t m = sm_active_mask_;
-    while (m) {
-        const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
-        m &= m - 1;
-        const SmState& s = sm_[i];
-        if (a >= s.start && a < static_cast<std::uint32_t>(s.start) + s.length) return static_cast<int>(i);
-    }
-    return -1;
-}
-
-std::uint32_t Esc::next_sm_start(std::uint32_t a) const {
-    std::uint32_t best = static_cast<std::uint32_t>(mem_.size());
-    std::uint32_t m = sm_active_mask_;
-    while (m) {
-        const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
-        m &= m - 1;
-        if (sm_[i].start > a) best = std::min<std::uint32_t>(best, sm_[i].start);
-    }
-    return best;
-}
-
 std::uint8_t* Esc::ecat_write_target(std::uint32_t a) {
     if (a >= mem_.size()) return nullptr;
     if (a >= kRegisterSpaceSize) {
         const int i = sm_covering(a);
-        if (i >= 0 && !sm_[i].mailbox && sm_[i].ecat_writes)
+        if (i >= 0 && sm_[i].active && !sm_[i].mailbox && sm_[i].ecat_writes)
             return &mem_[sm_[i].start + static_cast<std::size_t>(sm_[i].buf_ecat) * sm_[i].length +
                          (a - sm_[i].start)];
     }
@@ -417,8 +398,9 @@ bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_i
             const int s = sm_covering(cur);
             if (s >= 0) {
                 run = std::min<std::size_t>(rem, sm_[s].start + sm_[s].length - cur);
-                counted |=
-                    sm_ecat_read(static_cast<unsigned>(s), cur - sm_[s].start, dst + pos, run, or_into);
+                if (!sm_[s].locked)  // locked: the frame keeps its data, nothing is counted
+                    counted |=
+                        sm_ecat_read(static_cast<unsigned>(s), cur - sm_[s].start, dst + pos, run, or_into);
             } else {
                 run = std::min<std::size_t>(rem, next_sm_start(cur) - cur);
                 copy_out(dst + pos, &mem_[cur], run, or_into);
@@ -441,6 +423,8 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
     std::array<std::uint8_t, 8> systime{};
     std::uint8_t systime_bytes = 0;
     const std::uint8_t activation_before = mem_[addr(Reg::DcActivation)];
+    const bool al_control_refused = al_control_refuses_writes();
+    bool al_control_written = false;
     std::size_t pos = 0;
     while (pos < n) {
         const std::uint32_t cur = static_cast<std::uint32_t>(a) + static_cast<std::uint32_t>(pos);
@@ -452,6 +436,19 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
             for (std::size_t k = 0; k < run; ++k) {
                 const std::uint32_t ad = cur + static_cast<std::uint32_t>(k);
                 std::uint8_t m = wmask_.mask[ad];
+                if (ad - addr(Reg::AlControl) < 2u) {
+                    if (al_control_refused) continue;  // still unread by the PDI: not written, not counted
+                    al_control_written = true;
+                }
+                if (ad - addr(Reg::DigitalOutputData) < protocol::kDigitalOutputSize && has_digital_io()) {
+                    // A SyncManager on the digital output register guards it like RAM.
+                    if (const int si = sm_covering(ad); si >= 0) {
+                        const auto i = static_cast<unsigned>(si);
+                        if (!sm_[i].locked && sm_ecat_write(i, ad - sm_[i].start, src + pos + k, 1))
+                            counted = true;
+                        continue;
+                    }
+                }
                 if (ad >= 0x0800 && ad < sm_addr(cfg_.sm_count) && (ad & 7) < 5 &&
                     (mem_[(ad & ~7u) + sm::Activate] & sm::ActEnable))
                     m = 0;  // SyncManager configuration is locked while the SM is enabled
@@ -465,25 +462,32 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
                         static_cast<std::uint8_t>(systime_bytes | (1u << (ad - addr(Reg::DcSystemTime))));
                 }
                 mem_[ad] = static_cast<std::uint8_t>((mem_[ad] & ~m) | (v & m));
+                // Counted when one byte lies in a register the master may write, even if its value is
+                // ignored (reserved bits, SM configuration locked); read-only and absent registers are
+                // not written (ESC datasheet section I 2.4, section II 1).
+                counted |= wmask_.writable(static_cast<std::uint16_t>(ad));
             }
             reg_lo = std::min(reg_lo, cur);
             reg_hi = std::max(reg_hi, cur + static_cast<std::uint32_t>(run) - 1);
-            counted = true;
         } else if (cur < mem_.size()) {
             const int s = sm_covering(cur);
             if (s >= 0) {
                 run = std::min<std::size_t>(rem, sm_[s].start + sm_[s].length - cur);
-                counted |= sm_ecat_write(static_cast<unsigned>(s), cur - sm_[s].start, src + pos, run);
+                if (!sm_[s].locked)
+                    counted |= sm_ecat_write(static_cast<unsigned>(s), cur - sm_[s].start, src + pos, run);
             } else {
                 run = std::min<std::size_t>(rem, next_sm_start(cur) - cur);
                 std::memcpy(&mem_[cur], src + pos, run);
                 counted = true;
             }
         } else {
-            run = std::min<std::size_t>(rem, 0x10000 - cur);
-            counted = true;  // unimplemented memory: accepted and ignored
+            run = std::min<std::size_t>(rem, 0x10000 - cur);  // past the process RAM: nothing to write
         }
         pos += run;
+    }
+    if (al_control_written) {
+        al_control_unread_ = true;
+        set_al_event(al_event::AlControl);
     }
     if (reg_lo <= reg_hi) {
         if (sii_cmd_written) sii_command(written_sii_cmd_);
@@ -497,70 +501,14 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
     return counted;
 }
 
-bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into) {
-    SmState& s = sm_[i];
-    if (s.ecat_writes) return false;  // the master may not read a buffer it writes
-    const std::uint8_t* src;
-    if (s.mailbox) {
-        if (!s.mbx_full) return false;  // empty mailbox: not counted
-        src = &mem_[s.start + off];
-    } else {
-        if (!s.ecat_reading) {
-            if (s.buf_next != SmState::kNone) {
-                s.buf_ecat = s.buf_next;
-                s.buf_next = SmState::kNone;
-            }
-            s.ecat_reading = true;
-        }
-        src = &mem_[s.start + static_cast<std::size_t>(s.buf_ecat) * s.length + off];
-    }
-    copy_out(dst, src, n, or_into);
-    if (off + n == s.length) {  // last byte read: buffer released
-        if (s.mailbox)
-            s.mbx_full = false;
-        else
-            s.ecat_reading = false;
-        set_al_event(al_event::sm(i));
-        update_sm_status(i);
-    }
-    return true;
-}
-
-bool Esc::sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n) {
-    SmState& s = sm_[i];
-    if (!s.ecat_writes) return false;
-    if (s.mailbox) {
-        if (s.mbx_full) return false;  // full mailbox: refused, not counted (masters retry)
-        std::memcpy(&mem_[s.start + off], src, n);
-        if (off + n == s.length) {
-            s.mbx_full = true;
-            set_al_event(al_event::sm(i));
-            update_sm_status(i);
-        }
-        return true;
-    }
-    std::memcpy(&mem_[s.start + static_cast<std::size_t>(s.buf_ecat) * s.length + off], src, n);
-    if (s.control & sm::CtrlWatchdog) {
-        wd_armed_ = true;
-        wd_last_trigger_ns_ = last_host_ns_;
-        mem_[addr(Reg::WatchdogStatusProcessData)] |= 0x01;
-    }
-    if (off + n == s.length) {  // last byte written: the buffer becomes the newest complete one
-        s.buf_next = s.buf_ecat;
-        s.buf_ecat = static_cast<std::uint8_t>(3 - s.buf_next - s.buf_pdi);
-        s.ever_written = true;
-        ++s.complete_writes;
-        set_al_event(al_event::sm(i));
-        update_sm_status(i);
-    }
-    return true;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Register side effects
 
+bool Esc::al_control_refuses_writes() const {
+    return al_control_unread_ && !(mem_[addr(Reg::EscConfiguration)] & protocol::esc_config::DeviceEmulation);
+}
+
 void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTiming& /*t*/) {
-    if (overlaps(lo, hi, addr(Reg::AlControl), 2)) set_al_event(al_event::AlControl);
     if (overlaps(lo, hi, addr(Reg::DlControl) + 1, 1)) {
         // Writing "auto close" again opens a port that has its link back.
         auto_closed_ = static_cast<std::uint8_t>(auto_closed_ & ~link_mask_);
@@ -614,162 +562,12 @@ void Esc::update_fmmu(unsigned i) {
     }
 }
 
-protocol::SmConfig Esc::sm_block(unsigned i) const {
-    return SmConfig::unpack(std::span<const std::uint8_t, kSmSize>(&mem_[sm_addr(i)], kSmSize));
-}
-
-Esc::SmConfigView Esc::sm_config(unsigned i) const {
-    const SmConfig c = sm_block(i);
-    return {c.physical_start, c.length, c.control, c.enabled(), c.pdi_deactivated(), sm_[i].valid};
-}
-
-void Esc::update_sm(unsigned i) {
-    if (i >= cfg_.sm_count) return;
-    const SmConfig c = sm_block(i);
-    SmState& s = sm_[i];
-    const std::uint16_t start = c.physical_start;
-    const std::uint16_t length = c.length;
-    const std::uint8_t control = c.control;
-    const bool mode_ok = (control & sm::CtrlModeMask) == sm::CtrlModeBuffered || c.mailbox();
-    const bool dir_ok =
-        (control & sm::CtrlDirMask) == sm::CtrlDirRead || (control & sm::CtrlDirMask) == sm::CtrlDirWrite;
-    const bool mailbox = c.mailbox();
-    const std::size_t span = mailbox ? length : 3u * length;
-    const bool valid =
-        mode_ok && dir_ok && length > 0 && start >= kRegisterSpaceSize && start + span <= mem_.size();
-    const bool active = c.enabled() && !c.pdi_deactivated() && valid;
-    const bool changed = active != s.active || start != s.start || length != s.length || control != s.control;
-    const bool repeat = c.repeat_request();
-    static_assert(kMaxSms <= 32);
-    const bool was_repeat = (repeat_bits_ >> i) & 1u;
-    s.valid = valid;
-    if (changed) {
-        s.active = active;
-        s.start = start;
-        s.length = length;
-        s.control = control;
-        s.mailbox = mailbox;
-        s.ecat_writes = c.ecat_writes();
-        s.mbx_full = false;
-        s.ecat_reading = false;
-        s.ever_written = false;
-        s.buf_next = SmState::kNone;
-        if (s.ecat_writes) {
-            s.buf_ecat = 0;
-            s.buf_pdi = 1;
-        } else {
-            s.buf_pdi = 0;
-            s.buf_ecat = 1;
-        }
-        sm_activation_event_ = true;
-        set_al_event(al_event::SmActivation);
-    }
-    if (repeat != was_repeat) {
-        repeat_bits_ = repeat ? (repeat_bits_ | (1u << i)) : (repeat_bits_ & ~(1u << i));
-        sm_activation_event_ = true;
-        set_al_event(al_event::SmActivation);
-    }
-    if (active)
-        sm_active_mask_ |= 1u << i;
-    else
-        sm_active_mask_ &= ~(1u << i);
-    update_sm_status(i);
-}
-
-void Esc::update_sm_status(unsigned i) {
-    const SmState& s = sm_[i];
-    std::uint8_t st = 0;
-    if (!s.active) {
-        st = 0;
-    } else if (s.mailbox) {
-        if (s.mbx_full) st = sm::StatusMailboxFull | sm::StatusIrqWrite;
-    } else {
-        const std::uint8_t last =
-            s.buf_next != SmState::kNone ? s.buf_next : (s.ecat_writes ? s.buf_pdi : s.buf_ecat);
-        st = static_cast<std::uint8_t>((last & 0x3) << sm::StatusBufferShift);
-        if (s.buf_next != SmState::kNone) st |= sm::StatusIrqWrite;
-        if (s.ecat_reading) st |= sm::StatusReadBufferInUse;
-    }
-    mem_[sm_addr(i) + sm::Status] = st;
-}
-
-bool Esc::pdi_take_sm_activation_event() {
-    const bool e = sm_activation_event_;
-    sm_activation_event_ = false;
-    clear_al_event(al_event::SmActivation);
-    return e;
-}
-
-void Esc::pdi_deactivate_sm(unsigned i, bool deactivate) {
-    if (i >= cfg_.sm_count) return;
-    std::uint8_t& pc = mem_[sm_addr(i) + sm::PdiControl];
-    pc = static_cast<std::uint8_t>(deactivate ? (pc | sm::PdiDeactivate) : (pc & ~sm::PdiDeactivate));
-    update_sm(i);
-}
-
-bool Esc::sm_repeat_request(unsigned i) const {
-    return (mem_[sm_addr(i) + sm::Activate] & sm::ActRepeatRequest) != 0;
-}
-
-void Esc::pdi_set_repeat_ack(unsigned i, bool ack) {
-    std::uint8_t& pc = mem_[sm_addr(i) + sm::PdiControl];
-    pc = static_cast<std::uint8_t>(ack ? (pc | sm::PdiRepeatAck) : (pc & ~sm::PdiRepeatAck));
-}
-
-bool Esc::pdi_mailbox_take(unsigned i, Bytes out) {
-    SmState& s = sm_[i];
-    if (i >= cfg_.sm_count || !s.active || !s.mailbox || !s.ecat_writes || !s.mbx_full) return false;
-    std::memcpy(out.data(), &mem_[s.start], std::min<std::size_t>(out.size(), s.length));
-    s.mbx_full = false;
-    clear_al_event(al_event::sm(i));
-    update_sm_status(i);
-    return true;
-}
-
-bool Esc::pdi_mailbox_put(unsigned i, ConstBytes data) {
-    SmState& s = sm_[i];
-    if (i >= cfg_.sm_count || !s.active || !s.mailbox || s.ecat_writes || s.mbx_full) return false;
-    const std::size_t n = std::min<std::size_t>(data.size(), s.length);
-    std::memcpy(&mem_[s.start], data.data(), n);
-    std::memset(&mem_[s.start + n], 0, s.length - n);
-    s.mbx_full = true;
-    update_sm_status(i);
-    return true;
-}
-
-bool Esc::pdi_buffer_read(unsigned i, Bytes out) {
-    SmState& s = sm_[i];
-    if (i >= cfg_.sm_count || !s.active || s.mailbox || !s.ecat_writes) return false;
-    if (s.buf_next != SmState::kNone) {
-        s.buf_pdi = s.buf_next;
-        s.buf_next = SmState::kNone;
-        clear_al_event(al_event::sm(i));
-        update_sm_status(i);
-    }
-    if (!s.ever_written) return false;
-    std::memcpy(out.data(), &mem_[s.start + static_cast<std::size_t>(s.buf_pdi) * s.length],
-                std::min<std::size_t>(out.size(), s.length));
-    return true;
-}
-
-bool Esc::pdi_buffer_write(unsigned i, ConstBytes in) {
-    SmState& s = sm_[i];
-    if (i >= cfg_.sm_count || !s.active || s.mailbox || s.ecat_writes) return false;
-    std::uint8_t* dst = &mem_[s.start + static_cast<std::size_t>(s.buf_pdi) * s.length];
-    const std::size_t n = std::min<std::size_t>(in.size(), s.length);
-    std::memcpy(dst, in.data(), n);
-    if (n < s.length) std::memset(dst + n, 0, s.length - n);
-    s.buf_next = s.buf_pdi;
-    s.buf_pdi = static_cast<std::uint8_t>(3 - s.buf_next - s.buf_ecat);
-    update_sm_status(i);
-    return true;
-}
-
 // ---------------------------------------------------------------------------------------------
 // AL registers (PDI side)
 
 std::uint16_t Esc::pdi_read_al_control() {
     clear_al_event(al_event::AlControl);
+    al_control_unread_ = false;  // the "mailbox" is empty again: the master may write
     return ld_le16(&mem_[addr(Reg::AlControl)]);
 }
 

@@ -106,12 +106,16 @@ class Esc {
     bool sm_repeat_request(unsigned i) const;
     void pdi_set_repeat_ack(unsigned i, bool ack);
 
-    // Buffered (3-buffer) SyncManagers.
+    // Process data SyncManagers: buffered (3 buffers), 1 byte (no buffers) or 1-buffer (mailbox) mode.
     // Latest complete buffer written by the master (ECAT-write SM). Returns false if none was ever written.
     bool pdi_buffer_read(unsigned i, Bytes out);
     std::uint64_t sm_buffer_writes(unsigned i) const { return sm_[i].complete_writes; }
     // Publishes a new buffer for the master to read (ECAT-read SM).
     bool pdi_buffer_write(unsigned i, ConstBytes in);
+    // Process data without a SyncManager (the master left it off, or it is virtual): the FMMU reads and
+    // writes the memory. Writes reach the process RAM only.
+    void pdi_write_memory(std::uint16_t a, ConstBytes in);
+    void pdi_read_memory(std::uint16_t a, Bytes out) const;
 
     // Time: runs the watchdogs. Call regularly with the host clock in ns.
     void tick(std::uint64_t now_ns);
@@ -146,10 +150,16 @@ class Esc {
   private:
     struct SmState {
         bool active = false;  // enabled by ECAT, not deactivated by PDI, config valid
+        // Enabled by ECAT but deactivated by the PDI: the area is read/write protected (ESC datasheet
+        // section I 8.7), no access is counted.
+        bool locked = false;
         bool valid = false;
         std::uint16_t start = 0, length = 0;
         std::uint8_t control = 0;
         bool mailbox = false;
+        // Buffered mode of 1 byte: no buffer mechanism, accesses pass to the memory (section I 8.5); the
+        // SyncManagers on the digital output register are these.
+        bool single = false;
         bool ecat_writes = false;
         // mailbox
         bool mbx_full = false;
@@ -169,6 +179,8 @@ class Esc {
     };
 
     bool addressed_fixed(std::uint16_t adp) const;
+    // Copies memory into a datagram, or ORs it in (broadcast reads).
+    static void copy_out(std::uint8_t* dst, const std::uint8_t* src, std::size_t n, bool or_into);
     void physical(protocol::DatagramView d, std::uint16_t ado, bool do_read, bool do_write, bool or_read,
                   const FrameTiming& t, unsigned& wkc_add);
     void logical(protocol::DatagramView d, bool do_read, bool do_write, const FrameTiming& t,
@@ -177,9 +189,14 @@ class Esc {
     // Accesses with full ECAT semantics (masks, SyncManagers, side effects); true if any byte counted.
     bool ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_into, const FrameTiming& t);
     bool ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t);
+    bool al_control_refuses_writes() const;
+    // Where a SyncManager of span bytes may lie: in the process RAM, or on the digital output register
+    // of an ESC with a digital I/O PDI.
+    bool sm_area_exists(std::uint32_t start, std::uint32_t span) const;
+    bool has_digital_io() const;
     bool sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into);
     bool sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n);
-    int sm_covering(std::uint32_t a) const;  // -1 if none
+    int sm_covering(std::uint32_t a) const;  // an active or locked SM guarding this byte; -1 if none
     std::uint32_t next_sm_start(std::uint32_t a) const;
     std::uint8_t* ecat_write_target(std::uint32_t a);  // where an ECAT write of this byte lands
 
@@ -201,7 +218,7 @@ class Esc {
     protocol::WriteMaskTable wmask_;
     std::array<SmState, protocol::kMaxSms> sm_{};
     std::array<FmmuState, protocol::kMaxFmmus> fmmu_{};
-    std::uint32_t sm_active_mask_ = 0;
+    std::uint32_t sm_guard_mask_ = 0;  // active or locked SMs: the ones that control their memory area
     // Active FMMUs that read / write, and the logical bit range all active FMMUs cover together (a
     // logical datagram outside it is rejected without looking at each FMMU).
     std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;
@@ -211,6 +228,9 @@ class Esc {
     std::uint8_t auto_closed_ = 0;  // ports that "auto close" closed at a link loss, until the master reopens
     std::uint8_t link_mask_ = 0x01;
     std::uint8_t written_sii_cmd_ = 0;
+    // AL control written by the master and not yet read by the PDI: without device emulation the
+    // register then refuses further writes (ESC datasheet section II 0x0120, "behaves like a mailbox").
+    bool al_control_unread_ = false;
     bool sm_activation_event_ = false;
     bool wd_armed_ = false;
     std::uint64_t wd_last_trigger_ns_ = 0;

@@ -246,18 +246,51 @@ AlStatusCode Slave::check_mailbox_config() const {
     return ok0 && ok1 ? AlStatusCode::NoError : AlStatusCode::InvalidMailboxConfigPreOp;
 }
 
+// The process data SyncManagers as the device declares them (ESI Sm, SII SyncM: ETG.2000, ETG.2010): mode
+// and direction of its ControlByte (buffered, or 1-buffer mode 0x22/0x26), Enable="0" (the master may leave
+// it off: the FMMU reads the memory), Virtual="1" (no hardware SyncManager: nothing to check).
 AlStatusCode Slave::check_process_data_config() const {
-    auto check = [&](int smi, unsigned bytes, std::uint8_t ctrl) {
-        if (smi < 0) return bytes == 0;
+    auto check = [&](int smi, device::SmType type, unsigned bytes, std::uint8_t dflt_ctrl) {
+        const auto* decl = desc_.sm_of_type(type);
+        if (smi < 0 || !decl) return bytes == 0;
+        if (decl->enable & device::sm_enable::Virtual) return true;
         const auto c = esc_.sm_config(static_cast<unsigned>(smi));
         if (bytes == 0) return !c.ecat_enabled || c.length == 0;
-        return c.ecat_enabled && c.valid && c.length == bytes && (c.control & 0x0F) == ctrl;
+        if (!(decl->enable & device::sm_enable::Enable) && !c.ecat_enabled) return true;
+        const std::uint8_t declared = decl->control & (sm::CtrlModeMask | sm::CtrlDirMask);
+        const std::uint8_t ctrl = decl->control ? declared : dflt_ctrl;
+        return c.ecat_enabled && c.valid && c.length == bytes &&
+               (c.control & (sm::CtrlModeMask | sm::CtrlDirMask)) == ctrl;
     };
-    if (!check(sm_out_, app_->output_bytes(), sm::CtrlModeBuffered | sm::CtrlDirWrite))
+    if (!check(sm_out_, device::SmType::Outputs, app_->output_bytes(),
+               sm::CtrlModeBuffered | sm::CtrlDirWrite))
         return AlStatusCode::InvalidOutputConfig;
-    if (!check(sm_in_, app_->input_bytes(), sm::CtrlModeBuffered | sm::CtrlDirRead))
+    if (!check(sm_in_, device::SmType::Inputs, app_->input_bytes(), sm::CtrlModeBuffered | sm::CtrlDirRead))
         return AlStatusCode::InvalidInputConfig;
     return AlStatusCode::NoError;
+}
+
+bool Slave::through_sm(int smi, device::SmType type) const {
+    const auto* decl = desc_.sm_of_type(type);
+    if (!decl || smi < 0 || esc_.sm_config(static_cast<unsigned>(smi)).ecat_enabled) return true;
+    return (decl->enable & device::sm_enable::Enable) && !(decl->enable & device::sm_enable::Virtual);
+}
+
+bool Slave::read_outputs(unsigned len) {
+    if (len == 0 || sm_out_ < 0) return false;
+    if (through_sm(sm_out_, device::SmType::Outputs))
+        return esc_.pdi_buffer_read(static_cast<unsigned>(sm_out_), Bytes(outputs_.data(), len));
+    esc_.pdi_read_memory(desc_.sm_of_type(device::SmType::Outputs)->start, Bytes(outputs_.data(), len));
+    return true;
+}
+
+void Slave::write_inputs(unsigned len) {
+    if (len == 0 || sm_in_ < 0) return;
+    if (through_sm(sm_in_, device::SmType::Inputs))
+        esc_.pdi_buffer_write(static_cast<unsigned>(sm_in_), ConstBytes(inputs_.data(), len));
+    else
+        esc_.pdi_write_memory(desc_.sm_of_type(device::SmType::Inputs)->start,
+                              ConstBytes(inputs_.data(), len));
 }
 
 void Slave::handle_al_control(std::uint64_t now_ns) {
@@ -330,7 +363,8 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
 }
 
 bool Slave::outputs_valid() const {
-    if (app_->output_bytes() == 0 || sm_out_ < 0) return true;
+    if (app_->output_bytes() == 0 || sm_out_ < 0 || !through_sm(sm_out_, device::SmType::Outputs))
+        return true;
     return esc_.sm_buffer_writes(static_cast<unsigned>(sm_out_)) > outputs_at_safeop_;
 }
 
@@ -400,13 +434,10 @@ void Slave::send_pending_replies() {
 void Slave::exchange_process_data(std::uint64_t now_ns) {
     const unsigned out_len = std::min<unsigned>(app_->output_bytes(), static_cast<unsigned>(outputs_.size()));
     const unsigned in_len = std::min<unsigned>(app_->input_bytes(), static_cast<unsigned>(inputs_.size()));
-    bool have_out = false;
-    if (out_len > 0 && sm_out_ >= 0)
-        have_out = esc_.pdi_buffer_read(static_cast<unsigned>(sm_out_), Bytes(outputs_.data(), out_len));
+    const bool have_out = read_outputs(out_len);
     app_->exchange(now_ns, have_out ? ConstBytes(outputs_.data(), out_len) : ConstBytes{},
                    state_ == AlState::Op && have_out, Bytes(inputs_.data(), in_len));
-    if (in_len > 0 && sm_in_ >= 0)
-        esc_.pdi_buffer_write(static_cast<unsigned>(sm_in_), ConstBytes(inputs_.data(), in_len));
+    write_inputs(in_len);
 }
 
 void Slave::run(std::uint64_t now_ns) {
@@ -452,8 +483,7 @@ void Slave::deliver_sync_pulses(std::uint64_t now_ns) {
         app_->sync_event(pulses_[i].signal, pulses_[i].host_ns);
     if (rank(state_) < rank(AlState::SafeOp) || sm_in_ < 0) return;
     const unsigned in_len = std::min<unsigned>(app_->input_bytes(), static_cast<unsigned>(inputs_.size()));
-    if (in_len > 0 && app_->refresh_inputs(Bytes(inputs_.data(), in_len)))
-        esc_.pdi_buffer_write(static_cast<unsigned>(sm_in_), ConstBytes(inputs_.data(), in_len));
+    if (in_len > 0 && app_->refresh_inputs(Bytes(inputs_.data(), in_len))) write_inputs(in_len);
 }
 
 }  // namespace vecat::esc

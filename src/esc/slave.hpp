@@ -157,6 +157,11 @@ class Slave {
     void publish_status();
     protocol::AlStatusCode check_mailbox_config() const;
     protocol::AlStatusCode check_process_data_config() const;
+    // The process data of this direction goes through its SyncManager; false: through an FMMU alone (the
+    // SM is virtual, or declared not enabled and left off by the master).
+    bool through_sm(int smi, device::SmType type) const;
+    bool read_outputs(unsigned len);
+    void write_inputs(unsigned len);
     void service_mailbox();
     void send_pending_replies();
     void exchange_process_data(std::uint64_t now_ns);

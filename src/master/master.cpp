@@ -398,7 +398,11 @@ bool Master::configure_process_data() {
             if (!outputs && sm.type != protocol::sii::SmTypeInputs) continue;
             const auto bytes = static_cast<std::uint16_t>(outputs ? s.out_bytes : s.in_bytes);
             std::uint8_t b[SmConfig::kSize];
-            SmConfig::master(sm.start, bytes, sm.control).pack(b);
+            auto c = SmConfig::master(sm.start, bytes, sm.control);
+            // Activated as the SII's enable byte says (as SOEM does): a SyncManager declared not enabled or
+            // virtual stays off, and the FMMU reads or writes the memory (ETG.2010 SyncM).
+            if (!(sm.enable & protocol::sii::sm_enable::Enable)) c.activate = 0;
+            c.pack(b);
             auto w = fpwr(s.station, protocol::sm_addr(static_cast<unsigned>(i)), b);
             if (!w || *w != 1) return false;
             if (!bytes) continue;

@@ -97,6 +97,8 @@ enum class Reg : std::uint16_t {
     DcLatch0NegativeEdge = 0x09B8,
     DcLatch1PositiveEdge = 0x09C0,
     DcLatch1NegativeEdge = 0x09C8,
+    DigitalOutputData = 0x0F00,  // 4 bytes, ESCs with a digital I/O PDI
+    UserRam = 0x0F80,
     ProcessRam = 0x1000,
 };
 
@@ -130,6 +132,22 @@ constexpr std::uint16_t communication(unsigned port) {
     return static_cast<std::uint16_t>(0x0200u << (2 * port));
 }
 }  // namespace dl_status
+
+inline constexpr std::uint16_t kDigitalOutputSize = 4;
+
+// PDI types (0x0140, loaded from the low byte of SII word 0; ESC datasheet section II 0x0140) that drive
+// the digital I/O: 0x01 4 digital inputs, 0x02 4 digital outputs, 0x03 2 in/2 out, 0x04 digital I/O. The
+// ESC then has the digital output register 0x0F00-0x0F03.
+constexpr bool pdi_is_digital_io(std::uint8_t pdi_control) noexcept {
+    return pdi_control >= 0x01 && pdi_control <= 0x04;
+}
+
+// ESC configuration bits (0x0141, loaded from the high byte of SII word 0).
+namespace esc_config {
+// The ESC itself copies AL control to AL status (simple devices without a µController); off, AL control
+// behaves as a mailbox towards the PDI (ESC datasheet section II 0x0120).
+inline constexpr std::uint8_t DeviceEmulation = 0x01;
+}  // namespace esc_config
 
 // SII control/status bits (0x0502).
 namespace sii_ctrl {
@@ -180,9 +198,10 @@ struct RegisterInfo {
     std::array<std::uint8_t, 8> ecat_write_mask;  // per byte, up to 8 bytes
 };
 
-// Registers the EtherCAT master can write, with their per-byte write masks. Every register not listed
-// (and every bit not set in a mask) is read-only from the EtherCAT side: a write to it is accepted
-// (the working counter counts) and has no effect, as on a real ESC.
+// Registers the EtherCAT master can write, with their per-byte write masks. Every register not listed is
+// read-only from the EtherCAT side or reserved (ESC datasheet section II 1: "not writable"): a write to it
+// has no effect and, when no byte of the datagram is writable, is not counted (section I 2.4: only a
+// successful access counts). Bits not set in a mask of a listed register keep their value.
 inline constexpr RegisterInfo kWritableRegisters[] = {
     {0x0010, 2, "Configured Station Address", {0xFF, 0xFF}},
     {0x0020, 1, "Write Register Enable", {0x01}},
@@ -203,6 +222,11 @@ inline constexpr RegisterInfo kWritableRegisters[] = {
     {0x0502, 2, "SII EEPROM Control/Status", {0x01, 0x00}},  // command bits handled as a side effect
     {0x0504, 4, "SII EEPROM Address", {0xFF, 0xFF, 0xFF, 0xFF}},
     {0x0508, 8, "SII EEPROM Data", {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF}},
+    {0x0510, 2, "MII Management Control/Status", {0x01, 0x03}},  // no PHY behind: stored only
+    {0x0512, 1, "PHY Address", {0x1F}},
+    {0x0513, 1, "PHY Register Address", {0x1F}},
+    {0x0514, 2, "PHY Data", {0xFF, 0xFF}},
+    {0x0516, 1, "MII Management ECAT Access State", {0x01}},
     {0x0920, 8, "System Time Offset", {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF}},
     {0x0928, 4, "System Time Delay", {0xFF, 0xFF, 0xFF, 0xFF}},
     {0x0930, 2, "Speed Counter Start", {0xFF, 0x7F}},
@@ -217,35 +241,68 @@ inline constexpr RegisterInfo kWritableRegisters[] = {
     {0x09A9, 1, "Latch1 Control", {0x03}},
 };
 
-// Per-byte ECAT write masks for the whole register space, computed once from the table above plus the
-// repeated FMMU and SyncManager blocks.
+// Register areas the master may write whose written value is not stored as such: the write acts (the
+// ESC code does it), and it counts like any write. Areas stored byte for byte are listed with mask 0xFF.
+struct WritableArea {
+    std::uint16_t address;
+    std::uint16_t length;  // bytes
+    std::string_view name;
+    std::uint8_t ecat_write_mask;  // for every byte
+};
+
+inline constexpr WritableArea kWritableAreas[] = {
+    {0x0300, 14, "RX/forwarded RX/processing unit/PDI error counters: a write clears", 0x00},
+    {0x0310, 4, "Lost link counters: a write clears", 0x00},
+    {0x0442, 2, "Watchdog counters process data/PDI: a write clears", 0x00},
+    {0x0503, 1, "SII EEPROM command", 0x00},
+    {0x0900, 4, "Receive time port 0: a write latches the receive times", 0x00},
+    {0x0910, 8, "System time: a write feeds the time control loop", 0x00},
+    {addr(Reg::UserRam), 128, "User RAM", 0xFF},
+};
+
+// Per-byte ECAT write masks for the whole register space, and which bytes the master may write at all,
+// computed once from the tables above plus the FMMU and SyncManager blocks the ESC has.
 struct WriteMaskTable {
     std::array<std::uint8_t, kRegisterSpaceSize> mask{};
+    std::array<std::uint8_t, kRegisterSpaceSize / 8> writable_bits{};  // one bit per address
+
+    constexpr bool writable(std::uint16_t a) const {
+        return a < kRegisterSpaceSize && ((writable_bits[a / 8] >> (a % 8)) & 1u) != 0;
+    }
+    constexpr void set(unsigned a, std::uint8_t m, bool is_writable = true) {
+        mask[a] = is_writable ? m : 0;
+        const auto bit = static_cast<std::uint8_t>(1u << (a % 8));
+        writable_bits[a / 8] =
+            static_cast<std::uint8_t>(is_writable ? writable_bits[a / 8] | bit : writable_bits[a / 8] & ~bit);
+    }
 };
 
 constexpr WriteMaskTable make_write_mask_table(unsigned fmmu_count, unsigned sm_count) {
     WriteMaskTable t{};
     for (const auto& r : kWritableRegisters)
         for (unsigned i = 0; i < r.width; ++i)
-            t.mask[r.address + i] = r.ecat_write_mask[i];
+            t.set(r.address + i, r.ecat_write_mask[i]);
+    for (const auto& r : kWritableAreas)
+        for (unsigned i = 0; i < r.length; ++i)
+            t.set(r.address + i, r.ecat_write_mask);
     for (unsigned f = 0; f < fmmu_count && f < kMaxFmmus; ++f) {
         const unsigned b = fmmu_addr(f);
         for (unsigned i = 0; i < fmmu::LogicalStartBit; ++i)  // logical start and length
-            t.mask[b + i] = 0xFF;
-        t.mask[b + fmmu::LogicalStartBit] = 0x07;
-        t.mask[b + fmmu::LogicalStopBit] = 0x07;
-        t.mask[b + fmmu::PhysicalStart] = 0xFF;
-        t.mask[b + fmmu::PhysicalStart + 1] = 0xFF;
-        t.mask[b + fmmu::PhysicalStartBit] = 0x07;
-        t.mask[b + fmmu::Type] = 0x03;
-        t.mask[b + fmmu::Activate] = 0x01;
+            t.set(b + i, 0xFF);
+        t.set(b + fmmu::LogicalStartBit, 0x07);
+        t.set(b + fmmu::LogicalStopBit, 0x07);
+        t.set(b + fmmu::PhysicalStart, 0xFF);
+        t.set(b + fmmu::PhysicalStart + 1, 0xFF);
+        t.set(b + fmmu::PhysicalStartBit, 0x07);
+        t.set(b + fmmu::Type, 0x03);
+        t.set(b + fmmu::Activate, 0x01);
     }
     for (unsigned s = 0; s < sm_count && s < kMaxSms; ++s) {
         const unsigned b = sm_addr(s);
         for (unsigned i = 0; i < sm::Control; ++i)  // physical start and length
-            t.mask[b + i] = 0xFF;
-        t.mask[b + sm::Control] = 0x7F;
-        t.mask[b + sm::Activate] = 0xC3;
+            t.set(b + i, 0xFF);
+        t.set(b + sm::Control, 0x7F);
+        t.set(b + sm::Activate, 0xC3);
     }
     return t;
 }

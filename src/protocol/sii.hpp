@@ -82,6 +82,15 @@ inline constexpr std::uint8_t SmTypeMailboxIn = 2;
 inline constexpr std::uint8_t SmTypeOutputs = 3;
 inline constexpr std::uint8_t SmTypeInputs = 4;
 
+// SyncM category "enable synch manager" byte (ETG.2010 SyncM; the ESI Sm attributes Enable, Virtual and
+// OpOnly of ETG.2000).
+namespace sm_enable {
+inline constexpr std::uint8_t Enable = 0x01;        // the master enables the SyncManager
+inline constexpr std::uint8_t FixedContent = 0x02;  // information for a configuration tool
+inline constexpr std::uint8_t Virtual = 0x04;       // no hardware SyncManager: read through an FMMU only
+inline constexpr std::uint8_t OpOnly = 0x08;        // enabled in OP only
+}  // namespace sm_enable
+
 // Mailbox protocols word (word 0x1C).
 inline constexpr std::uint16_t MailboxCoE = 0x0004;
 }  // namespace sii

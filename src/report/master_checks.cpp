@@ -54,18 +54,6 @@ bool is_read(Command c) {
     }
 }
 
-// Registers that a write acts on although no bit of them is stored (ESC datasheet section II): the error
-// counters are cleared (0x0300-0x0313, 0x0442-0x0443), a write to port 0's receive time latches the receive
-// times (0x0900), one to the system time feeds the drift control loop (0x0910), and the EEPROM command
-// sits in 0x0503.
-bool write_has_effect(std::uint16_t a) {
-    return (a >= addr(Reg::RxErrorCounter) && a < addr(Reg::LostLinkCounter) + 4) ||
-           a == addr(Reg::WatchdogCounterProcessData) || a == addr(Reg::WatchdogCounterPdi) ||
-           (a >= addr(Reg::DcRecvTimePort0) && a < addr(Reg::DcRecvTimePort0) + 4) ||
-           (a >= addr(Reg::DcSystemTime) && a < addr(Reg::DcSystemTime) + 8) ||
-           a == addr(Reg::SiiControl) + 1;
-}
-
 std::string state_name(std::uint8_t s) {
     if (protocol::is_valid_state(s)) return std::string(protocol::to_string(static_cast<AlState>(s)));
     return fmt::format("0x{:X}", s);
@@ -183,11 +171,13 @@ void MasterChecks::check_write(std::size_t i, DatagramView d, std::uint64_t now_
         std::uint32_t{d.ado()} + d.length() <= protocol::kRegisterSpaceSize && d.length() > 0) {
         bool any = false;
         for (std::uint32_t a = d.ado(); a < std::uint32_t{d.ado()} + d.length() && !any; ++a)
-            any = t.write_mask.mask[a] != 0 || write_has_effect(static_cast<std::uint16_t>(a));
+            any = t.write_mask.writable(static_cast<std::uint16_t>(a));
         if (!any && !found(Rule::ReadOnlyRegisterWrite, i))
-            find(Rule::ReadOnlyRegisterWrite, i,
-                 fmt::format("{} of {} bytes at 0x{:04X}: none of them may be written by EtherCAT",
-                             protocol::to_string(d.command()), d.length(), d.ado()));
+            find(
+                Rule::ReadOnlyRegisterWrite, i,
+                fmt::format("{} of {} bytes at 0x{:04X}: none of them may be written by EtherCAT (a real ESC "
+                            "does not count it)",
+                            protocol::to_string(d.command()), d.length(), d.ado()));
     }
 }
 

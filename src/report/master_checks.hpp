@@ -43,7 +43,7 @@ class MasterChecks final : public net::FrameObserver {
     // What the checks remember of one slave.
     struct Track {
         protocol::SiiInfo sii;                  // parsed once from the slave's EEPROM
-        protocol::WriteMaskTable write_mask{};  // per register byte, the bits EtherCAT may write
+        protocol::WriteMaskTable write_mask{};  // which register bytes EtherCAT may write
         int requested = -1;                     // the state last requested in AL control (-1: none yet)
         bool request_unread = false;            // ... and its outcome not read from AL status since
         std::uint64_t outputs_at_safeop = 0;    // output SyncManager writes when SAFEOP was requested

@@ -239,3 +239,15 @@ TEST(Mailbox, HeaderLengthPastTheMailboxIsAnError) {
     ASSERT_EQ(b.master.fprd(st, 0x18F6, rep).value(), 1);
     EXPECT_EQ(ld_le16(rep.data() + 8), 0x0008);  // invalid size
 }
+
+// A slave that fell back to PREOP with an error deactivates its process data SyncManagers (0x0807); their
+// areas stay locked (ESC datasheet section I 8.7), so the master's LRW no longer gets the full working
+// counter and its check sees the fault.
+TEST(AlStateMachine, ProcessDataOfASlaveLeftInPreOpWithAnErrorIsNotCounted) {
+    Bench b(2);
+    reach(b, S::SafeOp);
+    EXPECT_EQ(b.master.exchange_process_data(), 6);  // LRW: 3 per slave
+    b.slave(1).raise_error(C::SyncManagerWatchdog, S::PreOp);
+    ASSERT_EQ(b.slave(1).state(), S::PreOp);
+    EXPECT_EQ(b.master.exchange_process_data(), 3);  // only the first slave
+}

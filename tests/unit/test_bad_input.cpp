@@ -30,7 +30,9 @@ TEST(BadInput, AddressesAtTheEndOfTheSpaces) {
     auto r = raw_datagram(*b.seg, 1, phys(0, 0xFFF0), std::vector<std::uint8_t>(64, 0xEE));
     EXPECT_EQ(r.wkc, 1);
     auto w = raw_datagram(*b.seg, 2, phys(0, 0xFFFF), std::vector<std::uint8_t>(300, 1));
-    EXPECT_EQ(w.wkc, 1);
+    EXPECT_EQ(w.wkc, 0);  // no memory there: nothing written, not counted
+    auto w2 = raw_datagram(*b.seg, 2, phys(0, 0x2FFF), std::vector<std::uint8_t>(300, 1));
+    EXPECT_EQ(w2.wkc, 1);  // the last byte of the process RAM is
     auto l = raw_datagram(*b.seg, 12, 0xFFFFFFF0, std::vector<std::uint8_t>(64, 0));
     EXPECT_EQ(l.wkc, 0);
     // An FMMU ending at the top of the logical space.

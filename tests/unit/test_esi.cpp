@@ -580,4 +580,197 @@ TEST(EsiRun, EachVendorDeviceReachesOpWithItsDefaultPdos) {
 }
 
 }  // namespace
+namespace {
+// A simple digital output terminal as Beckhoff describes an EL2004: no mailbox, a digital I/O PDI with
+// device emulation (ConfigData 0x0104...), one 1-byte SyncManager on the ESC's digital output register
+// 0x0F00 (watchdog trigger, ControlByte 0x44) and four 1-bit outputs.
+std::string digital_output_terminal_esi() {
+    std::string pdos;
+    for (int ch = 0; ch < 4; ++ch)
+        pdos += R"(<RxPdo Fixed="1" Sm="0"><Index>#x160)" + std::to_string(ch) + "</Index><Name>Channel " +
+                std::to_string(ch + 1) + "</Name><Entry><Index>#x70" + std::to_string(ch) +
+                R"(0</Index><SubIndex>1</SubIndex><BitLen>1</BitLen><Name>Output</Name>)" +
+                "<DataType>BOOL</DataType></Entry></RxPdo>";
+    return R"(<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x2</Id><Name>V</Name></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x07d43052" RevisionNo="#x00100000">EL2004</Type><Name>4Ch. Dig. Output</Name>
+<Fmmu>Outputs</Fmmu><Sm ControlByte="#x44" StartAddress="#x0f00" Enable="1">Outputs</Sm>)" +
+           pdos + R"(<Eeprom><ByteSize>128</ByteSize><ConfigData>0401000000000000</ConfigData></Eeprom>
+</Device></Devices></Descriptions></EtherCATInfo>)";
+}
+}  // namespace
+
+// Digital outputs on the ESC's digital output register: a 1-byte SyncManager at 0x0F00 is accepted when the
+// ESC has that register (digital I/O PDI), its buffer mechanism is off (ESC datasheet section I 8.5, "single
+// byte buffer length ... digital output PDI") and the outputs land in 0x0F00.
+TEST(EsiEmulation, DigitalOutputsOnTheDigitalOutputRegisterReachOp) {
+    auto r = esi::import_esi_text(digital_output_terminal_esi());
+    esi::complete_for_emulation(r.desc);
+    ASSERT_EQ(r.desc.pdi_control, 0x0104);
+    auto seg = coe::make_coe_segment(r.desc, 1);
+    net::InProcessLink link(*seg);
+    link.set_time(1'000'000'000);
+    master::Master m(link);
+    std::string why;
+    ASSERT_TRUE(m.startup(protocol::AlState::Op, &why))
+        << why << " AL status code 0x" << std::hex << static_cast<unsigned>(seg->slave(0).status_code());
+    auto& esc = seg->slave(0).esc();
+    EXPECT_EQ(esc.sm_config(0).start, 0x0F00);
+    EXPECT_TRUE(esc.sm_config(0).valid);
+    m.outputs(0)[0] = 0x0A;
+    EXPECT_EQ(m.exchange_process_data(), m.expected_wkc());
+    EXPECT_EQ(esc.peek(0x0F00), 0x0A);
+    EXPECT_EQ(seg->slave(0).state(), protocol::AlState::Op);
+}
+
+}  // namespace vecat
+
+namespace vecat {
+namespace {
+// A device with one 16-bit output and one 16-bit input, its process data SyncManagers declared as sms.
+std::string process_data_esi(const std::string& sms) {
+    return R"(<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x1234</Id><Name>V</Name></Vendor><Descriptions><Devices><Device>
+<Type ProductCode="#x77" RevisionNo="#x1">PD</Type><Name>PD</Name><Fmmu>Outputs</Fmmu><Fmmu>Inputs</Fmmu>)" +
+           sms + R"(<RxPdo Fixed="1" Sm="0"><Index>#x1600</Index><Name>Out</Name><Entry><Index>#x7000</Index>
+<SubIndex>1</SubIndex><BitLen>16</BitLen><Name>Value</Name><DataType>UINT</DataType></Entry></RxPdo>
+<TxPdo Fixed="1" Sm="1"><Index>#x1A00</Index><Name>In</Name><Entry><Index>#x6000</Index>
+<SubIndex>1</SubIndex><BitLen>16</BitLen><Name>Value</Name><DataType>UINT</DataType></Entry></TxPdo>
+</Device></Devices></Descriptions></EtherCATInfo>)";
+}
+
+struct DeclaredSms {
+    const char* what;
+    std::string sms;
+};
+
+void PrintTo(const DeclaredSms& d, std::ostream* os) {
+    *os << d.what;
+}
+
+class ProcessDataSyncManagers : public ::testing::TestWithParam<DeclaredSms> {};
+}  // namespace
+
+// The process data SyncManager checks follow what the device's own ESI declares (ETG.2000 Sm; the SII vecat
+// generates from it carries it in the SyncM category, ETG.2010): 1-buffer mode (ControlByte 0x26/0x22),
+// Enable="0" (the master leaves it off; the FMMU reads the memory), Virtual="1" (no hardware SyncManager).
+// The device reaches OP with the project master (which activates the SMs as the SII's enable byte says, as
+// SOEM does) and its process data flows both ways.
+TEST_P(ProcessDataSyncManagers, TheDeviceReachesOpAndExchanges) {
+    auto r = esi::import_esi_text(process_data_esi(GetParam().sms));
+    esi::complete_for_emulation(r.desc);
+    auto seg = coe::make_coe_segment(r.desc, 1);
+    net::InProcessLink link(*seg);
+    link.set_time(1'000'000'000);
+    master::Master m(link);
+    std::string why;
+    ASSERT_TRUE(m.startup(protocol::AlState::Op, &why))
+        << GetParam().what << ": " << why << ", AL status code 0x" << std::hex
+        << static_cast<unsigned>(seg->slave(0).status_code());
+    auto& od = dynamic_cast<coe::CoeApplication&>(seg->slave(0).app()).dictionary();
+    od.find(0x6000, 1)->set(std::uint16_t{0x1234});
+    st_le16(m.outputs(0).data(), 0xBEEF);
+    for (int i = 0; i < 4; ++i)
+        EXPECT_EQ(m.exchange_process_data(), m.expected_wkc()) << GetParam().what;
+    EXPECT_EQ(ld_le16(m.inputs(0).data()), 0x1234) << GetParam().what;
+    EXPECT_EQ(od.find(0x7000, 1)->get<std::uint16_t>(), 0xBEEF) << GetParam().what;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Declared, ProcessDataSyncManagers,
+    ::testing::Values(
+        DeclaredSms{"buffered",
+                    R"(<Sm StartAddress="#x1100" ControlByte="#x64" DefaultSize="2" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x20" DefaultSize="2" Enable="1">Inputs</Sm>)"},
+        DeclaredSms{"1-buffer mode",
+                    R"(<Sm StartAddress="#x1100" ControlByte="#x26" DefaultSize="2" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x22" DefaultSize="2" Enable="1">Inputs</Sm>)"},
+        DeclaredSms{"inputs Enable=0",
+                    R"(<Sm StartAddress="#x1100" ControlByte="#x64" DefaultSize="2" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x20" DefaultSize="2" Enable="0">Inputs</Sm>)"},
+        DeclaredSms{"virtual inputs",
+                    R"(<Sm StartAddress="#x1100" ControlByte="#x64" DefaultSize="2" Enable="1">Outputs</Sm>
+<Sm StartAddress="#x1180" ControlByte="#x20" DefaultSize="2" Enable="0" Virtual="1">Inputs</Sm>)"}),
+    [](const auto& p) {
+        std::string n = p.param.what;
+        for (auto& c : n)
+            if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+        return n;
+    });
+
+TEST(EsiReader, VirtualAndOpOnlyAreBitsOfTheSiiEnableByte) {
+    const auto r = esi::import_esi_text(process_data_esi(
+        R"(<Sm StartAddress="#x0f00" ControlByte="#x44" Enable="1" OpOnly="1">Outputs</Sm>
+<Sm StartAddress="#x0998" ControlByte="#x00" Enable="0" Virtual="1">Inputs</Sm>)"));
+    ASSERT_EQ(r.desc.sync_managers.size(), 2u);
+    EXPECT_EQ(r.desc.sync_managers[0].enable, 0x09);  // as the EL2004's SII
+    EXPECT_EQ(r.desc.sync_managers[1].enable, 0x04);  // as the EL2262's virtual input SM
+    const auto again = esi::import_esi_text(esi::write_esi(r.desc));
+    EXPECT_EQ(again.desc.sync_managers[0].enable, 0x09);
+    EXPECT_EQ(again.desc.sync_managers[1].enable, 0x04);
+}
+}  // namespace vecat
+
+namespace vecat {
+namespace {
+// One product in two revisions, and another product.
+std::string two_revisions_esi() {
+    auto device = [](const char* type, const char* product, const char* revision, const char* name) {
+        return std::string(R"(<Device><Type ProductCode=")") + product + R"(" RevisionNo=")" + revision +
+               R"(">)" + type + "</Type><Name>" + name + "</Name></Device>";
+    };
+    return R"(<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x2</Id><Name>V</Name></Vendor><Descriptions><Devices>)" +
+           device("EL9999", "#x27074052", "#x00100000", "rev 16") +
+           device("EL9999", "#x27074052", "#x00110000", "rev 17") +
+           device("EL8888", "#x22b83052", "#x00100000", "other") + "</Devices></Descriptions></EtherCATInfo>";
+}
+}  // namespace
+
+// --device/--product take the first revision unless --revision picks another; a revision the file does not
+// have is an error naming the ones it has.
+TEST(EsiReader, TheRevisionPicksOneOfSeveral) {
+    esi::DeviceSelector sel;
+    sel.product_code = 0x27074052;
+    EXPECT_EQ(esi::import_esi_text(two_revisions_esi(), sel).desc.name, "rev 16");
+    sel.revision = 0x00110000;
+    EXPECT_EQ(esi::import_esi_text(two_revisions_esi(), sel).desc.name, "rev 17");
+    sel.product_code.reset();
+    sel.type = "EL9999";
+    EXPECT_EQ(esi::import_esi_text(two_revisions_esi(), sel).desc.identity.revision, 0x00110000u);
+    sel.revision = 0x00120000;
+    try {
+        esi::import_esi_text(two_revisions_esi(), sel);
+        ADD_FAILURE() << "no error";
+    } catch (const esi::EsiError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("0x00120000"), std::string::npos) << what;
+        EXPECT_NE(what.find("0x00100000"), std::string::npos) << what;  // the revisions EL9999 has
+        EXPECT_NE(what.find("0x00110000"), std::string::npos) << what;
+        EXPECT_EQ(what.find("EL8888"), std::string::npos) << what;  // not another product's
+    }
+}
+}  // namespace vecat
+
+namespace vecat {
+// vecat sii generate / run / exec --esi FILE --product P --revision R: the option reaches the selector.
+TEST(EsiCommandLine, RevisionOptionPicksTheRevision) {
+    const auto esi_path = temp_file("revisions.xml", two_revisions_esi());
+    const auto sii_path = esi_path + ".bin";
+    const std::string cmd = std::string(VECAT_BINARY) + " sii generate --esi " + esi_path +
+                            " --product 0x27074052 --revision 0x00110000 -o " + sii_path + " 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    std::ifstream f(sii_path, std::ios::binary);
+    const std::vector<std::uint8_t> img((std::istreambuf_iterator<char>(f)),
+                                        std::istreambuf_iterator<char>());
+    ASSERT_GE(img.size(), 32u);
+    EXPECT_EQ(ld_le32(&img[2 * protocol::sii::RevisionNo]), 0x00110000u);
+    const std::string out =
+        test::run_capture(std::string(VECAT_BINARY) + " sii generate --esi " + esi_path +
+                          " --device EL9999 --revision 0x00120000 -o " + sii_path + " 2>&1");
+    EXPECT_NE(out.find("its revisions are"), std::string::npos) << out;
+    EXPECT_NE(out.find("0x00110000"), std::string::npos) << out;
+    std::filesystem::remove(esi_path);
+    std::filesystem::remove(sii_path);
+}
 }  // namespace vecat

@@ -19,17 +19,60 @@ TEST(Registers, InformationRegisters) {
     EXPECT_TRUE(ld_le16(&r.data[8]) & protocol::feature::DcAvailable);
 }
 
-TEST(Registers, ReadOnlyRegistersCountButKeepTheirValue) {
+// Writes to read-only or absent registers are not counted (ESC datasheet section I 2.4: counted is a
+// successful access; section II 1: reserved addresses "are not writable"), as real ESCs answer.
+TEST(Registers, WritesToReadOnlyOrAbsentRegistersAreNotCounted) {
     Bench b(1);
-    auto w = raw_datagram(*b.seg, 2, phys(0, 0x0000), {0x55, 0x55});
-    EXPECT_EQ(w.wkc, 1);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0000), {0x55, 0x55}).wkc, 0);
     EXPECT_EQ(b.escx().peek(0x0000), 0x11);
-    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0130), {0x08, 0}).wkc, 1);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0130), {0x08, 0}).wkc, 0);
     EXPECT_EQ(b.escx().peek(0x0130), 0x01);  // AL status is written by the slave only
-    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0012), {0x12, 0x34}).wkc, 1);
-    EXPECT_EQ(b.escx().peek16(0x0012), 0);  // alias comes from the EEPROM
-    raw_datagram(*b.seg, 2, phys(0, 0x0120), {0xFF, 0xFF});
-    EXPECT_EQ(b.escx().peek16(0x0120), 0x003F);  // AL control write mask
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0012), {0x12, 0x34}).wkc, 0);
+    EXPECT_EQ(b.escx().peek16(0x0012), 0);                                     // alias comes from the EEPROM
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x092C), {1, 2, 3, 4}).wkc, 0);  // system time difference
+    // The ESC has 8 FMMUs and 8 SyncManagers (0x0004, 0x0005): FMMU 8 and SyncManager 8 are absent.
+    ASSERT_EQ(b.escx().peek(0x0004), 8);
+    ASSERT_EQ(b.escx().peek(0x0005), 8);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, protocol::fmmu_addr(8)), std::vector<std::uint8_t>(16, 1)).wkc,
+              0);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, protocol::sm_addr(8)), std::vector<std::uint8_t>(8, 1)).wkc, 0);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, protocol::fmmu_addr(7)), std::vector<std::uint8_t>(16, 0)).wkc,
+              1);
+    // Past the process RAM (8 KiB: 0x1000-0x2FFF) there is no memory to write.
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x3000), {1, 2}).wkc, 0);
+    // Reads are counted, also of reserved or absent addresses (they read 0).
+    EXPECT_EQ(raw_datagram(*b.seg, 1, phys(0, protocol::fmmu_addr(8)), std::vector<std::uint8_t>(16, 0)).wkc,
+              1);
+    EXPECT_EQ(raw_datagram(*b.seg, 1, phys(0, 0x3000), {0, 0}).wkc, 1);
+    // A read-write of a read-only register: the read counts (+1), the write does not (+2).
+    EXPECT_EQ(raw_datagram(*b.seg, 3, phys(0, 0x0130), {0, 0}).wkc, 1);
+}
+
+// A write counts when at least one of its bytes lies in a register the master may write (section I 2.4
+// "at least one byte"), whatever the value or the other bytes; bits outside the register's write mask keep
+// their value.
+TEST(Registers, AWriteCountsWhenOneOfItsBytesIsWritable) {
+    Bench b(1);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0120), {0xFF, 0xFF}).wkc, 1);
+    EXPECT_EQ(b.escx().peek16(0x0120), 0x003F);                                // AL control write mask
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x012E), {1, 2, 3, 4}).wkc, 0);  // reserved + AL status
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x012E), std::vector<std::uint8_t>(12, 0)).wkc,
+              1);  // ... + 0x0138 RUN LED override
+    // TwinCAT writes 0x0910-0x092F at once: the system time is writable, the difference is not.
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0910), std::vector<std::uint8_t>(32, 0)).wkc, 1);
+    // Registers whose write acts instead of storing: receive time latch, error counters, SII command.
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0900), {0, 0, 0, 0}).wkc, 1);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0310), {0}).wkc, 1);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0443), {0}).wkc, 1);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0503), {0}).wkc, 1);
+    // Locked SyncManager configuration bytes (the SM is enabled) are still a writable register.
+    std::vector<std::uint8_t> sm{0x00, 0x1F, 0x10, 0x00, 0x64, 0x00, 0x01, 0x00};
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0820), sm).wkc, 1);
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0820), {0x00, 0x1E}).wkc, 1);
+    EXPECT_EQ(b.escx().peek16(0x0820), 0x1F00);
+    // The user RAM 0x0F80-0x0FFF is read/write.
+    EXPECT_EQ(raw_datagram(*b.seg, 2, phys(0, 0x0F80), {0x5A}).wkc, 1);
+    EXPECT_EQ(b.escx().peek(0x0F80), 0x5A);
 }
 
 TEST(Registers, DlStatusShowsTheLine) {

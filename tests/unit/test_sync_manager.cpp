@@ -146,3 +146,104 @@ TEST_F(EscOnly, SyncManagerOutsideRamIsIgnored) {
     EXPECT_FALSE(esc.sm_config(2).valid);
     EXPECT_EQ(write(0x2FF0, {1}), 1);  // plain memory
 }
+
+// ESC datasheet section I 8.7: a SyncManager the PDI deactivated (0x0807 bit 0) while the master has it
+// enabled keeps its whole area read/write protected; the working counter shows it.
+TEST_F(EscOnly, SyncManagerDeactivatedByThePdiLocksItsArea) {
+    sm(2, 0x1000, 4, 0x64);
+    esc.pdi_deactivate_sm(2, true);
+    EXPECT_EQ(write(0x1000, {7, 7, 7, 7}), 0);
+    std::vector<std::uint8_t> r{0xAA, 0xAA, 0xAA, 0xAA};
+    EXPECT_EQ(read(0x1000, r), 0);
+    EXPECT_EQ(r[0], 0xAA);  // nothing placed in the frame
+    EXPECT_EQ(esc.peek(0x1000), 0);
+    // A datagram that also covers memory outside the area counts for that part only.
+    std::vector<std::uint8_t> wide(8);
+    EXPECT_EQ(read(0x0FFC, wide), 1);
+    // The mailbox SMs as in INIT: configured and enabled by the master, deactivated by the firmware.
+    sm(1, 0x1100, 8, 0x22);
+    esc.pdi_deactivate_sm(1, true);
+    std::vector<std::uint8_t> mbx(8);
+    EXPECT_EQ(read(0x1100, mbx), 0);
+    // Activated again by the PDI: a buffered SM works as before; disabled by the master: plain memory.
+    esc.pdi_deactivate_sm(2, false);
+    EXPECT_EQ(write(0x1000, {1, 2, 3, 4}), 1);
+    EXPECT_EQ(write(sm_addr(1) + 6, {0x00}), 1);
+    EXPECT_EQ(read(0x1100, mbx), 1);
+}
+
+// ESC datasheet section II 0x0120: without device emulation (0x0141 bit 0 = 0) AL control behaves like a
+// mailbox: once written by the master it takes no further write until the PDI has read it.
+TEST_F(EscOnly, AlControlIsAMailboxWithoutDeviceEmulation) {
+    ASSERT_EQ(esc.peek(addr(Reg::EscConfiguration)) & esc_config::DeviceEmulation, 0);
+    EXPECT_EQ(write(addr(Reg::AlControl), {0x02, 0x00}), 1);
+    EXPECT_EQ(write(addr(Reg::AlControl), {0x04, 0x00}), 0);  // not read yet: refused
+    EXPECT_EQ(write(addr(Reg::AlControl) + 1, {0x00}), 0);    // either byte
+    EXPECT_EQ(esc.peek16(addr(Reg::AlControl)), 0x0002);
+    // A datagram that also covers other writable registers counts for them.
+    EXPECT_EQ(write(addr(Reg::AlControl), std::vector<std::uint8_t>(25, 0)), 1);  // up to 0x0138
+    EXPECT_EQ(esc.peek16(addr(Reg::AlControl)), 0x0002);
+    EXPECT_EQ(esc.pdi_read_al_control(), 0x0002);
+    EXPECT_EQ(write(addr(Reg::AlControl), {0x04, 0x00}), 1);
+    EXPECT_EQ(esc.peek16(addr(Reg::AlControl)), 0x0004);
+}
+
+TEST(AlControl, AlwaysWritableWithDeviceEmulation) {
+    auto dev = device::default_drive();
+    dev.pdi_control = 0x0104;  // digital I/O PDI, device emulation (as an EL2004's SII word 0)
+    Esc esc{EscConfig{}, build_sii_image(dev)};
+    ASSERT_NE(esc.peek(addr(Reg::EscConfiguration)) & esc_config::DeviceEmulation, 0);
+    std::array<std::uint8_t, 16> buf{};
+    for (const std::uint8_t state : {std::uint8_t{0x02}, std::uint8_t{0x04}}) {
+        buf.fill(0);
+        buf[0] = static_cast<std::uint8_t>(Command::APWR);
+        st_le16(&buf[4], addr(Reg::AlControl));
+        st_le16(&buf[6], 2);
+        buf[10] = state;
+        DatagramView d(buf.data());
+        esc.process(d, FrameTiming{1000, 2000});
+        EXPECT_EQ(d.wkc(), 1);
+        EXPECT_EQ(esc.peek(addr(Reg::AlControl)), state);
+    }
+}
+
+// ESC datasheet section I 8.5: a buffered SyncManager of 1 byte has no buffer mechanism (accesses pass to
+// the memory, the watchdog trigger still works); on an ESC with a digital I/O PDI such SyncManagers guard
+// the digital output register 0x0F00-0x0F03. Without that PDI there is no such register.
+TEST(SingleByteSyncManager, OnTheDigitalOutputRegisterOfADigitalIoEsc) {
+    for (const std::uint16_t pdi : {std::uint16_t{0x0005}, std::uint16_t{0x0104}}) {
+        auto dev = device::default_drive();
+        dev.pdi_control = pdi;
+        Esc esc{EscConfig{}, build_sii_image(dev)};
+        auto dg = [&](Command cmd, std::uint16_t ado, std::vector<std::uint8_t> data) {
+            std::array<std::uint8_t, 64> buf{};
+            buf[0] = static_cast<std::uint8_t>(cmd);
+            st_le16(&buf[4], ado);
+            st_le16(&buf[6], static_cast<std::uint16_t>(data.size()));
+            std::copy(data.begin(), data.end(), buf.begin() + 10);
+            DatagramView d(buf.data());
+            esc.process(d, FrameTiming{1000, 2000});
+            return d.wkc();
+        };
+        const bool dio = pdi == 0x0104;
+        EXPECT_EQ(dg(Command::APWR, sm_addr(2), {0x00, 0x0F, 1, 0, 0x44, 0, 1, 0}), 1);
+        EXPECT_EQ(esc.sm_config(2).valid, dio) << pdi;
+        EXPECT_EQ(dg(Command::APWR, 0x0F00, {0x0A}), dio ? 1 : 0) << pdi;
+        EXPECT_EQ(esc.peek(0x0F00), dio ? 0x0A : 0) << pdi;
+        if (!dio) continue;
+        EXPECT_EQ(esc.sm_buffer_writes(2), 1u);
+        EXPECT_EQ(esc.peek(0x0440) & 1, 1);  // watchdog triggered
+        std::array<std::uint8_t, 1> out{};
+        EXPECT_TRUE(esc.pdi_buffer_read(2, out));
+        EXPECT_EQ(out[0], 0x0A);
+        EXPECT_EQ(dg(Command::APRD, 0x0F00, {0}), 1);  // readable: no buffer in the way
+        // Deactivated by the PDI: locked like any SyncManager area.
+        esc.pdi_deactivate_sm(2, true);
+        EXPECT_EQ(dg(Command::APWR, 0x0F00, {0x05}), 0);
+        EXPECT_EQ(esc.peek(0x0F00), 0x0A);
+        // Disabled by the master: the plain register.
+        EXPECT_EQ(dg(Command::APWR, sm_addr(2) + 6, {0}), 1);
+        EXPECT_EQ(dg(Command::APWR, 0x0F00, {0x05}), 1);
+        EXPECT_EQ(esc.peek(0x0F00), 0x05);
+    }
+}
