@@ -248,6 +248,9 @@ protocol::AlStatusCode ProcessDataMap::validate() const {
 }
 
 void ProcessDataMap::copy_outputs(ConstBytes image) {
+    // Mapped entries a device watches count the write (EntryHooks::writes).
+    for (const auto& f : out_)
+        if (f.entry) f.entry->touch();
     if (out_plan_.ok && image.size() >= out_bytes_) {
         run_plan<false>(out_plan_, image.data());
         return;
