@@ -4,12 +4,14 @@
 // has no such object (a vendor's ESI without it).
 //
 // When the adapter reads what:
-//   - DriveParameters once per advance (the dictionary does not change while the servo periods of one
-//     advance run: frames and SDO requests come in between);
-//   - DriveCommand every servo period, after the TWINsync port's receive: it holds the set-points and the
-//     manufacturer objects 0x2003/0x2100-0x2110, which a TWINsync receive mapping (parameter P as object
-//     0x2000 + P) can write;
-//   - TwinsyncInputs every servo period, after the receive (the remote values it has just written).
+//   - DriveParameters (the profile parameters 0x605A-0x60C6 and the manufacturer objects 0x2003,
+//     0x2100-0x2110) only after one of their entries was written (coe::EntryHooks::writes counts SDO
+//     downloads, process data outputs and every Entry::set/assign, also a TWINsync receive mapping's), so
+//     an unchanged dictionary costs the servo period nothing; checked before each advance and after the
+//     TWINsync port's receive in each period;
+//   - DriveCommand (controlword, mode, set-points) every servo period, after the TWINsync receive;
+//   - TwinsyncInputs every servo period, after the receive (the remote values it has just written); the
+//     TWINsync parameters only while the link is on.
 #pragma once
 
 #include <array>
@@ -43,7 +45,7 @@ bool injectable(std::uint16_t code) noexcept;
 // Statusword bits (CiA 402 6.3.3), protocol/cia402.hpp.
 namespace sw = protocol::cia402::sw;
 
-// Parameters of the profile objects, read once per advance.
+// Parameters: the profile objects and the manufacturer objects, read again after a write.
 struct DriveParameters {
     OptionCodes options;                                 // 0x605A-0x605E
     FactorGroup factors;                                 // 0x608F, 0x6091, 0x6092 (applied only when valid)
@@ -98,7 +100,7 @@ struct DriveParameters {
     bool fieldbus_synchronised = false;  // the slave's cycle runs on SYNC0/SYNC1 (0x1C32:1)
 };
 
-// The set-points and machine inputs of one servo period.
+// The set-points of one servo period.
 struct DriveCommand {
     std::uint16_t controlword = 0;     // 0x6040
     std::int8_t mode = 0;              // 0x6060

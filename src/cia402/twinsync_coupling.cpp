@@ -60,17 +60,20 @@ std::uint16_t TwinsyncCoupling::controlword(std::uint16_t own, const TwinsyncInp
 }
 
 RaisedFault TwinsyncCoupling::raise(twinsync::ErrorId e) {
-    // 0x603F: serial interface 2 for the link (40-xx) and the other axis (39-02); the speed and torque
-    // monitoring of the gantry as velocity and torque control faults. The emergency's manufacturer bytes
-    // carry the MSD error number and location.
-    RaisedFault f{0x7520,
+    // 0x603F (CiA 402 error code table): serial interface 2 for the link (40-xx) and the other axis
+    // (39-02); the speed and torque monitoring of the gantry as velocity and torque control faults. The
+    // emergency's manufacturer bytes carry the MSD error number and location.
+    constexpr std::uint16_t kSerialInterface2 = 0x7520;
+    constexpr std::uint16_t kVelocityControl = 0x8400;
+    constexpr std::uint16_t kTorqueControl = 0x8300;
+    RaisedFault f{kSerialInterface2,
                   static_cast<std::uint8_t>(error_register::Communication | error_register::Manufacturer),
                   {e.number, e.location, 0, 0, 0}};
     if (e == twinsync::error::SpeedDifference) {
-        f.code = 0x8400;
+        f.code = kVelocityControl;
         f.register_bits = error_register::Manufacturer;
     } else if (e == twinsync::error::TorqueDifference) {
-        f.code = 0x8300;
+        f.code = kTorqueControl;
         f.register_bits = error_register::Manufacturer;
     }
     error_ = e;

@@ -1,5 +1,6 @@
 // What a TWINsync option card reports about its link: the values behind P2612, P2617, P2619 and P2623,
 // and the counters a scope or the telemetry shows. Filled by the drive's TWINsync port every control cycle.
+// And what the drive tells the port about itself (LocalState, made by the drive core's TWINsync coupling).
 #pragma once
 
 #include <cstdint>
