@@ -297,7 +297,8 @@ twinsync::LocalState Drive::twinsync_local() const {
 }
 
 // Every parameter of the DriveIo with its handle, once: read_parameters() copies them, the constructor
-// watches them (a write through Entry::set/assign or a process data output counts in parameter_writes_).
+// watches them (a write through Entry::set/assign counts in parameter_writes_), configure() finds those
+// mapped into the RxPDOs.
 template <class F>
 void Drive::for_each_parameter(F&& f) {
     Objects& o = *o_;
@@ -374,6 +375,20 @@ void Drive::read_parameters() {
 }
 
 void Drive::configure() {
+    // Process data outputs write the entries they map without Entry::set: a parameter mapped into the
+    // RxPDOs counts as written whenever the outputs were copied.
+    const coe::ProcessDataMap& pd = process_data();
+    if (pd.mapping_changes() != mapping_seen_) {
+        mapping_seen_ = pd.mapping_changes();
+        maps_parameters_ = false;
+        for_each_parameter([&](auto& v, auto&) {
+            if (v.entry() && pd.is_rx_mapped(*v.entry())) maps_parameters_ = true;
+        });
+    }
+    if (maps_parameters_ && pd.outputs_copied() != outputs_seen_) {
+        outputs_seen_ = pd.outputs_copied();
+        ++parameter_writes_;
+    }
     // The parameters only when one was written since they were read.
     if (parameter_writes_ != parameters_read_) read_parameters();
     io_.parameters.fieldbus_synchronised =

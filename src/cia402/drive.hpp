@@ -75,6 +75,9 @@ class Drive : public coe::CoeApplication {
     std::unique_ptr<DriveCore> core_;
     DriveIo io_;
     std::uint32_t parameter_writes_ = 0;  // writes to the parameters' entries (EntryHooks::writes)
+    std::uint64_t mapping_seen_ = ~std::uint64_t{0};     // the RxPDO mapping last checked for parameters
+    bool maps_parameters_ = false;                       // ... maps one of them
+    std::uint64_t outputs_seen_ = 0;                     // outputs copied when last counted
     std::uint32_t parameters_read_ = ~std::uint32_t{0};  // parameter_writes_ when they were last read
     std::uint64_t sim_ns_ = 0;
     bool started_ = false;

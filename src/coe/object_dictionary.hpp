@@ -39,9 +39,10 @@ struct EntryHooks {
     std::function<SdoAbort(const Entry&, ConstBytes)> on_download;
     std::function<void(Entry&)> after_download;
     std::function<void(Entry&)> before_upload;
-    // Incremented on every write through Entry::set or Entry::assign and by a process data output
-    // (ProcessDataMap::copy_outputs), not by the device's own writes through a coe::Value: the device can
-    // tell that none of its parameters changed without reading them (cia402::Drive).
+    // Incremented on every write through Entry::set or Entry::assign (SDO downloads, tools, tests), not by
+    // the device's own writes through a coe::Value: the device can tell that none of its parameters changed
+    // without reading them (cia402::Drive). Process data outputs are counted by the ProcessDataMap
+    // (outputs_copied()).
     std::uint32_t* writes = nullptr;
 };
 

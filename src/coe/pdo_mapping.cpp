@@ -199,6 +199,7 @@ bool ProcessDataMap::build(const Direction& d, std::vector<MappedField>& fields,
 }
 
 void ProcessDataMap::rebuild() {
+    ++mapping_changes_;
     if (rx_.assign_index) out_valid_ = build(rx_, out_, out_bytes_);
     if (tx_.assign_index) in_valid_ = build(tx_, in_, in_bytes_);
     out_plan_ = make_plan(out_);
@@ -248,9 +249,7 @@ protocol::AlStatusCode ProcessDataMap::validate() const {
 }
 
 void ProcessDataMap::copy_outputs(ConstBytes image) {
-    // Mapped entries a device watches count the write (EntryHooks::writes).
-    for (const auto& f : out_)
-        if (f.entry) f.entry->touch();
+    ++outputs_copied_;
     if (out_plan_.ok && image.size() >= out_bytes_) {
         run_plan<false>(out_plan_, image.data());
         return;
