@@ -74,7 +74,8 @@ struct DriveParameters {
     std::uint32_t profile_jerk = 0;                      // 0x60A4:1
     std::uint32_t torque_slope = 0;                      // 0x6087, per mille/s
     // 0x607D:1/2. Absent, they read as INT32_MIN/INT32_MAX for "enabled" (min < max) and as 0 for the
-    // clamp, as the drive always did (Axis::software_limits_enabled).
+    // clamp, as the drive always did (Axis::software_limits_enabled): a dictionary without 0x607D clamps
+    // every position set-point to 0 (a known quirk, kept).
     std::optional<std::int32_t> software_limit_min, software_limit_max;
     std::int32_t home_offset = 0;           // 0x607C
     std::int8_t homing_method = 0;          // 0x6098
