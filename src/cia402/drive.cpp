@@ -201,6 +201,9 @@ Drive::Drive(const device::DeviceDescription& d,
     for_each_parameter([this](auto& v, auto&) {
         if (v.entry()) v.entry()->hooks().writes = &parameter_writes_;
     });
+    for_each_command([this](auto& v, auto&) {
+        if (v.entry()) v.entry()->hooks().writes = &command_writes_;
+    });
     core_ = std::make_unique<DriveCore>(motor_from(*o_));
     configure();
     twin_ = std::make_unique<twinsync::Port>(dictionary(), kServoPeriodNs);
@@ -282,7 +285,7 @@ void Drive::servo_step() {
     twin_->receive(sim_ns_, twinsync_local());
     // (A receive mapping may write parameters, the manufacturer objects 0x2000 + P: read again.)
     if (parameter_writes_ != parameters_read_) read_parameters();
-    read_command();
+    if (command_writes_ != command_read_) read_command();
     read_twinsync();
     core_->step(io_);
     write_feedback();
@@ -360,6 +363,9 @@ void Drive::for_each_parameter(F&& f) {
     f(o.limit_switch_reaction, p.limit_switch_reaction);
     f(o.simulated_fault, p.simulated_fault);
     f(o.velocity_override, p.velocity_override);
+    // The local TWINsync references (P2602), written with the parameters.
+    f(o.tw_local_torque_ref, io_.twinsync.local_torque_reference);
+    f(o.tw_local_speed_ref, io_.twinsync.local_speed_reference);
 }
 
 void Drive::read_parameters() {
@@ -375,8 +381,8 @@ void Drive::read_parameters() {
 }
 
 void Drive::configure() {
-    // Process data outputs write the entries they map without Entry::set: a parameter mapped into the
-    // RxPDOs counts as written whenever the outputs were copied.
+    // Process data outputs write the entries they map without Entry::set: the command, and a parameter
+    // mapped into the RxPDOs, count as written whenever the outputs were copied.
     const coe::ProcessDataMap& pd = process_data();
     if (pd.mapping_changes() != mapping_seen_) {
         mapping_seen_ = pd.mapping_changes();
@@ -385,9 +391,10 @@ void Drive::configure() {
             if (v.entry() && pd.is_rx_mapped(*v.entry())) maps_parameters_ = true;
         });
     }
-    if (maps_parameters_ && pd.outputs_copied() != outputs_seen_) {
+    if (pd.outputs_copied() != outputs_seen_) {
         outputs_seen_ = pd.outputs_copied();
-        ++parameter_writes_;
+        ++command_writes_;
+        if (maps_parameters_) ++parameter_writes_;
     }
     // The parameters only when one was written since they were read.
     if (parameter_writes_ != parameters_read_) read_parameters();
@@ -396,18 +403,25 @@ void Drive::configure() {
     core_->configure(io_);
 }
 
+template <class F>
+void Drive::for_each_command(F&& f) {
+    Objects& o = *o_;
+    DriveCommand& c = io_.command;
+    f(o.controlword, c.controlword);
+    f(o.modes, c.mode);
+    f(o.target_position, c.target_position);
+    f(o.target_velocity, c.target_velocity);
+    f(o.target_torque, c.target_torque);
+    f(o.position_offset, c.position_offset);
+    f(o.velocity_offset, c.velocity_offset);
+    f(o.torque_offset, c.torque_offset);
+    f(o.probe_function, c.probe_function);
+}
+
 void Drive::read_command() {
-    const Objects& o = *o_;
-    DriveCommand& c = io_.command;  // an absent object leaves the field at its default
-    c.controlword = o.controlword.get_or(c.controlword);
-    c.mode = o.modes.get_or(c.mode);
-    c.target_position = o.target_position.get_or(c.target_position);
-    c.target_velocity = o.target_velocity.get_or(c.target_velocity);
-    c.target_torque = o.target_torque.get_or(c.target_torque);
-    c.position_offset = o.position_offset.get_or(c.position_offset);
-    c.velocity_offset = o.velocity_offset.get_or(c.velocity_offset);
-    c.torque_offset = o.torque_offset.get_or(c.torque_offset);
-    c.probe_function = o.probe_function.get_or(c.probe_function);
+    command_read_ = command_writes_;
+    // An absent object leaves the field at its default.
+    for_each_command([](const auto& v, auto& field) { field = v.get_or(field); });
 }
 
 void Drive::read_twinsync() {
@@ -420,8 +434,6 @@ void Drive::read_twinsync() {
     t.controlled_by_twinsync = port.controlled_by_twinsync();
     t.received_control_word = port.received_control_word();
     t.pending_error = port.pending_error();
-    t.local_torque_reference = o.tw_local_torque_ref.get_or(1.0f);
-    t.local_speed_reference = o.tw_local_speed_ref.get_or(1.0f);
     if (!t.active) return;  // the rest matters only while the link is on
     t.link_ok = port.link_ok();
     t.role = port.role();

@@ -66,6 +66,8 @@ class Drive : public coe::CoeApplication {
     void for_each_parameter(F&& f);
     void read_parameters();
     void configure();
+    template <class F>
+    void for_each_command(F&& f);
     void read_command();
     void read_twinsync();
     void write_feedback();
@@ -78,6 +80,8 @@ class Drive : public coe::CoeApplication {
     std::uint64_t mapping_seen_ = ~std::uint64_t{0};     // the RxPDO mapping last checked for parameters
     bool maps_parameters_ = false;                       // ... maps one of them
     std::uint64_t outputs_seen_ = 0;                     // outputs copied when last counted
+    std::uint32_t command_writes_ = 0;                   // ... to the command's (and process data outputs)
+    std::uint32_t command_read_ = ~std::uint32_t{0};     // command_writes_ when it was last read
     std::uint32_t parameters_read_ = ~std::uint32_t{0};  // parameter_writes_ when they were last read
     std::uint64_t sim_ns_ = 0;
     bool started_ = false;

@@ -278,8 +278,12 @@ void DriveCore::hold_disabled() {
     axis_.velocity_cmd = 0;
     axis_.torque_cmd = 0;
     axis_.torque_ff = 0;
-    for (OperationMode* m : modes_)
-        m->disable();
+    // Once is enough: only a mode's step gives it something to drop again.
+    if (!modes_disabled_) {
+        for (OperationMode* m : modes_)
+            m->disable();
+        modes_disabled_ = true;
+    }
 }
 
 void DriveCore::run_stop(StopKind k, double dt) {
@@ -313,6 +317,7 @@ void DriveCore::run_setpoints(DriveIo& io, double dt) {
 void DriveCore::run_mode(double dt) {
     axis_.halted = (axis_.controlword & cw::Halt) && (!active_ || active_->obeys_halt());
     if (active_) {
+        modes_disabled_ = false;
         active_->step(axis_, dt);
     } else {
         // No mode selected yet: hold the position.

@@ -9,9 +9,9 @@
 //     downloads, process data outputs and every Entry::set/assign, also a TWINsync receive mapping's), so
 //     an unchanged dictionary costs the servo period nothing; checked before each advance and after the
 //     TWINsync port's receive in each period;
-//   - DriveCommand (controlword, mode, set-points) every servo period, after the TWINsync receive;
+//   - DriveCommand (controlword, mode, set-points) the same way, after a write or process data outputs;
 //   - TwinsyncInputs every servo period, after the receive (the remote values it has just written); the
-//     TWINsync parameters only while the link is on.
+//     TWINsync parameters only while the link is on, the local references P2602 with DriveParameters.
 #pragma once
 
 #include <array>
