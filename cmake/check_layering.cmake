@@ -10,7 +10,8 @@
 cmake_minimum_required(VERSION 3.22)
 
 # ---- The rule: which library may use which (direct arrows). A library of a folder is named after it; the
-# program vecat of src/cli is "cli"; src/cia402 holds two libraries, motion (pure models) and cia402.
+# program vecat of src/cli is "cli"; src/cia402 holds three libraries, motion (pure models), drive_core
+# (the drive without EtherCAT) and cia402 (its CoE adapter).
 set(LAYER_common "")
 set(LAYER_protocol common)         # wire formats: layouts, codes, SII parse
 set(LAYER_twinsync_parameters common)     # the TWINsync parameter numbers alone (header-only)
@@ -19,7 +20,8 @@ set(LAYER_device common protocol twinsync_parameters)  # device descriptions (th
 set(LAYER_esc protocol device)     # the emulated ESC, the slave, the segment
 set(LAYER_coe esc device)          # object dictionary, SDO server, PDO mapping
 set(LAYER_motion protocol)         # profile generator, mechanics, homing, CiA 402 state machine, touch probe
-set(LAYER_cia402 motion coe twinsync)
+set(LAYER_drive_core motion twinsync)  # the drive core, its operation modes, the TWINsync coupling: no EtherCAT
+set(LAYER_cia402 drive_core coe twinsync)  # the CoE adapter of the drive core, the TWINsync port
 set(LAYER_net common)              # transport: raw socket, link, pcapng, netns, realtime, privileges
 set(LAYER_serve net esc)           # serve loop, in-process link: a segment behind a link
 set(LAYER_master protocol net)     # the master: wire formats and a link, never the slave emulation

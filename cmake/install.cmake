@@ -4,7 +4,7 @@
 # package through CPack (cpack -G DEB in the build directory).
 include(CMakePackageConfigHelpers)
 
-set(VECAT_INSTALL_LIBS vecat_common vecat_protocol vecat_device vecat_esc vecat_coe vecat_twinsync_parameters vecat_twinsync vecat_motion vecat_cia402
+set(VECAT_INSTALL_LIBS vecat_common vecat_protocol vecat_device vecat_esc vecat_coe vecat_twinsync_parameters vecat_twinsync vecat_motion vecat_drive_core vecat_cia402
                        vecat_net vecat_serve vecat_report vecat_faults vecat_master vecat_telemetry vecat_testing vecat_esi vecat_network)
 if(VECAT_TELEMETRY)
   list(APPEND VECAT_INSTALL_LIBS vecat_telemetry_idl)
@@ -37,14 +37,14 @@ install(FILES ${PROJECT_BINARY_DIR}/vecatConfig.cmake ${PROJECT_BINARY_DIR}/veca
         DESTINATION ${VECAT_CMAKE_DIR})
 
 # pkg-config: all libraries, users first (static linking resolves left to right).
-set(VECAT_PC_LIBS "-lvecat_testing -lvecat_esi -lvecat_master -lvecat_faults -lvecat_telemetry")
+set(VECAT_PC_LIBS "-lvecat_network -lvecat_testing -lvecat_esi -lvecat_master -lvecat_faults -lvecat_telemetry")
 if(VECAT_TELEMETRY)
   string(APPEND VECAT_PC_LIBS " -lvecat_telemetry_idl")
   set(VECAT_PC_REQUIRES "fmt yaml-cpp pugixml libcap CycloneDDS")
 else()
   set(VECAT_PC_REQUIRES "fmt yaml-cpp pugixml libcap")
 endif()
-string(APPEND VECAT_PC_LIBS " -lvecat_cia402 -lvecat_motion -lvecat_twinsync -lvecat_coe -lvecat_serve -lvecat_net -lvecat_esc"
+string(APPEND VECAT_PC_LIBS " -lvecat_report -lvecat_cia402 -lvecat_drive_core -lvecat_motion -lvecat_twinsync -lvecat_coe -lvecat_serve -lvecat_net -lvecat_esc"
                             " -lvecat_device -lvecat_protocol -pthread")
 # The prefix relative to the .pc file, so that the file is right wherever the tree is installed (--prefix).
 file(RELATIVE_PATH VECAT_PC_TO_PREFIX /root/${CMAKE_INSTALL_LIBDIR}/pkgconfig /root)

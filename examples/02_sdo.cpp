@@ -13,15 +13,15 @@ int main() {
     testing::VirtualSegment vs({.drives = 1, .target = protocol::AlState::PreOp});
     master::CoeClient coe(vs.master(), vs.station(0));
 
-    // Upload: the device name 0x1008 (a string, longer than 4 bytes: a normal transfer).
-    const auto name = coe.upload(0x1008, 0);
+    // Upload: the device name 0x1008 (a string, longer than 4 bytes: a normal transfer). The object
+    // catalogue names the objects (protocol/objects.hpp, protocol/cia402_objects.hpp).
+    namespace od = vecat::protocol::obj;
+    const auto name = coe.upload(od::device_name.index, 0);
     if (!name.ok()) return 1;
     std::printf("0x1008 device name: %.*s\n", static_cast<int>(name.data.size()),
                 reinterpret_cast<const char*>(name.data.data()));
 
-    // Download then upload: the profile velocity 0x6081 (expedited, 4 bytes). The object catalogue
-    // names the objects (protocol/cia402_objects.hpp).
-    namespace od = vecat::protocol::obj;
+    // Download then upload: the profile velocity 0x6081 (expedited, 4 bytes).
     if (!coe.download_value<std::uint32_t>(od::profile_velocity.index, 0, 123456).ok()) return 1;
     const auto v = coe.upload(od::profile_velocity.index, 0);
     if (!v.ok() || v.data.size() != 4) return 1;

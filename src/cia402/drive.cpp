@@ -1,98 +1,20 @@
-// The CiA 402 drive (about 1,400 lines): still the god file that issue 24 asks to split into a DriveCore,
-// one class per operation mode, the TWINsync coupling and a thin CoE adapter (started on branch `drive`).
+// The CoE adapter of the drive core: binds the DriveIo (drive_io.hpp) to the dictionary once, through the
+// named objects, and around each servo period of the core copies the dictionary in and the feedback out,
+// runs the TWINsync option card (receive before, transmit after) and raises the core's faults as
+// emergencies. The motion itself is drive_core.cpp and the modes; the segment factories drive_segment.cpp.
 #include "cia402/drive.hpp"
 
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <limits>
-#include <numbers>
-
-#include "cia402/homing.hpp"
-#include "cia402/touch_probe.hpp"
 #include "device/drive_objects.hpp"
 #include "protocol/cia402_objects.hpp"
+#include "twinsync/parameters.hpp"
 
 namespace vecat::cia402 {
-
-bool supported(Mode m) noexcept {
-    switch (m) {
-        case Mode::ProfilePosition:
-        case Mode::ProfileVelocity:
-        case Mode::ProfileTorque:
-        case Mode::Homing:
-        case Mode::CyclicPosition:
-        case Mode::CyclicVelocity:
-        case Mode::CyclicTorque:
-            return true;
-        default:
-            return false;
-    }
-}
-
-bool fault::injectable(std::uint16_t code) noexcept {
-    return code == OverCurrent || code == Encoder || code == FollowingError || code == ReferenceLimit;
-}
 
 namespace {
 
 using coe::Entry;
 namespace obj = protocol::obj;
 namespace mfr = device::mfr;
-
-std::int32_t wrap32(std::int64_t v) {
-    return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
-}
-
-// floor() as a 64-bit integer, saturated: with absurd parameters the simulated machine can run away past
-// the 64-bit range, and converting such a double is undefined (found by the random-values test under UBSan).
-std::int64_t floor64(double v) {
-    if (!(v == v)) return 0;
-    return static_cast<std::int64_t>(std::floor(std::clamp(v, -9.2e18, 9.2e18)));
-}
-
-// std::lround for |v| < 2^52 without the library call (several per servo step): halves away from zero.
-// v - trunc(v) is exact, so the result is the same.
-double round_half_away(double v) {
-    double r = std::trunc(v);
-    const double frac = v - r;
-    if (frac >= 0.5)
-        r += 1.0;
-    else if (frac <= -0.5)
-        r -= 1.0;
-    return r;
-}
-
-std::int32_t sat32(double v) {
-    if (!(v == v)) return 0;
-    v = std::clamp(v, -2147483648.0, 2147483647.0);
-    return static_cast<std::int32_t>(round_half_away(v));
-}
-
-std::int16_t sat16(double v) {
-    if (!(v == v)) return 0;
-    return static_cast<std::int16_t>(round_half_away(std::clamp(v, -32768.0, 32767.0)));
-}
-
-// 10^index for every int8 index, from std::pow once (the interpolation period is read every servo step).
-double pow10_of(std::int8_t index) {
-    static const std::array<double, 256> table = [] {
-        std::array<double, 256> t{};
-        for (int i = -128; i < 128; ++i)
-            t[static_cast<std::size_t>(i + 128)] = std::pow(10.0, i);
-        return t;
-    }();
-    return table[static_cast<std::size_t>(index + 128)];
-}
-
-// Controlword bits of the modes (protocol/cia402.hpp).
-namespace cw = protocol::cia402::cw;
-constexpr std::uint16_t kNewSetpoint = cw::NewSetpoint;
-constexpr std::uint16_t kChangeImmediately = cw::ChangeSetImmediately;
-constexpr std::uint16_t kRelative = cw::Relative;
-constexpr std::uint16_t kHalt = cw::Halt;
-constexpr std::uint16_t kChangeOnSetpoint = cw::ChangeOnSetpoint;
-constexpr std::uint16_t kHomingStart = cw::HomingStart;
 
 }  // namespace
 
@@ -276,11 +198,14 @@ MotorParameters motor_from(const Drive::Objects& o) {
 Drive::Drive(const device::DeviceDescription& d,
              std::shared_ptr<const std::vector<device::ObjectDescription>> objects)
     : CoeApplication(d, std::move(objects)), o_(std::make_unique<Objects>(dictionary())) {
-    read_configuration();
-    const MotorParameters mp = motor_from(*o_);
-    mech_ = std::make_unique<Mechanics>(mp, ControlGains{});
-    inertia_ = mp.rotor_inertia + mp.load_inertia;
-    homing_ = std::make_unique<Homing>();
+    for_each_parameter([this](auto& v, auto&) {
+        if (v.entry()) v.entry()->hooks().writes = &parameter_writes_;
+    });
+    for_each_command([this](auto& v, auto&) {
+        if (v.entry()) v.entry()->hooks().writes = &command_writes_;
+    });
+    core_ = std::make_unique<DriveCore>(motor_from(*o_));
+    configure();
     twin_ = std::make_unique<twinsync::Port>(dictionary(), kServoPeriodNs);
     // Fault injection is refused for codes the drive does not simulate.
     if (o_->simulated_fault.bound())
@@ -293,13 +218,11 @@ Drive::Drive(const device::DeviceDescription& d,
         o_->compensation_start.entry()->hooks().after_download = [this](Entry& e) {
             if (e.get<std::uint8_t>() == 0) return;
             e.set(std::uint8_t{0});
-            // The move now ends at its target plus the achievable part of the compensation.
-            if (profile_.compensate(static_cast<double>(o_->compensation_distance.get_or(0)),
-                                    static_cast<double>(o_->compensation_length.get_or(0))) &&
-                pp_moving_)
-                pp_target_ = profile_.target();
+            core_->compensate(static_cast<double>(o_->compensation_distance.get_or(0)),
+                              static_cast<double>(o_->compensation_length.get_or(0)));
         };
-    update_inputs();
+    read_command();
+    core_->start(io_);
     write_feedback();
 }
 
@@ -333,7 +256,7 @@ void Drive::advance(std::uint64_t now_ns) {
     Drive* partner = twin_partner_;
     const bool first = twin_->end() == 0;
     // The dictionary cannot change while the steps run (frames and SDO requests come in between calls).
-    if (now_ns - sim_ns_ >= kServoPeriodNs) read_configuration();
+    if (now_ns - sim_ns_ >= kServoPeriodNs) configure();
     while (now_ns - sim_ns_ >= kServoPeriodNs) {
         sim_ns_ += kServoPeriodNs;
         if (partner && !first) partner->step_to(sim_ns_);
@@ -349,974 +272,243 @@ void Drive::step_to(std::uint64_t t_ns) {
         return;
     }
     if (t_ns > sim_ns_ + 200'000'000) sim_ns_ = t_ns - 200'000'000;
-    if (sim_ns_ + kServoPeriodNs <= t_ns) read_configuration();
+    if (sim_ns_ + kServoPeriodNs <= t_ns) configure();
     while (sim_ns_ + kServoPeriodNs <= t_ns) {
         sim_ns_ += kServoPeriodNs;
         servo_step();
     }
 }
 
-void Drive::apply_gains() {
-    // 0x2003: a non-zero entry replaces the gain tuned from the motor parameters.
-    ControlGains g = Mechanics::tuned_for(mech_->parameters());
-    auto u = [](const coe::Value<std::uint32_t>& v) { return static_cast<double>(v.get_or(0)); };
-    if (u(o_->gain_position_kp) > 0) g.position_kp = u(o_->gain_position_kp) * 0.01;
-    if (u(o_->gain_velocity_kp) > 0) g.velocity_kp = u(o_->gain_velocity_kp) * 1e-6;
-    if (u(o_->gain_velocity_ti) > 0) g.velocity_ti = u(o_->gain_velocity_ti) * 1e-6;
-    if (u(o_->gain_current_bandwidth) > 0) g.current_bandwidth = u(o_->gain_current_bandwidth);
-    mech_->set_gains(g);
-}
-
-void Drive::read_configuration() {
-    options_.quick_stop = o_->quick_stop_option.get_or(2);
-    options_.shutdown = o_->shutdown_option.get_or(0);
-    options_.disable_operation = o_->disable_operation_option.get_or(1);
-    options_.halt = o_->halt_option.get_or(1);
-    options_.fault_reaction = o_->fault_reaction_option.get_or(2);
-    FactorGroup f;
-    f.encoder_increments = o_->encoder_increments.get_or(f.encoder_increments);
-    f.motor_revolutions = o_->encoder_revolutions.get_or(1);
-    f.gear_motor_revolutions = o_->gear_motor.get_or(1);
-    f.gear_shaft_revolutions = o_->gear_shaft.get_or(1);
-    f.feed = o_->feed.get_or(f.feed);
-    f.feed_shaft_revolutions = o_->feed_shaft.get_or(1);
-    // factors_ only ever holds a valid group, so an unchanged one needs no check.
-    const bool same = f.encoder_increments == factors_.encoder_increments &&
-                      f.motor_revolutions == factors_.motor_revolutions &&
-                      f.gear_motor_revolutions == factors_.gear_motor_revolutions &&
-                      f.gear_shaft_revolutions == factors_.gear_shaft_revolutions &&
-                      f.feed == factors_.feed && f.feed_shaft_revolutions == factors_.feed_shaft_revolutions;
-    if (!same && f.valid()) {
-        factors_ = f;
-        ratios_ = f.ratios();
-    }
-    const double rated = static_cast<double>(o_->rated_torque.get_or(1000)) * 1e-3;  // Nm
-    nm_per_permille_ = rated / 1000.0;
-    // Velocity threshold 0x606F, at least one unit per second.
-    standstill_velocity_ = std::max<double>(o_->velocity_threshold.get_or(10), 1.0);
-}
-
-double Drive::max_velocity() const {
-    double v = static_cast<double>(o_->max_profile_velocity.get_or(0xFFFFFFFFu));
-    // Max motor speed 0x6080 (rpm) converted to user units/s.
-    const double rpm = static_cast<double>(o_->max_motor_speed.get_or(0));
-    if (rpm > 0) v = std::min(v, ratios_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi));
-    return std::max(v, 1.0);
-}
-
-ProfileLimits Drive::profile_limits() const {
-    ProfileLimits l;
-    l.velocity = std::min(static_cast<double>(o_->profile_velocity.get_or(1)), max_velocity());
-    l.acceleration = static_cast<double>(o_->profile_acceleration.get_or(1));
-    l.deceleration = static_cast<double>(o_->profile_deceleration.get_or(1));
-    if (o_->max_acceleration.get_or(0) > 0)
-        l.acceleration = std::min(l.acceleration, static_cast<double>(o_->max_acceleration.get()));
-    if (o_->max_deceleration.get_or(0) > 0)
-        l.deceleration = std::min(l.deceleration, static_cast<double>(o_->max_deceleration.get()));
-    const std::int16_t type = o_->motion_profile_type.get_or(0);
-    l.jerk = type == 0 ? 0.0 : static_cast<double>(o_->profile_jerk.get_or(0));
-    return l;
-}
-
-double Drive::interpolation_period() const {
-    const double value = o_->interpolation_value.get_or(1);
-    const std::int8_t index = o_->interpolation_index.get_or(-3);
-    const double t = value * pow10_of(index);
-    return t > 0 ? std::max(t, kServoPeriodNs * 1e-9) : 1e-3;
-}
-
-bool Drive::software_limits_enabled() const {
-    const auto lo = o_->software_limit_min.get_or(std::numeric_limits<std::int32_t>::min());
-    const auto hi = o_->software_limit_max.get_or(std::numeric_limits<std::int32_t>::max());
-    return lo < hi;
-}
-
-double Drive::clamp_to_software_limits(double p) const {
-    if (!software_limits_enabled()) return p;
-    const double lo = o_->software_limit_min.get_or(0);
-    const double hi = o_->software_limit_max.get_or(0);
-    return std::clamp(p, lo, hi);
-}
-
-double Drive::machine_increments() const {
-    return mech_->position() / (2.0 * std::numbers::pi) * ratios_.per_revolution;
-}
-
-void Drive::update_inputs() {
-    // Machine position in increments (homing does not move it).
-    const double inc = machine_increments();
-    negative_limit_ = inc <= o_->negative_limit_switch.get_or(std::numeric_limits<std::int32_t>::min());
-    positive_limit_ = inc >= o_->positive_limit_switch.get_or(std::numeric_limits<std::int32_t>::max());
-    home_switch_ = inc >= o_->home_switch.get_or(std::numeric_limits<std::int32_t>::max());
-    probe_inputs_ = o_->probe_inputs.get_or(0);
-    std::uint32_t di = 0;
-    if (negative_limit_) di |= 1u << 0;
-    if (positive_limit_) di |= 1u << 1;
-    if (home_switch_) di |= 1u << 2;
-    if (probe_inputs_ & 1) di |= 1u << 16;  // manufacturer bits: touch probe inputs 1 and 2
-    if (probe_inputs_ & 2) di |= 1u << 17;
-    o_->digital_inputs.set(di);
-}
-
-void Drive::enter_fault(std::uint16_t code, std::uint8_t bits) {
-    if (active_fault_ != 0) return;
-    active_fault_ = code;
-    raise_fault(code, bits);
-}
-
-void Drive::check_faults(double dt) {
-    const std::uint16_t injected = o_->simulated_fault.get_or(0);
-    // Encoder and over-current faults are injected into the mechanics, which the drive then monitors
-    // (the encoder freezes; the power stage reports over-current, also from its I2t protection).
-    mech_->inject_encoder_fault(injected == fault::Encoder);
-    mech_->inject_overcurrent(injected == fault::OverCurrent);
-    if (mech_->overcurrent()) enter_fault(fault::OverCurrent, coe::error_register::Current);
-    if (!mech_->encoder_ok()) enter_fault(fault::Encoder, coe::error_register::Manufacturer);
-    if (injected == fault::FollowingError)
-        enter_fault(fault::FollowingError, coe::error_register::DeviceProfile);
-    if (injected == fault::ReferenceLimit)
-        enter_fault(fault::ReferenceLimit, coe::error_register::DeviceProfile);
-
-    // Following error (position loop): window 0xFFFFFFFF switches the monitoring off.
-    const std::uint32_t window = o_->following_error_window.get_or(0xFFFFFFFFu);
-    const double timeout = o_->following_error_timeout.get_or(0) * 1e-3;
-    if (loop_ == LoopMode::Position && window != 0xFFFFFFFFu && std::abs(following_error_) > window) {
-        following_error_time_ += dt;
-        if (following_error_time_ > timeout)
-            enter_fault(fault::FollowingError, coe::error_register::DeviceProfile);
-    } else {
-        following_error_time_ = 0;
-    }
-    // Limit switch with reaction "fault".
-    if (o_->limit_switch_reaction.get_or(0) == 1 && sm_.drive_enabled() && mode_ != Mode::Homing &&
-        (negative_limit_ || positive_limit_))
-        enter_fault(fault::ReferenceLimit, coe::error_register::DeviceProfile);
-}
-
-void Drive::on_mode_change() {
-    continuing_ = false;
-    // A new mode starts from where the axis is.
-    profile_.reset({actual_user_, velocity_user_, 0.0});
-    demand_ = {actual_user_, velocity_user_, 0.0};
-    pp_moving_ = false;
-    pending_target_.reset();
-    setpoint_ack_ = false;
-    csp_valid_ = false;
-    pv_running_ = false;
-    torque_cmd_ = 0;
-    homing_bits_ = 0;
-    homing_active_ = homing_error_ = false;
-    homing_velocity_ = 0;
-    homing_->abort();
-}
-
-void Drive::hold_disabled() {
-    // No torque: the demand follows the actual position, so enabling starts without a jump.
-    loop_ = LoopMode::Off;
-    demand_ = {actual_user_, velocity_user_, 0.0};
-    profile_.reset(demand_);
-    velocity_cmd_ = 0;
-    torque_cmd_ = 0;
-    torque_ff_ = 0;
-    pp_moving_ = false;
-    pending_target_.reset();
-    csp_valid_ = false;
-    pv_running_ = false;
-}
-
-void Drive::run_stop(StopKind k, double dt) {
-    if (k == StopKind::Coast) {
-        hold_disabled();
-        return;
-    }
-    if (k == StopKind::CurrentLimit || k == StopKind::VoltageLimit) {
-        // Brake at the torque limit: velocity loop with a zero set-point.
-        loop_ = LoopMode::Velocity;
-        velocity_cmd_ = 0;
-        torque_ff_ = 0;
-        demand_ = {actual_user_, 0.0, 0.0};
-        profile_.reset(demand_);
-        return;
-    }
-    const double dec =
-        static_cast<double>(k == StopKind::QuickStopRamp ? o_->quick_stop_deceleration.get_or(1)
-                                                         : o_->profile_deceleration.get_or(1));
-    if (stopping_ != k) {
-        // Starts from the current demand in position modes, from the actual motion otherwise. A slave that
-        // followed TWINsync has a demand the profile never made: it brakes from its actual motion too
-        // (the profile left from its enable would make the ramp jump back there).
-        if (loop_ != LoopMode::Position || coupled_) profile_.reset({actual_user_, velocity_user_, 0.0});
-        profile_.stop(std::max(dec, 1.0), profile_limits().jerk);
-        stopping_ = k;
-    }
-    demand_ = profile_.step(dt);
-    loop_ = LoopMode::Position;
-    velocity_cmd_ = demand_.v;
-    torque_ff_ = 0;
-}
-
+// One servo period: the TWINsync telegram of the partner's last cycle (its receive mapping writes
+// parameters), the set-points, the core's step, the feedback, and this drive's telegram.
 void Drive::servo_step() {
-    const double dt = kServoPeriodNs * 1e-9;
-    ++steps_;
-    const std::uint16_t own_controlword = o_->controlword.get_or(0);
-    controlword_ = own_controlword;
-
-    // TWINsync: the telegram of the partner drive's last cycle. A slave controlled through TWINsync obeys
-    // the master drive's control word (P2611) instead of 0x6040.
-    // (The drive's own state matters to the port only while TWINsync is on.)
-    twin_->receive(sim_ns_, twin_->active() ? twinsync_local() : twinsync::LocalState{});
-    previous_twin_control_ = twin_control_;
-    twin_control_ = twin_->received_control_word();
-    if (twin_->controlled_by_twinsync() && twin_->has_data())
-        controlword_ = twinsync::cia402_from_control_word(twin_control_);
-    // A master drive switches on its control once its slave is in state Control (unless P2651 bit 2).
-    if (twin_->active() && twin_->role() == twinsync::Role::Master && twin_->link_ok() &&
-        twin_->partner().mode == twinsync::Role::Slave && !twin_->partner_enabled() &&
-        !(o_->tw_config.get_or(0) & twinsync::kConfigNoSlaveStateCheck) &&
-        sm_.state() != State::OperationEnabled)
-        controlword_ = static_cast<std::uint16_t>(controlword_ & ~cw::EnableOperation);
-
-    update_inputs();
-    check_faults(dt);
-    // TWINsync errors become faults in state Control (chapter 7).
-    if (const auto e = twin_->pending_error(); e && sm_.state() == State::OperationEnabled)
-        enter_twinsync_fault(*e);
-
-    const State before = sm_.state();
-    const bool twin_cause = twin_error_ && twin_->pending_error() == twin_error_;
-    const bool fault_present =
-        active_fault_ != 0 && (o_->simulated_fault.get_or(0) != 0 || mech_->overcurrent() ||
-                               !mech_->encoder_ok() || twin_cause || sm_.state() != State::Fault);
-    const bool at_rest =
-        std::abs(velocity_user_) <= standstill_velocity() && (loop_ != LoopMode::Position || profile_.done());
-    sm_.update(controlword_, fault_present, at_rest, options_);
-    const State now = sm_.state();
-    if (now != before) {
-        if (before == State::Fault && now == State::SwitchOnDisabled) {
-            active_fault_ = 0;
-            twin_error_.reset();
-            twin_->set_error(std::nullopt);
-            clear_faults();
-        }
-        if (now == State::OperationEnabled) {
-            apply_gains();
-            on_mode_change();
-        }
-    }
-    if (sm_.stop() == StopKind::None) stopping_ = StopKind::None;
-
-    // Velocity override (TwinCAT NC PTP online change) of the profile modes, in ppm of 100 %.
-    const std::uint32_t ov = std::min<std::uint32_t>(o_->velocity_override.get_or(1'000'000), 1'000'000);
-    if (ov != override_ppm_) {
-        override_ppm_ = ov;
-        profile_.set_override(ov * 1e-6);
-    }
-
-    // Modes of operation: a supported mode takes effect at once; 0x6061 shows it.
-    const auto requested = static_cast<Mode>(o_->modes.get_or(0));
-    if (requested != mode_ && supported(requested)) {
-        mode_ = requested;
-        on_mode_change();
-    }
-
-    internal_limit_ = false;
-    const bool follow = twin_->follows() && twin_->has_data();
-    if (coupled_ && !follow) {
-        // Decoupled: in motion, the axis goes on as if it were still coupled until it is stopped.
-        coupled_ = false;
-        if (sm_.following_setpoints() && std::abs(demand_.v) > standstill_velocity()) {
-            continuing_ = true;
-            continue_halting_ = false;
-            continue_velocity_ = demand_.v;
-            continue_target_position_ = o_->target_position.get_or(0);
-            continue_target_velocity_ = o_->target_velocity.get_or(0);
-        }
-    }
-    if (!sm_.drive_enabled()) {
-        hold_disabled();
-        coupled_ = continuing_ = false;
-    } else if (sm_.stop() != StopKind::None) {
-        run_stop(sm_.stop(), dt);
-        coupled_ = continuing_ = false;
-    } else if (follow) {
-        run_twinsync(dt);
-    } else if (continuing_) {
-        run_decoupled(dt);
-    } else {
-        run_mode(dt);
-    }
-    if (mode_ == Mode::Homing && (homing_bits_ & sw::Bit12) && !(homing_bits_ & sw::Bit13)) homed_ = true;
-
-    // The loops and the mechanics.
-    const double torque_limit_pos =
-        std::min(o_->max_torque.get_or(3000), o_->positive_torque_limit.get_or(3000)) * nm_per_permille();
-    const double torque_limit_neg =
-        std::min(o_->max_torque.get_or(3000), o_->negative_torque_limit.get_or(3000)) * nm_per_permille();
-    mech_->set_torque_limits(torque_limit_pos, torque_limit_neg);
-    mech_->set_load_torque(o_->load_torque.get_or(0) * nm_per_permille());
-    const double inertia = inertia_;
-    switch (loop_) {
-        case LoopMode::Off:
-            mech_->command(LoopMode::Off, 0, 0, 0);
-            break;
-        case LoopMode::Position:
-            mech_->command(LoopMode::Position, user_to_rad(demand_.p), user_velocity_to_rad(demand_.v),
-                           inertia * user_velocity_to_rad(demand_.a) + torque_ff_ * nm_per_permille());
-            break;
-        case LoopMode::Velocity:
-            mech_->command(LoopMode::Velocity, 0, user_velocity_to_rad(velocity_cmd_),
-                           torque_ff_ * nm_per_permille());
-            break;
-        case LoopMode::Torque:
-            mech_->command(LoopMode::Torque, 0, 0, torque_cmd_ * nm_per_permille());
-            break;
-    }
-    const double previous_inc = previous_machine_inc_;
-    mech_->step(dt);
-    const double machine_inc = machine_increments();
-    previous_machine_inc_ = machine_inc;
-    increments_ = floor64(machine_inc);
-    actual_user_ = static_cast<double>(ratios_.increments_to_user(increments_)) + home_shift_;
-    velocity_user_ = ratios_.radians_to_user(mech_->velocity());
-    if (loop_ != LoopMode::Position)
-        demand_ = {actual_user_, loop_ == LoopMode::Velocity ? velocity_cmd_ : velocity_user_, 0.0};
-    following_error_ = loop_ == LoopMode::Position ? demand_.p - actual_user_ : 0.0;
-
-    run_touch_probe(previous_inc, machine_inc);
+    twin_->receive(sim_ns_, twinsync_local());
+    // (A receive mapping may write parameters, the manufacturer objects 0x2000 + P: read again.)
+    if (parameter_writes_ != parameters_read_) read_parameters();
+    if (command_writes_ != command_read_) read_command();
+    read_twinsync();
+    core_->step(io_);
     write_feedback();
-    // The TWINsync values every cycle while the link is on; otherwise only for SDO reads, every 4 ms.
-    if (twin_->active() || steps_ % 16 == 0) write_twinsync_values();
-    twinsync::LocalState local;
-    if (twin_->active()) {
-        local = twinsync_local();
-        local.controlword = own_controlword;
-    }
-    twin_->transmit(sim_ns_, local);
-    previous_controlword_ = controlword_;
+    twin_->set_error(core_->twinsync_error());
+    twin_->transmit(sim_ns_, twinsync_local());
 }
 
-namespace {
-
-// The MSD display numbers the DriveCom states from 1 in the order of CiA 402's (0 is its start-up).
-twinsync::DriveComState drivecom_state(State s) {
-    static_assert(static_cast<int>(State::NotReadyToSwitchOn) + 1 ==
-                      static_cast<int>(twinsync::DriveComState::NotReadyToSwitchOn) &&
-                  static_cast<int>(State::OperationEnabled) + 1 ==
-                      static_cast<int>(twinsync::DriveComState::OperationEnabled) &&
-                  static_cast<int>(State::Fault) + 1 == static_cast<int>(twinsync::DriveComState::Fault));
-    return static_cast<twinsync::DriveComState>(static_cast<std::uint8_t>(s) + 1);
-}
-
-double rpm_of_rad(double rad_per_s) {
-    return rad_per_s * 60.0 / (2.0 * std::numbers::pi);
-}
-
-// A value as a 16-bit fraction of its reference (section 4.1.6: -reference..+reference = -32768..32767).
-std::int16_t scaled16(double value, double reference) {
-    if (!(reference > 0)) return 0;
-    return static_cast<std::int16_t>(
-        std::clamp(std::llround(value / reference * 32768.0), -32768ll, 32767ll));
-}
-
-}  // namespace
-
+// The drive's state for its option card (only while TWINsync is on).
 twinsync::LocalState Drive::twinsync_local() const {
-    twinsync::LocalState l;
-    l.state = drivecom_state(sm_.state());
-    l.fault = sm_.state() == State::Fault || sm_.state() == State::FaultReactionActive;
-    l.homed = homed_;
-    l.transition = sm_.stop() != StopKind::None;
-    l.controlword = o_->controlword.get_or(0);
-    l.homing_mode = mode_ == Mode::Homing;
-    l.fieldbus_synchronised = sync_mode() == coe::SyncMode::DcSync0 || sync_mode() == coe::SyncMode::DcSync1;
-    l.position = actual_user_;
-    l.speed_rpm = rpm_of_rad(mech_->velocity());
-    l.torque_nm = mech_->torque();
-    l.rated_torque_nm = nm_per_permille() * 1000.0;
-    return l;
+    if (!twin_->active()) return {};
+    return core_->twinsync_local(o_->controlword.get_or(0), io_.parameters.fieldbus_synchronised);
 }
 
-void Drive::write_twinsync_values() {
-    const double torque_ref = static_cast<double>(o_->tw_local_torque_ref.get_or(1.0f));
-    const double speed_ref = static_cast<double>(o_->tw_local_speed_ref.get_or(1.0f));
-    const double act_rpm = rpm_of_rad(mech_->velocity());
-    const double demand_v = loop_ == LoopMode::Velocity ? velocity_cmd_ : demand_.v;
-    const double ref_rpm = rpm_of_rad(user_velocity_to_rad(demand_v));
-    const double ref_torque = loop_ == LoopMode::Torque ? torque_cmd_ * nm_per_permille() : mech_->torque();
-    o_->tw_local_ref_torque.set(scaled16(ref_torque, torque_ref));
-    o_->tw_local_act_torque.set(scaled16(mech_->torque(), torque_ref));
-    o_->tw_torque_actual_scaled.set(scaled16(mech_->torque(), torque_ref));
-    o_->tw_local_ref_speed.set(scaled16(ref_rpm, speed_ref));
-    o_->tw_local_ff_speed.set(scaled16(ref_rpm, speed_ref));
-    o_->tw_local_act_speed.set(scaled16(act_rpm, speed_ref));
-    o_->tw_speed_actual_rpm.set(static_cast<float>(act_rpm));
-    o_->tw_speed_setpoint_rpm.set(static_cast<float>(ref_rpm));
-    o_->tw_local_ref_pos.set(wrap32(static_cast<std::int64_t>(std::llround(demand_.p))));
-    const std::int32_t act = wrap32(static_cast<std::int64_t>(std::floor(actual_user_)));
-    o_->tw_local_act_pos.set(act);
-    o_->tw_position_actual.set(act);
-    // Single-turn angle of the motor, 16 bit (the virtual encoder's raw value).
-    const double per_rev = ratios_.per_revolution;
-    const double turn = std::fmod(machine_increments(), per_rev) / per_rev;
-    o_->tw_local_eps.set(
-        static_cast<std::uint16_t>(std::llround((turn < 0 ? turn + 1.0 : turn) * 65536.0) & 0xFFFF));
-    // P2650: the drive's own current error, unless the receive mapping brings the slave's (TWD, SCON,
-    // PCON, VE masters: "interpreted as the error of the slave drive").
-    if (!twin_->receives(twinsync::p::CurrentError)) {
-        std::uint16_t number = 0, location = 0;
-        if (twin_error_) {
-            number = twin_error_->number;
-            location = twin_error_->location;
-        } else if (active_fault_ != 0) {
-            number = static_cast<std::uint16_t>(active_fault_ >> 8);
-            location = static_cast<std::uint16_t>(active_fault_ & 0xFF);
+// Every parameter of the DriveIo with its handle, once: read_parameters() copies them, the constructor
+// watches them (a write through Entry::set/assign counts in parameter_writes_), configure() finds those
+// mapped into the RxPDOs.
+template <class F>
+void Drive::for_each_parameter(F&& f) {
+    Objects& o = *o_;
+    DriveParameters& p = io_.parameters;
+    f(o.quick_stop_option, p.options.quick_stop);
+    f(o.shutdown_option, p.options.shutdown);
+    f(o.disable_operation_option, p.options.disable_operation);
+    f(o.halt_option, p.options.halt);
+    f(o.fault_reaction_option, p.options.fault_reaction);
+    f(o.encoder_increments, p.factors.encoder_increments);
+    f(o.encoder_revolutions, p.factors.motor_revolutions);
+    f(o.gear_motor, p.factors.gear_motor_revolutions);
+    f(o.gear_shaft, p.factors.gear_shaft_revolutions);
+    f(o.feed, p.factors.feed);
+    f(o.feed_shaft, p.factors.feed_shaft_revolutions);
+    f(o.rated_current, p.rated_current);
+    f(o.rated_torque, p.rated_torque);
+    f(o.following_error_window, p.following_error_window);
+    f(o.following_error_timeout, p.following_error_timeout);
+    f(o.position_window, p.position_window);
+    f(o.position_window_time, p.position_window_time);
+    f(o.velocity_window, p.velocity_window);
+    f(o.velocity_window_time, p.velocity_window_time);
+    f(o.velocity_threshold, p.velocity_threshold);
+    f(o.velocity_threshold_time, p.velocity_threshold_time);
+    f(o.max_torque, p.max_torque);
+    f(o.positive_torque_limit, p.positive_torque_limit);
+    f(o.negative_torque_limit, p.negative_torque_limit);
+    f(o.max_profile_velocity, p.max_profile_velocity);
+    f(o.max_motor_speed, p.max_motor_speed);
+    f(o.profile_velocity, p.profile_velocity);
+    f(o.profile_acceleration, p.profile_acceleration);
+    f(o.profile_deceleration, p.profile_deceleration);
+    f(o.quick_stop_deceleration, p.quick_stop_deceleration);
+    f(o.max_acceleration, p.max_acceleration);
+    f(o.max_deceleration, p.max_deceleration);
+    f(o.motion_profile_type, p.motion_profile_type);
+    f(o.profile_jerk, p.profile_jerk);
+    f(o.torque_slope, p.torque_slope);
+    f(o.software_limit_min, p.software_limit_min);
+    f(o.software_limit_max, p.software_limit_max);
+    f(o.home_offset, p.home_offset);
+    f(o.homing_method, p.homing_method);
+    f(o.homing_speed_switch, p.homing_speed_switch);
+    f(o.homing_speed_zero, p.homing_speed_zero);
+    f(o.homing_acceleration, p.homing_acceleration);
+    f(o.interpolation_value, p.interpolation_value);
+    f(o.interpolation_index, p.interpolation_index);
+    f(o.gain_position_kp, p.gain_position_kp);
+    f(o.gain_velocity_kp, p.gain_velocity_kp);
+    f(o.gain_velocity_ti, p.gain_velocity_ti);
+    f(o.gain_current_bandwidth, p.gain_current_bandwidth);
+    f(o.negative_limit_switch, p.negative_limit_switch);
+    f(o.positive_limit_switch, p.positive_limit_switch);
+    f(o.home_switch, p.home_switch);
+    f(o.index_pulse_offset, p.index_pulse_offset);
+    f(o.load_torque, p.load_torque);
+    f(o.probe_inputs, p.probe_inputs);
+    f(o.limit_switch_reaction, p.limit_switch_reaction);
+    f(o.simulated_fault, p.simulated_fault);
+    f(o.velocity_override, p.velocity_override);
+    // The local TWINsync references (P2602), written with the parameters.
+    f(o.tw_local_torque_ref, io_.twinsync.local_torque_reference);
+    f(o.tw_local_speed_ref, io_.twinsync.local_speed_reference);
+}
+
+void Drive::read_parameters() {
+    parameters_read_ = parameter_writes_;
+    // An absent object leaves the field at its default (drive_io.hpp); an absent software limit is empty.
+    for_each_parameter([]<class T, class V>(const coe::Value<T>& v, V& field) {
+        if constexpr (std::is_same_v<V, std::optional<T>>) {
+            if (v.bound()) field = v.get();
+        } else {
+            field = v.get_or(field);
         }
-        o_->tw_error_number.set(number);
-        o_->tw_error_location.set(location);
-    }
+    });
 }
 
-void Drive::enter_twinsync_fault(twinsync::ErrorId e) {
-    if (active_fault_ != 0) return;
-    // 0x603F: serial interface 2 for the link (40-xx) and the other axis (39-02); the speed and torque
-    // monitoring of the gantry as velocity and torque control faults. The emergency's manufacturer bytes
-    // carry the MSD error number and location.
-    std::uint16_t code = 0x7520;
-    std::uint8_t bits = coe::error_register::Communication | coe::error_register::Manufacturer;
-    if (e == twinsync::error::SpeedDifference) {
-        code = 0x8400;
-        bits = coe::error_register::Manufacturer;
-    } else if (e == twinsync::error::TorqueDifference) {
-        code = 0x8300;
-        bits = coe::error_register::Manufacturer;
+void Drive::configure() {
+    // Process data outputs write the entries they map without Entry::set: the command, and a parameter
+    // mapped into the RxPDOs, count as written whenever the outputs were copied.
+    const coe::ProcessDataMap& pd = process_data();
+    if (pd.mapping_changes() != mapping_seen_) {
+        mapping_seen_ = pd.mapping_changes();
+        maps_parameters_ = false;
+        for_each_parameter([&](auto& v, auto&) {
+            if (v.entry() && pd.is_rx_mapped(*v.entry())) maps_parameters_ = true;
+        });
     }
-    active_fault_ = code;
-    twin_error_ = e;
-    twin_->set_error(e);
-    raise_fault(code, bits, {e.number, e.location, 0, 0, 0});
+    if (pd.outputs_copied() != outputs_seen_) {
+        outputs_seen_ = pd.outputs_copied();
+        ++command_writes_;
+        if (maps_parameters_) ++parameter_writes_;
+    }
+    // The parameters only when one was written since they were read.
+    if (parameter_writes_ != parameters_read_) read_parameters();
+    io_.parameters.fieldbus_synchronised =
+        sync_mode() == coe::SyncMode::DcSync0 || sync_mode() == coe::SyncMode::DcSync1;
+    core_->configure(io_);
 }
 
-void Drive::hold_for_coupling() {
-    loop_ = LoopMode::Position;
-    demand_.v = demand_.a = 0;
-    torque_ff_ = 0;
+template <class F>
+void Drive::for_each_command(F&& f) {
+    Objects& o = *o_;
+    DriveCommand& c = io_.command;
+    f(o.controlword, c.controlword);
+    f(o.modes, c.mode);
+    f(o.target_position, c.target_position);
+    f(o.target_velocity, c.target_velocity);
+    f(o.target_torque, c.target_torque);
+    f(o.position_offset, c.position_offset);
+    f(o.velocity_offset, c.velocity_offset);
+    f(o.torque_offset, c.torque_offset);
+    f(o.probe_function, c.probe_function);
 }
 
-void Drive::run_twinsync(double dt) {
-    (void)dt;
-    using twinsync::Follow;
-    using twinsync::Setting;
-    const auto* m = twin_->mode();
-    Follow f = m->follow;
-    if (f == Follow::ByControlMode) {
-        const auto cm = o_->tw_control_mode.get_or(3);
-        f = cm == 1 ? Follow::Torque : cm == 2 ? Follow::Speed : Follow::PositionAbsolute;
-    }
-    const bool user = m->follow == Follow::ByControlMode;
-    const double inv = o_->tw_inverted.get_or(1) < 0 ? -1.0 : 1.0;
-    const double remote_speed_ref = static_cast<double>(o_->tw_remote_speed_ref.get_or(1.0f));
-    const double remote_torque_ref = static_cast<double>(o_->tw_remote_torque_ref.get_or(1.0f));
-    using I16 = coe::Value<std::int16_t>;
-    auto speed = [&](const I16& e) { return e.get_or(0) / 32768.0 * remote_speed_ref; };    // rpm
-    auto torque = [&](const I16& e) { return e.get_or(0) / 32768.0 * remote_torque_ref; };  // Nm
-    auto rpm_to_user = [&](double rpm) {
-        return ratios_.radians_to_user(rpm / 60.0 * 2.0 * std::numbers::pi);
-    };
-    const double still = standstill_velocity();
-    // The master's speed arrives as a 16-bit fraction of P2609: standstill within two of its steps.
-    const double still_remote = std::max(still, 2.0 * std::abs(rpm_to_user(remote_speed_ref / 32768.0)));
-    torque_ff_ = 0;
-    cyclic_following_ =
-        true;  // statusword bit 12 of the cyclic modes: the drive follows (TWINsync's) command
-
-    switch (f) {
-        case Follow::PositionAbsolute: {
-            // IP: the master's actual position; REFPOS and GANTRY (and USER/EXT_MAP): its set-point.
-            const bool ip = m->setting == Setting::PconIpSlave;
-            const double master = (ip ? o_->tw_remote_act_pos : o_->tw_remote_ref_pos).get_or(0);
-            const double ff_rpm = m->setting == Setting::PconGantrySlave
-                                      ? static_cast<double>(o_->tw_act_speed_master.get_or(0))
-                                      : speed(ip ? o_->tw_remote_act_speed : o_->tw_remote_ref_speed);
-            const double v = inv * rpm_to_user(ff_rpm);
-            if (!coupled_) {
-                // Coupling only at standstill of both axes.
-                if (std::abs(v) > still_remote || std::abs(velocity_user_) > still)
-                    return hold_for_coupling();
-                coupled_ = true;
-            }
-            demand_ = {clamp_to_software_limits(inv * master), v, 0.0};
-            loop_ = LoopMode::Position;
-            if (m->setting == Setting::PconGantrySlave)
-                torque_ff_ = inv * torque(o_->tw_remote_act_torque) / nm_per_permille();
-            break;
-        }
-        case Follow::PositionDelta: {
-            // PCON: increments of the master's actual position, corrected by the resolution factors
-            // (P0270/P2652), geared (P2653/P2654), reversed by P2583, integrated onto the coupling position.
-            const std::int32_t master = o_->tw_remote_act_pos.get_or(0);
-            const double k = inv * static_cast<double>(o_->tw_local_resolution.get_or(1)) /
-                             std::max<double>(o_->tw_remote_resolution.get_or(1), 1.0) *
-                             static_cast<double>(o_->tw_gear_numerator.get_or(1)) /
-                             std::max<double>(o_->tw_gear_denominator.get_or(1), 1.0);
-            const double v = k * rpm_to_user(speed(o_->tw_remote_act_speed));
-            if (!coupled_) {
-                if (std::abs(v) > still_remote || std::abs(velocity_user_) > still)
-                    return hold_for_coupling();
-                coupled_ = true;
-                twin_master_last_ = master;
-            }
-            const auto delta = static_cast<std::int32_t>(static_cast<std::uint32_t>(master) -
-                                                         static_cast<std::uint32_t>(twin_master_last_));
-            twin_master_last_ = master;
-            double p = demand_.p + k * delta;
-            // Re-synchronisation (P2611 bit 12, rising): the slave takes the master position itself.
-            if ((twin_control_ & twinsync::control::ReSyncPosition) &&
-                !(previous_twin_control_ & twinsync::control::ReSyncPosition))
-                p = k * master;
-            demand_ = {clamp_to_software_limits(p), v, 0.0};
-            loop_ = LoopMode::Position;
-            break;
-        }
-        case Follow::Speed:
-        case Follow::SpeedTorquePrecontrol: {
-            double rpm = inv * speed(user ? o_->tw_remote_ref_speed : o_->tw_remote_act_speed);
-            if (m->setting == Setting::TwdSlaveV1) {
-                // Speed-up: P2584 % of the main set-point, at least P2585, signed as the master's torque.
-                const double master_torque = torque(o_->tw_remote_act_torque);
-                double add = std::abs(rpm) * static_cast<double>(o_->tw_speed_up.get_or(0)) / 100.0;
-                add = std::max(add, static_cast<double>(o_->tw_speed_up_min.get_or(0)));
-                if (master_torque != 0) rpm += master_torque > 0 ? add : -add;
-            }
-            velocity_cmd_ = std::clamp(rpm_to_user(rpm), -max_velocity(), max_velocity());
-            if (f == Follow::SpeedTorquePrecontrol)
-                torque_ff_ = inv * torque(o_->tw_remote_act_torque) / nm_per_permille();
-            loop_ = LoopMode::Velocity;
-            demand_ = {actual_user_, velocity_cmd_, 0.0};
-            coupled_ = true;
-            break;
-        }
-        case Follow::Torque:
-            torque_cmd_ = inv * torque(o_->tw_remote_ref_torque) / nm_per_permille();
-            loop_ = LoopMode::Torque;
-            coupled_ = true;
-            break;
-        case Follow::None:
-        case Follow::ByControlMode:
-            break;
-    }
+void Drive::read_command() {
+    command_read_ = command_writes_;
+    // An absent object leaves the field at its default.
+    for_each_command([](const auto& v, auto& field) { field = v.get_or(field); });
 }
 
-void Drive::run_decoupled(double dt) {
-    // A new set-point, a new target or a new mode ends the decoupled motion; halt stops it.
-    const bool new_setpoint = (controlword_ & kNewSetpoint) && !(previous_controlword_ & kNewSetpoint);
-    if (new_setpoint || o_->target_position.get_or(0) != continue_target_position_ ||
-        o_->target_velocity.get_or(0) != continue_target_velocity_) {
-        continuing_ = false;
-        on_mode_change();
-        run_mode(dt);
-        return;
-    }
-    loop_ = LoopMode::Position;
-    torque_ff_ = 0;
-    if (controlword_ & kHalt) {
-        if (!continue_halting_) {
-            profile_.reset(demand_);
-            profile_.stop(std::max<double>(o_->profile_deceleration.get_or(1), 1.0), profile_limits().jerk);
-            continue_halting_ = true;
-        }
-        demand_ = profile_.step(dt);
-        if (profile_.done()) continuing_ = false;
-        return;
-    }
-    demand_ = {demand_.p + continue_velocity_ * dt, continue_velocity_, 0.0};
-}
-
-void Drive::run_mode(double dt) {
-    halted_ = (controlword_ & kHalt) && mode_ != Mode::CyclicTorque && mode_ != Mode::ProfileTorque;
-    switch (mode_) {
-        case Mode::ProfilePosition:
-            run_profile_position(dt);
-            break;
-        case Mode::ProfileVelocity:
-            run_profile_velocity(dt);
-            break;
-        case Mode::ProfileTorque:
-            run_torque(dt, true);
-            break;
-        case Mode::Homing:
-            run_homing(dt);
-            break;
-        case Mode::CyclicPosition:
-            run_cyclic_position(dt);
-            break;
-        case Mode::CyclicVelocity:
-            run_cyclic_velocity(dt);
-            break;
-        case Mode::CyclicTorque:
-            run_torque(dt, false);
-            break;
-        default:
-            // No mode selected yet: hold the position.
-            loop_ = LoopMode::Position;
-            demand_.v = demand_.a = 0;
-            break;
-    }
-}
-
-bool Drive::blocked(double direction) const {
-    // A hardware limit switch blocks motion towards it (motion away from it is allowed).
-    return (direction > 0 && positive_limit_) || (direction < 0 && negative_limit_);
-}
-
-void Drive::start_move(double target) {
-    pp_target_ = target;
-    pp_moving_ = true;
-    profile_.move_to(target, profile_limits());
-}
-
-void Drive::run_profile_position(double dt) {
-    const bool edge = (controlword_ & kNewSetpoint) && !(previous_controlword_ & kNewSetpoint);
-    if (edge && !pending_target_) {
-        double target = static_cast<double>(o_->target_position.get_or(0));
-        if (controlword_ & kRelative) target += pp_target_;
-        const double clamped = clamp_to_software_limits(target);
-        if (clamped != target) internal_limit_ = true;
-        setpoint_ack_ = true;
-        if (!blocked(clamped - actual_user_)) {
-            if (!pp_moving_ || (controlword_ & kChangeImmediately) || halted_)
-                start_move(clamped);
-            else
-                pending_target_ = clamped;  // set of set-points: executed after the current one
-        }
-    }
-    // Set-point acknowledge: cleared once the master took bit 4 back and the buffer is free again.
-    if (!(controlword_ & kNewSetpoint) && !pending_target_) setpoint_ack_ = false;
-
-    if (halted_) {
-        run_stop(stop_for(StopOption::Halt, options_), dt);
-        return;
-    }
-    if (stopping_ != StopKind::None) {
-        // Halt released: continue to the target.
-        stopping_ = StopKind::None;
-        if (pp_moving_) start_move(pp_target_);
-    }
-    if (pending_target_ && (controlword_ & kChangeOnSetpoint)) {
-        // Change on set-point: go on to the next target without stopping at this one.
-        start_move(*pending_target_);
-        pending_target_.reset();
-    }
-    // A hardware limit switch in the direction of travel stops the move.
-    if (pp_moving_ && blocked(demand_.v) && stopping_ == StopKind::None) {
-        profile_.stop(static_cast<double>(std::max<std::uint32_t>(o_->quick_stop_deceleration.get_or(1), 1)),
-                      profile_limits().jerk);
-        pp_target_ = profile_.target();
-        pp_moving_ = false;
-        pending_target_.reset();
-    }
-    loop_ = LoopMode::Position;
-    torque_ff_ = 0;
-    demand_ = profile_.step(dt);
-    if (pp_moving_ && profile_.done()) {
-        pp_moving_ = false;
-        if (pending_target_) {
-            start_move(*pending_target_);
-            pending_target_.reset();
-        }
-    }
-    if (positive_limit_ || negative_limit_) internal_limit_ = true;
-    if (software_limits_enabled() && (actual_user_ <= o_->software_limit_min.get_or(0) ||
-                                      actual_user_ >= o_->software_limit_max.get_or(0)))
-        internal_limit_ = true;
-}
-
-void Drive::run_profile_velocity(double dt) {
-    double target = static_cast<double>(o_->target_velocity.get_or(0));
-    target = std::clamp(target, -max_velocity(), max_velocity());
-    if (halted_) {
-        run_stop(stop_for(StopOption::Halt, options_), dt);
-        if (loop_ == LoopMode::Position) {
-            loop_ = LoopMode::Velocity;
-            velocity_cmd_ = demand_.v;
-        }
-        pv_running_ = false;
-        return;
-    }
-    if (blocked(target)) {
-        internal_limit_ = true;
-        target = 0;
-    }
-    if (stopping_ != StopKind::None || target != pv_target_ || !pv_running_) {
-        if (stopping_ != StopKind::None) profile_.reset({actual_user_, velocity_user_, 0.0});
-        stopping_ = StopKind::None;
-        ProfileLimits l = profile_limits();
-        profile_.run_at(target, l);
-        pv_target_ = target;
-        pv_running_ = true;
-    }
-    const Kinematics k = profile_.step(dt);
-    loop_ = LoopMode::Velocity;
-    velocity_cmd_ = k.v;
-    torque_ff_ = inertia_ * user_velocity_to_rad(k.a) / nm_per_permille();
-}
-
-void Drive::run_torque(double dt, bool profile) {
-    double target = o_->target_torque.get_or(0);
-    if (!profile) target += o_->torque_offset.get_or(0);
-    const double max = o_->max_torque.get_or(3000);
-    target = std::clamp(target, -max, max);
-    if (blocked(target)) {
-        internal_limit_ = true;
-        target = 0;
-    }
-    if (profile) {
-        // Profile torque: the demand moves to the target at the torque slope (per mille per second).
-        const double slope = std::max<double>(o_->torque_slope.get_or(0), 1.0);
-        const double step = slope * dt;
-        torque_cmd_ += std::clamp(target - torque_cmd_, -step, step);
-    } else {
-        torque_cmd_ = target;
-    }
-    loop_ = LoopMode::Torque;
-    // Speed limit: above the maximum motor speed the velocity loop takes over at that speed, with the
-    // torque demand as the limit.
-    const double vmax = max_velocity();
-    if (std::abs(velocity_user_) > vmax && torque_cmd_ * velocity_user_ > 0) {
-        loop_ = LoopMode::Velocity;
-        velocity_cmd_ = std::copysign(vmax, velocity_user_);
-        internal_limit_ = true;
-    }
-}
-
-void Drive::run_cyclic_position(double dt) {
-    const std::int32_t raw = o_->target_position.get_or(0);
-    const double offset = o_->position_offset.get_or(0);
-    if (!csp_valid_ || raw != csp_raw_) {
-        csp_from_ = csp_valid_ ? demand_.p : actual_user_;
-        csp_to_ = static_cast<double>(raw) + offset;
-        csp_raw_ = raw;
-        csp_since_ = 0;
-        csp_valid_ = true;
-    }
-    if (halted_) {
-        run_stop(stop_for(StopOption::Halt, options_), dt);
-        csp_valid_ = false;
-        return;
-    }
-    stopping_ = StopKind::None;
-    const double period = interpolation_period();
-    csp_since_ += dt;
-    const double frac = std::min(1.0, csp_since_ / period);
-    double p = csp_from_ + (csp_to_ - csp_from_) * frac;
-    // The velocity feed-forward is the demand's own change over this servo period.
-    double v = (p - demand_.p) / dt;
-    const double limited = clamp_to_software_limits(p);
-    if (limited != p) {
-        internal_limit_ = true;
-        p = limited;
-        v = 0;
-    }
-    if (blocked(p - demand_.p)) {
-        internal_limit_ = true;
-        p = demand_.p;
-        v = 0;
-    }
-    cyclic_following_ = !internal_limit_;
-    const double a = (v - demand_.v) / dt;
-    demand_ = {p, v, std::abs(a) < 1e12 ? a : 0.0};
-    demand_.v += o_->velocity_offset.get_or(0);
-    loop_ = LoopMode::Position;
-    torque_ff_ = o_->torque_offset.get_or(0);
-}
-
-void Drive::run_cyclic_velocity(double dt) {
-    if (halted_) {
-        run_stop(stop_for(StopOption::Halt, options_), dt);
-        if (loop_ == LoopMode::Position) {
-            loop_ = LoopMode::Velocity;
-            velocity_cmd_ = demand_.v;
-        }
-        pv_running_ = false;
-        return;
-    }
-    stopping_ = StopKind::None;
-    double v = static_cast<double>(o_->target_velocity.get_or(0)) + o_->velocity_offset.get_or(0);
-    v = std::clamp(v, -max_velocity(), max_velocity());
-    if (blocked(v)) {
-        internal_limit_ = true;
-        v = 0;
-    }
-    cyclic_following_ = !internal_limit_;
-    loop_ = LoopMode::Velocity;
-    velocity_cmd_ = v;
-    torque_ff_ = o_->torque_offset.get_or(0);
-}
-
-void Drive::run_homing(double dt) {
-    // Bit 4 rising starts the homing method 0x6098; bit 4 falling or halt interrupts it.
-    const bool edge = (controlword_ & kHomingStart) && !(previous_controlword_ & kHomingStart);
-    if (edge) {
-        const double ipu = ratios_.per_user;
-        HomingParameters hp;
-        hp.speed_switch = o_->homing_speed_switch.get_or(0);
-        hp.speed_zero = o_->homing_speed_zero.get_or(0);
-        hp.acceleration = o_->homing_acceleration.get_or(0);
-        hp.home_offset = o_->home_offset.get_or(0);
-        hp.index_period = ratios_.per_revolution / ipu;
-        hp.index_phase = o_->index_pulse_offset.get_or(0) / ipu + home_shift_;
-        hp.standstill_velocity = standstill_velocity();
-        homing_active_ = homing_->start(o_->homing_method.get_or(0), hp, actual_user_);
-        homing_error_ = !homing_active_;
-        homing_velocity_ = 0;
-    }
-    if (homing_active_ && (!(controlword_ & kHomingStart) || halted_)) {
-        homing_->halt();
-        homing_active_ = false;
-    }
-    HomingOutput out;
-    if (homing_active_) {
-        out = homing_->update(actual_user_, velocity_user_, {negative_limit_, positive_limit_, home_switch_});
-        if (out.home_found) {
-            // The coordinate system: the home position now reads as the home offset 0x607C.
-            const double shift = homing_->position_shift();
-            home_shift_ += shift;
-            actual_user_ += shift;
-            demand_.p += shift;
-            profile_.reset(demand_);
-            homing_velocity_ = std::numeric_limits<double>::quiet_NaN();  // re-plan from the shifted state
-        }
-        if (out.status == HomingStatus::Attained && out.target_reached) homing_active_ = false;
-        if (out.status == HomingStatus::Error && out.target_reached) homing_active_ = false;
-    }
-    if (halted_ && !homing_active_) {
-        run_stop(stop_for(StopOption::Halt, options_), dt);
-    } else {
-        stopping_ = StopKind::None;
-        const double v = homing_active_ ? out.velocity : 0.0;
-        const double acc = (homing_active_ && out.acceleration > 0)
-                               ? out.acceleration
-                               : std::max<double>(o_->homing_acceleration.get_or(1), 1.0);
-        if (!(v == homing_velocity_)) {
-            ProfileLimits l{std::max(std::abs(v), 1.0), acc, acc, 0.0};
-            profile_.run_at(v, l);
-            homing_velocity_ = v;
-        }
-        demand_ = profile_.step(dt);
-        loop_ = LoopMode::Position;
-        torque_ff_ = 0;
-    }
-    homing_bits_ = homing_error_ ? static_cast<std::uint16_t>(sw::Bit13 | sw::TargetReached)
-                                 : homing_->statusword_bits();
-}
-
-void Drive::run_touch_probe(double previous_inc, double machine_inc) {
-    TouchProbe::Period p;
-    p.function = o_->probe_function.get_or(0);
-    p.inputs = probe_inputs_;
-    p.previous_inc = previous_inc;
-    p.machine_inc = machine_inc;
-    p.index_offset = o_->index_pulse_offset.get_or(0);
-    const TouchProbe::Latched l = probe_.step(p, ratios_, home_shift_);
-    coe::Value<std::int32_t>* values[2][2] = {{&o_->probe1_positive, &o_->probe1_negative},
-                                              {&o_->probe2_positive, &o_->probe2_negative}};
-    for (int n = 0; n < 2; ++n)
-        for (int edge = 0; edge < 2; ++edge)
-            if (l.set[n][edge]) values[n][edge]->set(l.value[n][edge]);
-    o_->probe_status.set(probe_.status());
+void Drive::read_twinsync() {
+    const Objects& o = *o_;
+    const twinsync::Port& port = *twin_;
+    TwinsyncInputs& t = io_.twinsync;
+    t.active = port.active();
+    t.follows = port.follows();
+    t.has_data = port.has_data();
+    t.controlled_by_twinsync = port.controlled_by_twinsync();
+    t.received_control_word = port.received_control_word();
+    t.pending_error = port.pending_error();
+    if (!t.active) return;  // the rest matters only while the link is on
+    t.link_ok = port.link_ok();
+    t.role = port.role();
+    t.partner_role = port.partner().mode;
+    t.partner_enabled = port.partner_enabled();
+    t.mode = port.mode();
+    t.control_mode = o.tw_control_mode.get_or(3);
+    t.config = o.tw_config.get_or(0);
+    t.inverted = o.tw_inverted.get_or(1);
+    t.speed_up = o.tw_speed_up.get_or(0.0f);
+    t.speed_up_minimum = o.tw_speed_up_min.get_or(0.0f);
+    t.act_speed_master = o.tw_act_speed_master.get_or(0.0f);
+    t.remote_torque_reference = o.tw_remote_torque_ref.get_or(1.0f);
+    t.remote_speed_reference = o.tw_remote_speed_ref.get_or(1.0f);
+    t.remote_ref_torque = o.tw_remote_ref_torque.get_or(0);
+    t.remote_act_torque = o.tw_remote_act_torque.get_or(0);
+    t.remote_ref_speed = o.tw_remote_ref_speed.get_or(0);
+    t.remote_act_speed = o.tw_remote_act_speed.get_or(0);
+    t.remote_ref_pos = o.tw_remote_ref_pos.get_or(0);
+    t.remote_act_pos = o.tw_remote_act_pos.get_or(0);
+    t.local_resolution = o.tw_local_resolution.get_or(1);
+    t.remote_resolution = o.tw_remote_resolution.get_or(1);
+    t.gear_numerator = o.tw_gear_numerator.get_or(1);
+    t.gear_denominator = o.tw_gear_denominator.get_or(1);
 }
 
 void Drive::write_feedback() {
-    std::uint16_t status = sm_.statusword_bits() | sw::Remote;
-    const State st = sm_.state();
-    const bool enabled = st == State::OperationEnabled && sm_.stop() == StopKind::None;
-    const double dt = kServoPeriodNs * 1e-9;
-
-    // Target reached (bit 10) and the mode-specific bits 12/13.
-    bool reached = false;
-    bool bit12 = false, bit13 = false;
-    const double threshold = standstill_velocity();
-    const bool standing = std::abs(velocity_user_) <= threshold;
-    speed_zero_time_ = standing ? speed_zero_time_ + dt : 0.0;
-    const std::uint32_t fe_window = o_->following_error_window.get_or(0xFFFFFFFFu);
-    const bool fe_exceeded = fe_window != 0xFFFFFFFFu && std::abs(following_error_) > fe_window &&
-                             following_error_time_ > o_->following_error_timeout.get_or(0) * 1e-3;
-    if (enabled) {
-        switch (mode_) {
-            case Mode::ProfilePosition: {
-                const bool in_window = std::abs(pp_target_ - actual_user_) <= o_->position_window.get_or(0);
-                position_window_time_ =
-                    (in_window && !pp_moving_ && profile_.done()) ? position_window_time_ + dt : 0.0;
-                reached = halted_ ? (standing && profile_.done())
-                                  : !pp_moving_ && !pending_target_ &&
-                                        position_window_time_ >= o_->position_window_time.get_or(0) * 1e-3;
-                bit12 = setpoint_ack_;
-                bit13 = fe_exceeded;
-                break;
-            }
-            case Mode::ProfileVelocity: {
-                const double target = o_->target_velocity.get_or(0);
-                const bool in_window = std::abs(target - velocity_user_) <= o_->velocity_window.get_or(0);
-                velocity_window_time_ = in_window ? velocity_window_time_ + dt : 0.0;
-                reached =
-                    halted_ ? standing : velocity_window_time_ >= o_->velocity_window_time.get_or(0) * 1e-3;
-                bit12 = speed_zero_time_ >= o_->velocity_threshold_time.get_or(0) * 1e-3;
-                break;
-            }
-            case Mode::ProfileTorque:
-                reached = std::abs(torque_cmd_ - o_->target_torque.get_or(0)) < 0.5;
-                break;
-            case Mode::Homing: {
-                const std::uint16_t hb = homing_bits_;
-                reached = hb & sw::TargetReached;
-                bit12 = hb & sw::Bit12;
-                bit13 = hb & sw::Bit13;
-                break;
-            }
-            case Mode::CyclicPosition:
-                reached = std::abs(csp_to_ - actual_user_) <= o_->position_window.get_or(0);
-                bit12 = cyclic_following_ && !halted_;
-                bit13 = fe_exceeded;
-                break;
-            case Mode::CyclicVelocity:
-            case Mode::CyclicTorque:
-                bit12 = cyclic_following_ && !halted_;
-                break;
-            default:
-                break;
+    Objects& o = *o_;
+    DriveFeedback& f = io_.feedback;
+    // The faults of the period, in the order they happened.
+    if (f.raised) raise_fault(f.raised->code, f.raised->register_bits, f.raised->data);
+    if (f.cleared) clear_faults();
+    o.digital_inputs.set(f.digital_inputs);
+    if (f.probe) {
+        coe::Value<std::int32_t>* values[2][2] = {{&o.probe1_positive, &o.probe1_negative},
+                                                  {&o.probe2_positive, &o.probe2_negative}};
+        for (int n = 0; n < 2; ++n)
+            for (int edge = 0; edge < 2; ++edge)
+                if (f.probe_latched.set[n][edge]) values[n][edge]->set(f.probe_latched.value[n][edge]);
+        o.probe_status.set(f.probe_status);
+    }
+    o.statusword.set(f.statusword);
+    o.modes_display.set(f.mode_display);
+    o.position_demand.set(f.position_demand);
+    o.position_demand_internal.set(f.position_demand_internal);
+    o.position_internal.set(f.position_internal);
+    o.position_actual.set(f.position_actual);
+    o.following_error_actual.set(f.following_error);
+    o.velocity_demand.set(f.velocity_demand);
+    o.velocity_actual.set(f.velocity_actual);
+    o.torque_demand.set(f.torque_demand);
+    o.torque_actual.set(f.torque_actual);
+    o.current_actual.set(f.current_actual);
+    o.temperature.set(f.temperature);
+    if (f.twinsync) {
+        const TwinsyncValues& v = f.twinsync_values;
+        o.tw_local_ref_torque.set(v.ref_torque);
+        o.tw_local_act_torque.set(v.act_torque);
+        o.tw_torque_actual_scaled.set(v.act_torque);
+        o.tw_local_ref_speed.set(v.ref_speed);
+        o.tw_local_ff_speed.set(v.ref_speed);
+        o.tw_local_act_speed.set(v.act_speed);
+        o.tw_speed_actual_rpm.set(v.speed_actual_rpm);
+        o.tw_speed_setpoint_rpm.set(v.speed_setpoint_rpm);
+        o.tw_local_ref_pos.set(v.ref_pos);
+        o.tw_local_act_pos.set(v.act_pos);
+        o.tw_position_actual.set(v.act_pos);
+        o.tw_local_eps.set(v.eps);
+        // P2650: the drive's own current error, unless the receive mapping brings the slave's (TWD, SCON,
+        // PCON, VE masters: "interpreted as the error of the slave drive").
+        if (!twin_->receives(twinsync::p::CurrentError)) {
+            o.tw_error_number.set(v.error_number);
+            o.tw_error_location.set(v.error_location);
         }
-    } else if (st == State::QuickStopActive) {
-        reached = standing;  // the quick stop has ended
     }
-    if (mode_ == Mode::Homing && !enabled) {
-        reached = homing_bits_ & sw::TargetReached;
-        bit12 = homing_bits_ & sw::Bit12;
-        bit13 = homing_bits_ & sw::Bit13;
-    }
-    if (reached) status |= sw::TargetReached;
-    if (bit12) status |= sw::Bit12;
-    if (bit13) status |= sw::Bit13;
-    if (internal_limit_ || positive_limit_ || negative_limit_) status |= sw::InternalLimit;
-    if (positive_limit_ || negative_limit_ || (enabled && mech_->torque_limited())) status |= sw::Warning;
-
-    o_->statusword.set(status);
-    o_->modes_display.set(static_cast<std::int8_t>(mode_));
-    o_->position_demand.set(sat32(demand_.p));
-    o_->position_demand_internal.set(
-        wrap32(ratios_.user_to_increments(static_cast<std::int64_t>(std::llround(demand_.p - home_shift_)))));
-    o_->position_internal.set(wrap32(increments_));
-    o_->position_actual.set(wrap32(floor64(actual_user_)));
-    o_->following_error_actual.set(sat32(following_error_));
-    o_->velocity_demand.set(sat32(loop_ == LoopMode::Velocity ? velocity_cmd_ : demand_.v));
-    o_->velocity_actual.set(sat32(velocity_user_));
-    const double per = nm_per_permille();
-    o_->torque_demand.set(sat16(loop_ == LoopMode::Torque ? torque_cmd_ : mech_->torque() / per));
-    o_->torque_actual.set(sat16(mech_->torque() / per));
-    const double rated_a = std::max<double>(o_->rated_current.get_or(3000), 1.0) * 1e-3;
-    o_->current_actual.set(sat16(mech_->current() / rated_a * 1000.0));
-    // Drive temperature: 35 C plus a rise with the square of the current.
-    const double i_rel = mech_->current() / rated_a;
-    temperature_ += (350.0 + 300.0 * i_rel * i_rel - temperature_) * dt / 60.0;
-    o_->temperature.set(sat16(temperature_));
 }
 
 }  // namespace vecat::cia402

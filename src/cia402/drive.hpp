@@ -1,62 +1,45 @@
-// The CiA 402 drive: the application of a CoE slave (coe::CoeApplication) that acts on its dictionary.
-// Every servo period (250 us of simulated time) it reads the controlword and the set-points from the
-// dictionary, runs the device control state machine and the active operation mode, steps the simulated
-// mechanics, and writes statusword and actual values back. Time comes from the slave (frames, SYNC0 and
-// timer ticks); the simulation advances in fixed periods, so it is deterministic for a given cycle time.
+// The CiA 402 drive as a CoE slave: the application (coe::CoeApplication) that runs the drive core
+// (drive_core.hpp, which knows no EtherCAT) on the drive's dictionary. The adapter binds the core's typed
+// DriveIo to the dictionary once, through the named objects (protocol/cia402_objects.hpp,
+// device/drive_objects.hpp), and every servo period (250 us of simulated time) copies the set-points in,
+// steps the core, copies statusword and actual values back, and runs the TWINsync option card around the
+// step. Time comes from the slave (frames, SYNC0 and timer ticks); the simulation advances in fixed periods,
+// so it is deterministic for a given cycle time.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <optional>
 
-#include "cia402/factor_group.hpp"
-#include "cia402/mechanics.hpp"
-#include "cia402/profile_generator.hpp"
-#include "cia402/state_machine.hpp"
-#include "cia402/touch_probe.hpp"
+#include "cia402/drive_core.hpp"
+#include "cia402/drive_io.hpp"
 #include "cia402/twinsync_port.hpp"
 #include "coe/coe_application.hpp"
 #include "twinsync/status.hpp"
 
 namespace vecat::cia402 {
 
-class Homing;
-
-// Modes of operation (0x6060/0x6061), protocol/cia402.hpp.
-using protocol::cia402::Mode;
-bool supported(Mode m) noexcept;
-
-// 0x603F error codes the drive raises (IEC 61800-7-201 / CiA 402 error code table).
-namespace fault {
-inline constexpr std::uint16_t OverCurrent = 0x2310;     // continuous over current
-inline constexpr std::uint16_t Encoder = 0x7305;         // incremental sensor 1 fault
-inline constexpr std::uint16_t FollowingError = 0x8611;  // following error
-inline constexpr std::uint16_t ReferenceLimit = 0x8612;  // reference limit (limit switch reached)
-bool injectable(std::uint16_t code) noexcept;
-}  // namespace fault
-
-// Statusword bits (CiA 402 6.3.3), protocol/cia402.hpp.
-namespace sw = protocol::cia402::sw;
+// Mode, supported(), fault:: codes and sw:: bits: drive_io.hpp.
 
 class Drive : public coe::CoeApplication {
     friend std::shared_ptr<twinsync::Channel> connect_twinsync(Drive&, Drive&, double, double);
 
   public:
-    static constexpr std::uint64_t kServoPeriodNs = 250'000;
+    static constexpr std::uint64_t kServoPeriodNs = DriveCore::kPeriodNs;
 
     // objects: see CoeApplication.
     explicit Drive(const device::DeviceDescription& d,
                    std::shared_ptr<const std::vector<device::ObjectDescription>> objects = {});
     ~Drive() override;
 
-    State cia402_state() const { return sm_.state(); }
-    Mode mode() const { return mode_; }
-    const Mechanics& mechanics() const { return *mech_; }
+    State cia402_state() const { return core_->state(); }
+    Mode mode() const { return core_->mode(); }
+    const Mechanics& mechanics() const { return core_->mechanics(); }
     // Demand and actual values in user units (as in 0x6062/0x6064, without the 32-bit wrap).
-    double position_demand() const { return demand_.p; }
-    double position_actual() const { return actual_user_; }
-    double velocity_actual() const { return velocity_user_; }
-    std::uint64_t servo_steps() const { return steps_; }
+    double position_demand() const { return core_->position_demand(); }
+    double position_actual() const { return core_->position_actual(); }
+    double velocity_actual() const { return core_->velocity_actual(); }
+    std::uint64_t servo_steps() const { return core_->steps(); }
     std::uint64_t simulated_time_ns() const { return sim_ns_; }
     // The TWINsync option card of this drive, and its status (nullptr when no cable is connected).
     twinsync::Port& twinsync_port() { return *twin_; }
@@ -64,12 +47,12 @@ class Drive : public coe::CoeApplication {
         return twin_->channel() ? &twin_->status() : nullptr;
     }
     // The TWINsync error the drive has raised as a fault (40-xx, 39-xx), if any.
-    std::optional<twinsync::ErrorId> twinsync_error() const { return twin_error_; }
+    std::optional<twinsync::ErrorId> twinsync_error() const { return core_->twinsync_error(); }
 
     // esc::Application
     void tick(std::uint64_t now_ns) override;
 
-    // The dictionary entries the drive uses, bound once (drive.cpp).
+    // The dictionary entries of the DriveIo, bound once (drive.cpp).
     struct Objects;
 
   protected:
@@ -79,128 +62,32 @@ class Drive : public coe::CoeApplication {
     void advance(std::uint64_t now_ns);
     void step_to(std::uint64_t t_ns);
     void servo_step();
-    void read_configuration();
-    void apply_gains();
-    void update_inputs();
-    void run_mode(double dt);
-    void run_profile_position(double dt);
-    void run_profile_velocity(double dt);
-    void run_torque(double dt, bool profile);
-    void run_homing(double dt);
-    void run_cyclic_position(double dt);
-    void run_cyclic_velocity(double dt);
-    void run_stop(StopKind k, double dt);
-    void run_twinsync(double dt);
-    void run_decoupled(double dt);
-    void hold_for_coupling();
-    twinsync::LocalState twinsync_local() const;
-    void write_twinsync_values();
-    void enter_twinsync_fault(twinsync::ErrorId e);
-    void run_touch_probe(double previous_inc, double machine_inc);
-    bool blocked(double direction) const;
-    void start_move(double target);
-    void hold_disabled();
-    void check_faults(double dt);
-    void enter_fault(std::uint16_t code, std::uint8_t register_bits);
+    template <class F>
+    void for_each_parameter(F&& f);
+    void read_parameters();
+    void configure();
+    template <class F>
+    void for_each_command(F&& f);
+    void read_command();
+    void read_twinsync();
     void write_feedback();
-    void on_mode_change();
-    ProfileLimits profile_limits() const;
-    double max_velocity() const;
-    double interpolation_period() const;
-    double clamp_to_software_limits(double p) const;
-    bool software_limits_enabled() const;
-    double machine_increments() const;  // motor position in encoder increments (homing does not move it)
-    // From the dictionary by read_configuration(), before the servo steps of each advance.
-    double standstill_velocity() const { return standstill_velocity_; }
-    double nm_per_permille() const { return nm_per_permille_; }
-    double user_to_rad(double user) const { return ratios_.user_to_radians(user - home_shift_); }
-    double rad_to_user(double rad) const { return ratios_.radians_to_user(rad) + home_shift_; }
-    double user_velocity_to_rad(double v) const { return ratios_.user_to_radians(v); }
+    twinsync::LocalState twinsync_local() const;
 
     std::unique_ptr<Objects> o_;
-    StateMachine sm_;
-    OptionCodes options_;
-    FactorGroup factors_;
-    FactorRatios ratios_ = factors_.ratios();  // kept with factors_
-    double nm_per_permille_ = 1e-3;
-    double standstill_velocity_ = 10.0;
-    std::unique_ptr<Mechanics> mech_;
-    ProfileGenerator profile_;
-    std::unique_ptr<Homing> homing_;
-    Mode mode_ = Mode::None;
-
+    std::unique_ptr<DriveCore> core_;
+    DriveIo io_;
+    std::uint32_t parameter_writes_ = 0;  // writes to the parameters' entries (EntryHooks::writes)
+    std::uint64_t mapping_seen_ = ~std::uint64_t{0};     // the RxPDO mapping last checked for parameters
+    bool maps_parameters_ = false;                       // ... maps one of them
+    std::uint64_t outputs_seen_ = 0;                     // outputs copied when last counted
+    std::uint32_t command_writes_ = 0;                   // ... to the command's (and process data outputs)
+    std::uint32_t command_read_ = ~std::uint32_t{0};     // command_writes_ when it was last read
+    std::uint32_t parameters_read_ = ~std::uint32_t{0};  // parameter_writes_ when they were last read
     std::uint64_t sim_ns_ = 0;
     bool started_ = false;
-    std::uint64_t steps_ = 0;
-
-    // Set-points and the demand sent to the loops.
-    Kinematics demand_;  // position demand (user units)
-    LoopMode loop_ = LoopMode::Off;
-    double velocity_cmd_ = 0;  // user units/s (velocity modes)
-    double torque_cmd_ = 0;    // per mille of rated torque (torque modes)
-    double torque_ff_ = 0;     // per mille
-
-    // Actual values.
-    double actual_user_ = 0;
-    double velocity_user_ = 0;
-    double home_shift_ = 0;  // user position = machine position (converted) + home_shift_
-    std::int64_t increments_ = 0;
-    double inertia_ = 0;          // kg m^2, for the acceleration feed-forward
-    double temperature_ = 350.0;  // 0.1 C
-
-    // Controlword edges and profile position handshake.
-    std::uint16_t controlword_ = 0;
-    std::uint16_t previous_controlword_ = 0;
-    bool setpoint_ack_ = false;
-    std::optional<double> pending_target_;  // set of set-points: buffered next target
-    bool pp_moving_ = false;
-    double pp_target_ = 0;
-    bool halted_ = false;
-    std::uint32_t override_ppm_ = 1'000'000;
-    StopKind stopping_ = StopKind::None;  // the stop ramp being executed
-    double pv_target_ = 0;
-    bool pv_running_ = false;
-    bool cyclic_following_ = false;
-    std::uint16_t homing_bits_ = 0;  // statusword bits 10, 12, 13 from the homing method
-    bool homing_active_ = false;
-    bool homing_error_ = false;   // the method could not start (unsupported method, bad speeds)
-    double homing_velocity_ = 0;  // velocity the profile runs at for the homing method
-
-    // Cyclic modes: interpolation between the last two set-points.
-    double csp_from_ = 0, csp_to_ = 0;
-    std::int32_t csp_raw_ = 0;
-    double csp_since_ = 0;  // s since the latest set-point arrived
-    bool csp_valid_ = false;
-
-    // Windows and timers (s).
-    double following_error_ = 0;
-    double following_error_time_ = 0;
-    double position_window_time_ = 0;
-    double velocity_window_time_ = 0;
-    double speed_zero_time_ = 0;
-    bool internal_limit_ = false;
-
-    // Switches, index pulse and touch probe.
-    bool negative_limit_ = false, positive_limit_ = false, home_switch_ = false;
-    std::uint8_t probe_inputs_ = 0;
-    double previous_machine_inc_ = 0;
-    TouchProbe probe_;
-
-    // Faults.
-    std::uint16_t active_fault_ = 0;
-
-    // TWINsync: the option card, the coupling of a slave drive to its master drive, and decoupling in
-    // motion (the axis goes on at its velocity until it is stopped or given a new set-point).
+    // TWINsync: the option card, and the drive at the other end of its cable (they step in lockstep).
     std::unique_ptr<twinsync::Port> twin_;
-    Drive* twin_partner_ = nullptr;  // the drive at the other end of the cable (steps in lockstep)
-    std::optional<twinsync::ErrorId> twin_error_;
-    bool coupled_ = false;
-    std::int32_t twin_master_last_ = 0;  // master position at the previous cycle (PCON increments)
-    std::uint16_t twin_control_ = 0, previous_twin_control_ = 0;
-    bool continuing_ = false, continue_halting_ = false;
-    double continue_velocity_ = 0;
-    std::int32_t continue_target_position_ = 0, continue_target_velocity_ = 0;
-    bool homed_ = false;
+    Drive* twin_partner_ = nullptr;
 };
 
 // Connects the TWINsync option cards of two drives by a cable (a: end 0, b: end 1). Their oscillators

@@ -25,21 +25,7 @@
 
 namespace vecat::twinsync {
 
-// What the drive tells the port about itself every cycle.
-struct LocalState {
-    DriveComState state = DriveComState::SwitchOnDisabled;
-    bool fault = false;
-    bool homed = false;
-    bool transition = false;        // a state change is in progress (P2612 OpInProgress)
-    std::uint16_t controlword = 0;  // the drive's own CiA 402 controlword (a master sends it on)
-    bool homing_mode = false;
-    bool fieldbus_synchronised = false;  // the drive's cycle runs on EtherCAT DC (SYNC0)
-    // For the gantry monitoring (master: 29 / slave: 30), in the units of the telegram.
-    double position = 0;  // user units
-    double speed_rpm = 0;
-    double torque_nm = 0;
-    double rated_torque_nm = 1;
-};
+// LocalState, what the drive tells the port about itself every cycle: twinsync/status.hpp.
 
 class Port {
   public:

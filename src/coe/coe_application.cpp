@@ -12,7 +12,7 @@ CoeApplication::CoeApplication(const device::DeviceDescription& d,
     sdo_ = std::make_unique<SdoServer>(od_, [this] { return state_; });
     sync_ = std::make_unique<SyncParameters>(od_, d);
     pending_outputs_.reserve(1536);  // a whole frame's worth: no allocation in the cycle
-    error_register_ = od_.find(0x1001, 0);
+    error_register_ = od_.find(protocol::obj::error_register);
     error_code_ = od_.find(protocol::obj::error_code);
     // An object mapped into the active RxPDOs is written by the master's outputs in SAFEOP and OP.
     od_.download_guard = [this](const Entry& e, AlState st) {

@@ -14,19 +14,12 @@
 #include "coe/sync_parameters.hpp"
 #include "esc/segment.hpp"
 #include "esc/slave.hpp"
+#include "protocol/coe.hpp"
 
 namespace vecat::coe {
 
-// Error register 0x1001 bits (CiA 301 7.5.2.2).
-namespace error_register {
-inline constexpr std::uint8_t Generic = 0x01;
-inline constexpr std::uint8_t Current = 0x02;
-inline constexpr std::uint8_t Voltage = 0x04;
-inline constexpr std::uint8_t Temperature = 0x08;
-inline constexpr std::uint8_t Communication = 0x10;
-inline constexpr std::uint8_t DeviceProfile = 0x20;
-inline constexpr std::uint8_t Manufacturer = 0x80;
-}  // namespace error_register
+// Error register 0x1001 bits (CiA 301 7.5.2.2), protocol/coe.hpp.
+namespace error_register = protocol::error_register;
 
 // Emergency error codes used for EtherCAT state machine errors (ETG.1000.6 Table 53 / CiA 301).
 namespace emcy {

@@ -76,6 +76,7 @@ bool Entry::writable(AlState s) const {
 }
 
 void Entry::assign(ConstBytes v) {
+    touch();
     const std::size_t n = std::min(v.size(), storage_.size());
     std::copy_n(v.begin(), n, storage_.begin());
     if (device::is_variable_length(desc_->type)) {

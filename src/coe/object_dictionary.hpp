@@ -39,6 +39,11 @@ struct EntryHooks {
     std::function<SdoAbort(const Entry&, ConstBytes)> on_download;
     std::function<void(Entry&)> after_download;
     std::function<void(Entry&)> before_upload;
+    // Incremented on every write through Entry::set or Entry::assign (SDO downloads, tools, tests), not by
+    // the device's own writes through a coe::Value: the device can tell that none of its parameters changed
+    // without reading them (cia402::Drive). Process data outputs are counted by the ProcessDataMap
+    // (outputs_copied()).
+    std::uint32_t* writes = nullptr;
 };
 
 class Entry {
@@ -103,6 +108,7 @@ class Entry {
     template <class T>
     void set(T v) {
         static_assert(std::is_arithmetic_v<T>);
+        touch();
         if constexpr (std::endian::native == std::endian::little)
             if (storage_.size() >= sizeof(T)) {
                 std::memcpy(storage_.data(), &v, sizeof(T));
@@ -130,6 +136,10 @@ class Entry {
     }
     void run_after_download() {
         if (hooks_ && hooks_->after_download) hooks_->after_download(*this);
+    }
+    // Counts a write in the watching counter (EntryHooks::writes), if any.
+    void touch() {
+        if (hooks_ && hooks_->writes) ++*hooks_->writes;
     }
     void run_before_upload() {
         if (hooks_ && hooks_->before_upload) hooks_->before_upload(*this);

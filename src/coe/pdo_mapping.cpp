@@ -206,6 +206,7 @@ bool ProcessDataMap::build(const Direction& d, std::vector<MappedField>& fields,
 }
 
 void ProcessDataMap::rebuild() {
+    ++mapping_changes_;
     if (rx_.assign_index) out_valid_ = build(rx_, out_, out_bytes_);
     if (tx_.assign_index) in_valid_ = build(tx_, in_, in_bytes_);
     out_plan_ = make_plan(out_);
@@ -255,6 +256,7 @@ protocol::AlStatusCode ProcessDataMap::validate() const {
 }
 
 void ProcessDataMap::copy_outputs(ConstBytes image) {
+    ++outputs_copied_;
     if (out_plan_.ok && image.size() >= out_bytes_) {
         run_plan<false>(out_plan_, image.data());
         return;

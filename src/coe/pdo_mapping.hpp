@@ -59,6 +59,10 @@ class ProcessDataMap {
 
     // Re-reads the objects (called after each change through SDO).
     void rebuild();
+    // Counters for a device that caches values of its entries: mapping rebuilds, and copies of the outputs
+    // into the mapped entries (which write them without Entry::set, see EntryHooks::writes).
+    std::uint64_t mapping_changes() const { return mapping_changes_; }
+    std::uint64_t outputs_copied() const { return outputs_copied_; }
 
   private:
     struct Direction {
@@ -96,6 +100,8 @@ class ProcessDataMap {
     static Plan make_plan(const std::vector<MappedField>& fields);
 
     ObjectDictionary& od_;
+    std::uint64_t mapping_changes_ = 0;
+    std::uint64_t outputs_copied_ = 0;
     Direction rx_, tx_;
     std::vector<MappedField> out_, in_;
     Plan out_plan_, in_plan_;

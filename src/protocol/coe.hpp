@@ -225,4 +225,15 @@ struct Emergency {
     friend bool operator==(const Emergency&, const Emergency&) = default;
 };
 
+// Error register 0x1001 bits (CiA 301 7.5.2.2), also the emergency's second field.
+namespace error_register {
+inline constexpr std::uint8_t Generic = 0x01;
+inline constexpr std::uint8_t Current = 0x02;
+inline constexpr std::uint8_t Voltage = 0x04;
+inline constexpr std::uint8_t Temperature = 0x08;
+inline constexpr std::uint8_t Communication = 0x10;
+inline constexpr std::uint8_t DeviceProfile = 0x20;
+inline constexpr std::uint8_t Manufacturer = 0x80;
+}  // namespace error_register
+
 }  // namespace vecat::protocol

@@ -1,8 +1,11 @@
 // What a TWINsync option card reports about its link: the values behind P2612, P2617, P2619 and P2623,
 // and the counters a scope or the telemetry shows. Filled by the drive's TWINsync port every control cycle.
+// And what the drive tells the port about itself (LocalState, made by the drive core's TWINsync coupling).
 #pragma once
 
 #include <cstdint>
+
+#include "twinsync/telegram.hpp"
 
 namespace vecat::twinsync {
 
@@ -24,6 +27,22 @@ struct LinkStatus {
     std::uint8_t error_number = 0;     // MSD error (40 or 39), 0 = none
     std::uint8_t error_location = 0;
     float tracking_error = 0;  // gantry: master position minus slave position (user units)
+};
+
+// What the drive tells the port about itself every cycle.
+struct LocalState {
+    DriveComState state = DriveComState::SwitchOnDisabled;
+    bool fault = false;
+    bool homed = false;
+    bool transition = false;        // a state change is in progress (P2612 OpInProgress)
+    std::uint16_t controlword = 0;  // the drive's own CiA 402 controlword (a master sends it on)
+    bool homing_mode = false;
+    bool fieldbus_synchronised = false;  // the drive's cycle runs on EtherCAT DC (SYNC0)
+    // For the gantry monitoring (master: 29 / slave: 30), in the units of the telegram.
+    double position = 0;  // user units
+    double speed_rpm = 0;
+    double torque_nm = 0;
+    double rated_torque_nm = 1;
 };
 
 }  // namespace vecat::twinsync

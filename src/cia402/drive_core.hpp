@@ -1,0 +1,110 @@
+// The CiA 402 drive core, without EtherCAT: one servo period on a typed DriveIo (drive_io.hpp). The CoE
+// adapter (cia402::Drive) copies the dictionary into the DriveIo before each period and the feedback back
+// after it; a test or another fieldbus could drive the core the same way.
+//
+// A servo period (DriveCore::step, CiA 402 / IEC 61800-7-201):
+//   1. the controlword (0x6040, or TWINsync's), the limit switches and inputs;
+//   2. fault monitoring: injected faults, encoder, I2t over-current, following error, limit switch reaction,
+//      TWINsync errors;
+//   3. the device control state machine (state_machine.hpp) with the option codes 0x605A-0x605E;
+//   4. the mode of operation 0x6060 (shown in 0x6061 once it took effect), the set-points: disabled, a stop
+//      ramp, following TWINsync, decoupled motion, or the active mode (profile_modes, homing_mode,
+//      cyclic_modes: one class per mode, with its statusword bits);
+//   5. the loops and the simulated motor (mechanics.hpp), the touch probe;
+//   6. the feedback: statusword, actual values, TWINsync values.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "cia402/cyclic_modes.hpp"
+#include "cia402/drive_io.hpp"
+#include "cia402/homing_mode.hpp"
+#include "cia402/mechanics.hpp"
+#include "cia402/operation_mode.hpp"
+#include "cia402/profile_modes.hpp"
+#include "cia402/state_machine.hpp"
+#include "cia402/touch_probe.hpp"
+#include "cia402/twinsync_coupling.hpp"
+
+namespace vecat::cia402 {
+
+class DriveCore {
+  public:
+    static constexpr std::uint64_t kPeriodNs = Axis::kPeriodNs;
+
+    explicit DriveCore(const MotorParameters& motor);
+    DriveCore(const DriveCore&) = delete;
+    DriveCore& operator=(const DriveCore&) = delete;
+
+    // Once before the periods of an advance: option codes, factor group, rated torque, threshold.
+    void configure(const DriveIo& io);
+    // Before the first period: the inputs and the feedback of the drive as it starts.
+    void start(DriveIo& io);
+    // One servo period.
+    void step(DriveIo& io);
+
+    // Position compensation 0x2111 (TwinCAT NC PTP online change): the move ends at its target plus the
+    // achievable part of `distance`, spread over `length`.
+    void compensate(double distance, double length);
+
+    State state() const { return sm_.state(); }
+    Mode mode() const { return mode_; }
+    const Mechanics& mechanics() const { return mech_; }
+    double position_demand() const { return axis_.demand.p; }
+    double position_actual() const { return axis_.actual; }
+    double velocity_actual() const { return axis_.velocity; }
+    std::uint64_t steps() const { return steps_; }
+    std::optional<twinsync::ErrorId> twinsync_error() const { return coupling_.error(); }
+    // The drive's state for the TWINsync port (before and after a period).
+    twinsync::LocalState twinsync_local(std::uint16_t own_controlword, bool synchronised) const;
+
+  private:
+    void update_inputs(DriveIo& io);
+    void check_faults(DriveIo& io, double dt);
+    void raise(DriveIo& io, const RaisedFault& f);
+    void run_state_machine(DriveIo& io);
+    void select_mode(const DriveCommand& c);
+    void on_mode_change();
+    void run_setpoints(DriveIo& io, double dt);
+    void run_mode(double dt);
+    void run_stop(StopKind k, double dt);
+    void hold_disabled();
+    void apply_gains(const DriveParameters& p);
+    void run_mechanics(const DriveIo& io, double dt);
+    void run_touch_probe(DriveIo& io, double previous_inc, double machine_inc);
+    void write_feedback(DriveIo& io);
+    double machine_increments() const;  // motor position in encoder increments (homing does not move it)
+    double user_to_rad(double user) const { return axis_.ratios.user_to_radians(user - axis_.home_shift); }
+
+    StateMachine sm_;
+    FactorGroup factors_;  // the last valid factor group
+    Mechanics mech_;
+    Axis axis_;
+    TouchProbe probe_;
+    TwinsyncCoupling coupling_;
+
+    // The operation modes; `active_` is the one of mode_ (nullptr: none selected yet).
+    ProfilePositionMode pp_;
+    ProfileVelocityMode pv_;
+    ProfileTorqueMode pt_;
+    HomingMode hm_;
+    CyclicPositionMode csp_;
+    CyclicVelocityMode csv_;
+    CyclicTorqueMode cst_;
+    std::array<OperationMode*, 7> modes_{&pp_, &pv_, &pt_, &hm_, &csp_, &csv_, &cst_};
+    Mode mode_ = Mode::None;
+    OperationMode* active_ = nullptr;
+    bool modes_disabled_ = false;  // every mode's disable() ran, and no step since
+
+    std::uint64_t steps_ = 0;
+    std::uint32_t override_ppm_ = 1'000'000;
+    std::int64_t increments_ = 0;
+    double previous_machine_inc_ = 0;
+    std::uint8_t probe_inputs_ = 0;
+    double speed_zero_time_ = 0;
+    double temperature_ = 350.0;  // 0.1 C
+    std::uint16_t active_fault_ = 0;
+};
+
+}  // namespace vecat::cia402

@@ -1,0 +1,34 @@
+// Homing mode (HM, mode 6; CiA 402 / IEC 61800-7-201 6.6): controlword bit 4 rising starts the homing method
+// 0x6098 (homing.hpp: the methods themselves), with the speeds 0x6099 and the acceleration 0x609A; bit 4
+// falling or halt (bit 8) interrupts it. Once the home is found the coordinate system moves so that the
+// home position reads as the home offset 0x607C. Statusword bits 10/12/13: homing.hpp's statusword_bits()
+// (13/12/10 = 1/0/1 when the method could not start).
+#pragma once
+
+#include <cstdint>
+
+#include "cia402/homing.hpp"
+#include "cia402/operation_mode.hpp"
+
+namespace vecat::cia402 {
+
+class HomingMode final : public OperationMode {
+  public:
+    HomingMode() : OperationMode(true) {}
+    void reset() override;
+    void step(Axis& a, double dt) override;
+    ModeStatus status(const Axis& a, const StatusInputs& in) override;
+    // Statusword bits 10, 12, 13 of the last period (also shown outside OPERATION ENABLED).
+    std::uint16_t bits() const { return bits_; }
+    // Homing attained (bit 12 without the error bit 13).
+    bool attained() const { return (bits_ & sw::Bit12) && !(bits_ & sw::Bit13); }
+
+  private:
+    Homing homing_;
+    std::uint16_t bits_ = 0;  // statusword bits 10, 12, 13 from the homing method
+    bool active_ = false;
+    bool error_ = false;   // the method could not start (unsupported method, bad speeds)
+    double velocity_ = 0;  // velocity the profile runs at for the homing method
+};
+
+}  // namespace vecat::cia402
