@@ -76,9 +76,10 @@ AlAction al_transition(AlState from, AlState to) noexcept {
 }
 
 void ProcessImageApplication::exchange(std::uint64_t, ConstBytes out, bool apply, Bytes in) {
-    if (apply && !out.empty())
-        std::memcpy(outputs_.data(), out.data(), std::min(out.size(), outputs_.size()));
-    std::memcpy(in.data(), inputs_.data(), std::min(in.size(), inputs_.size()));
+    // std::copy_n, not memcpy: a device without outputs or inputs (an I/O terminal, a coupler) has an
+    // empty image whose data() may be null.
+    if (apply) std::copy_n(out.begin(), std::min(out.size(), outputs_.size()), outputs_.begin());
+    std::copy_n(inputs_.begin(), std::min(in.size(), inputs_.size()), in.begin());
     ++exchanges_;
 }
 
