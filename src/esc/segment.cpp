@@ -82,7 +82,7 @@ bool Segment::set_topology(const std::vector<int>& parents, const std::vector<st
         if (order[k] != k) return fail("the slaves are not in the order the frame reaches them");
     parent_ = parents;
     parent_port_.assign(ports.begin(), ports.end());
-    parent_port_[0] = 0;
+    if (n) parent_port_[0] = 0;  // the master's side
     delay_ = delays_ns;
     child_ = std::move(child);
     ++port_epoch_;
