@@ -6,8 +6,8 @@
 
 #include <cstdlib>
 #include <memory>
-#include <string>
 #include <stdexcept>
+#include <string>
 
 #include "master/master.hpp"
 #include "network/build.hpp"

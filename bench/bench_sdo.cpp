@@ -7,8 +7,8 @@
 #include "cia402/drive.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
-#include "serve/in_process_link.hpp"
 #include "protocol/cia402_objects.hpp"
+#include "serve/in_process_link.hpp"
 
 namespace {
 

@@ -3,8 +3,8 @@
 #include <benchmark/benchmark.h>
 
 #include "cia402/drive.hpp"
-#include "device/device_description.hpp"
 #include "cia402/twinsync_port.hpp"
+#include "device/device_description.hpp"
 #include "twinsync/telegram.hpp"
 
 namespace {

@@ -15,8 +15,8 @@
 #include "fuzz_support.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
-#include "serve/in_process_link.hpp"
 #include "protocol/cia402_objects.hpp"
+#include "serve/in_process_link.hpp"
 
 namespace obj = vecat::protocol::obj;
 

@@ -143,6 +143,9 @@ class Esc {
     const EscConfig& config() const { return cfg_; }
     const EscCounters& counters() const { return counters_; }
     std::uint16_t station_address() const { return peek16(protocol::addr(protocol::Reg::StationAddress)); }
+    // A configured-address command (FPxx, FRMW) with this ADP addresses this ESC: its station address, or
+    // its alias when DL control enables alias addressing.
+    bool addressed_fixed(std::uint16_t adp) const;
 
     // Reloads the ESC configuration area from the EEPROM (as at power-on and on an SII reload command).
     void reload_eeprom();
@@ -178,7 +181,6 @@ class Esc {
         bool byte_aligned = false;
     };
 
-    bool addressed_fixed(std::uint16_t adp) const;
     // Copies memory into a datagram, or ORs it in (broadcast reads).
     static void copy_out(std::uint8_t* dst, const std::uint8_t* src, std::size_t n, bool or_into);
     void physical(protocol::DatagramView d, std::uint16_t ado, bool do_read, bool do_write, bool or_read,

@@ -22,11 +22,6 @@ void Segment::add(std::unique_ptr<Slave> s) {
     add(std::move(s), {});
 }
 
-namespace {
-// The ports after port 0 in the order a frame passes them (ESC datasheet section I, frame processing).
-constexpr unsigned kPortOrder[] = {3, 1, 2};
-}  // namespace
-
 void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     const std::size_t i = slaves_.size();
     slaves_.push_back(std::move(s));
@@ -75,7 +70,7 @@ bool Segment::set_topology(const std::vector<int>& parents, const std::vector<st
         const std::size_t at = todo.back();
         todo.pop_back();
         order.push_back(at);
-        for (auto p = std::rbegin(kPortOrder); p != std::rend(kPortOrder); ++p)
+        for (auto p = protocol::kPortsAfterPort0.rbegin(); p != protocol::kPortsAfterPort0.rend(); ++p)
             if (const int c = child[at][*p]; c >= 0) todo.push_back(static_cast<std::size_t>(c));
     }
     for (std::size_t k = 0; k < order.size(); ++k)
@@ -129,7 +124,7 @@ void Segment::route() const {
     while (!stack_.empty()) {
         Visit& v = stack_.back();
         if (v.next < 3) {
-            const unsigned p = kPortOrder[v.next++];
+            const unsigned p = protocol::kPortsAfterPort0[v.next++];
             if (!slaves_[v.slave]->esc().port_open(p)) continue;  // the port loops the frame back at once
             const int c = child_[v.slave][p];
             if (c < 0 || !reached_[static_cast<std::size_t>(c)]) {
@@ -169,18 +164,8 @@ void Segment::set_downstream_link(bool up) {
 namespace {
 // A write of 0x0900 (receive time port 0) makes every port latch the time the frame passes it.
 bool latches_receive_times(DatagramView d) {
-    switch (d.command()) {
-        case Command::APWR:
-        case Command::APRW:
-        case Command::FPWR:
-        case Command::FPRW:
-        case Command::BWR:
-        case Command::BRW:
-            return d.ado() <= addr(Reg::DcRecvTimePort0) + 3u &&
-                   d.ado() + d.length() > addr(Reg::DcRecvTimePort0);
-        default:
-            return false;
-    }
+    return protocol::physical_write(d.command()) && d.ado() <= addr(Reg::DcRecvTimePort0) + 3u &&
+           d.ado() + d.length() > addr(Reg::DcRecvTimePort0);
 }
 }  // namespace
 

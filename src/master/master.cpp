@@ -1,5 +1,6 @@
-// The project's master (about 600 lines): one start-up sequence in the order of the masters' checklist
-// (scan, SII, mailboxes, PDO sizes, FMMUs, DC, state changes) and the cyclic exchange; the CoE side is in
+// The project's master (about 700 lines): one start-up sequence in the order of the masters' checklist
+// (scan, SII, topology, mailboxes, PDO sizes, FMMUs, DC on a tree, state changes) and the cyclic exchange,
+// each step a function that builds on the SlaveInfo the steps before filled; the CoE side is in
 // coe_client.cpp.
 #include "master/master.hpp"
 
@@ -283,13 +284,12 @@ bool Master::read_slave_information() {
 }
 
 void Master::compute_topology() {
-    constexpr unsigned kOrder[] = {3, 1, 2};
     // Per slave: the open ports after port 0 not yet given to a slave, in the frame's order.
     std::vector<std::vector<unsigned>> free(slaves_.size());
     std::vector<std::size_t> path;  // slaves from the first to the current one that may have ports left
     for (std::size_t i = 0; i < slaves_.size(); ++i) {
         SlaveInfo& s = slaves_[i];
-        for (unsigned p : kOrder)
+        for (unsigned p : protocol::kPortsAfterPort0)
             if ((s.open_ports >> p) & 1u) free[i].push_back(p);
         s.parent = -1;
         s.parent_port = 0;
@@ -509,13 +509,11 @@ bool Master::configure_dc() {
 
 namespace {
 
-constexpr unsigned kPortOrder[] = {3, 1, 2};
-
 // A slave's round trip: from its arrival at port 0 to the return through its last open port (0 for a slave
 // whose other ports are closed), from its latched receive times.
 std::int64_t round_trip(const SlaveInfo& x) {
     std::int64_t last = 0;
-    for (unsigned p : kPortOrder)
+    for (unsigned p : protocol::kPortsAfterPort0)
         if ((x.open_ports >> p) & 1u) last = static_cast<std::int32_t>(x.dc_port_time[p] - x.dc_port_time[0]);
     return last;
 }
@@ -526,7 +524,7 @@ std::int64_t round_trip(const SlaveInfo& x) {
 // time of the open port before it in the order 3, 1, 2 (0 when it is the first).
 std::int64_t Master::departure(const SlaveInfo& up, unsigned port) {
     std::int64_t t = 0;
-    for (unsigned p : kPortOrder) {
+    for (unsigned p : protocol::kPortsAfterPort0) {
         if (p == port) break;
         if ((up.open_ports >> p) & 1u) t = static_cast<std::int32_t>(up.dc_port_time[p] - up.dc_port_time[0]);
     }

@@ -8,6 +8,8 @@
 #include <map>
 #include <sstream>
 
+#include "protocol/registers.hpp"
+
 namespace vecat::network {
 
 namespace {
@@ -161,10 +163,6 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
     return d;
 }
 
-// Each device's ports in the order a frame passes them (ESC datasheet section I, frame processing order
-// with four ports: 0 -> 3 -> 1 -> 2).
-constexpr unsigned kOrder[] = {3, 1, 2};
-
 }  // namespace
 
 std::string_view to_string(Source s) noexcept {
@@ -282,7 +280,7 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
         const std::size_t at = stack.back();
         stack.pop_back();
         order.push_back(at);
-        for (auto p = std::rbegin(kOrder); p != std::rend(kOrder); ++p)
+        for (auto p = protocol::kPortsAfterPort0.rbegin(); p != protocol::kPortsAfterPort0.rend(); ++p)
             if (const int c = f.children[at][*p]; c >= 0) stack.push_back(static_cast<std::size_t>(c));
     }
     std::vector<int> position(n, -1);

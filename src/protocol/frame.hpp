@@ -48,6 +48,17 @@ constexpr std::string_view to_string(Command c) noexcept {
     return i < 15 ? names[i] : std::string_view{"?"};
 }
 
+// Physical (register/memory) commands that write, and that read, at the slaves they address (ETG.1000.4
+// 5.4: the read-multiple-writes read at the addressed slave and write at the others).
+constexpr bool physical_write(Command c) noexcept {
+    return c == Command::APWR || c == Command::APRW || c == Command::FPWR || c == Command::FPRW ||
+           c == Command::BWR || c == Command::BRW;
+}
+constexpr bool physical_read(Command c) noexcept {
+    return c == Command::APRD || c == Command::APRW || c == Command::FPRD || c == Command::FPRW ||
+           c == Command::BRD || c == Command::BRW || c == Command::ARMW || c == Command::FRMW;
+}
+
 // Ethernet header (IEEE 802.3): destination, source, EtherType (big-endian, the only big-endian field of an
 // EtherCAT frame). Frames with a VLAN tag are accepted by parse_frame; this layout is the untagged one.
 struct EthernetHeader {

@@ -118,6 +118,10 @@ constexpr std::uint16_t sm_addr(unsigned i) noexcept {
 }
 
 // DL status bits (0x0110).
+// The ports after port 0 in the order a frame passes them (ESC datasheet section I, frame processing order
+// 0 -> 3 -> 1 -> 2): devices on port 3 (a coupler's E-bus) come before those on port 1, then port 2.
+inline constexpr std::array<unsigned, 3> kPortsAfterPort0 = {3, 1, 2};
+
 namespace dl_status {
 inline constexpr std::uint16_t PdiOperational = 0x0001;
 inline constexpr std::uint16_t PdiWatchdogOk = 0x0002;

@@ -25,35 +25,6 @@ std::uint8_t byte_at(DatagramView d, std::uint16_t a) {
     return d.data()[a - d.ado()];
 }
 
-bool is_write(Command c) {
-    switch (c) {
-        case Command::APWR:
-        case Command::APRW:
-        case Command::FPWR:
-        case Command::FPRW:
-        case Command::BWR:
-        case Command::BRW:
-            return true;
-        default:
-            return false;
-    }
-}
-bool is_read(Command c) {
-    switch (c) {
-        case Command::APRD:
-        case Command::APRW:
-        case Command::FPRD:
-        case Command::FPRW:
-        case Command::BRD:
-        case Command::BRW:
-        case Command::ARMW:
-        case Command::FRMW:
-            return true;
-        default:
-            return false;
-    }
-}
-
 std::string state_name(std::uint8_t s) {
     if (protocol::is_valid_state(s)) return std::string(protocol::to_string(static_cast<AlState>(s)));
     return fmt::format("0x{:X}", s);
@@ -101,11 +72,7 @@ void MasterChecks::for_each_addressed(DatagramView d, F&& f) const {
         case Command::FRMW:
             for (std::size_t i = 0; i < n; ++i) {
                 if (!seg_.reached(i)) continue;
-                const esc::Esc& e = seg_.slave(i).esc();
-                // The station alias addresses too when DL control enables it (0x0100 bit 24).
-                const bool alias = (e.peek(addr(Reg::DlControl) + 3) & 0x01) != 0;
-                if (e.station_address() == d.adp() || (alias && e.peek16(addr(Reg::StationAlias)) == d.adp()))
-                    f(i);
+                if (seg_.slave(i).esc().addressed_fixed(d.adp())) f(i);
             }
             return;
         case Command::BRD:
@@ -143,9 +110,10 @@ void MasterChecks::on_request(ConstBytes frame, std::uint64_t now_ns) {
         const Command c = d.command();
         if ((c == Command::ARMW || c == Command::FRMW) && covers(d, addr(Reg::DcSystemTime))) ++drift_frames_;
         // In datagram order: a read of the AL status before a state request in the same frame counts.
-        if (is_read(c) && covers(d, addr(Reg::AlStatus)))
+        if (protocol::physical_read(c) && covers(d, addr(Reg::AlStatus)))
             for_each_addressed(d, [&](std::size_t i) { track_[i].request_unread = false; });
-        if (is_write(c)) for_each_addressed(d, [&](std::size_t i) { check_write(i, d, now_ns); });
+        if (protocol::physical_write(c))
+            for_each_addressed(d, [&](std::size_t i) { check_write(i, d, now_ns); });
     }
 }
 

@@ -2,6 +2,8 @@
 // written out by hand from the specification (so that both sides cannot agree on the same mistake).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <array>
 #include <vector>
 
@@ -35,6 +37,21 @@ TEST(ProtocolFrame, EthernetHeaderRoundTripAndEtherTypeBigEndian) {
     EXPECT_EQ(u.destination, h.destination);
     EXPECT_EQ(u.source, h.source);
     EXPECT_EQ(u.ether_type, 0x88A4);
+}
+
+TEST(ProtocolFrame, PhysicalCommandsThatReadAndWrite) {
+    // ETG.1000.4 5.4: which physical commands read and which write at the slaves they address.
+    using C = Command;
+    const C reads[] = {C::APRD, C::APRW, C::FPRD, C::FPRW, C::BRD, C::BRW, C::ARMW, C::FRMW};
+    const C writes[] = {C::APWR, C::APRW, C::FPWR, C::FPRW, C::BWR, C::BRW};
+    for (unsigned c = 0; c <= static_cast<unsigned>(C::FRMW); ++c) {
+        const auto cmd = static_cast<C>(c);
+        EXPECT_EQ(physical_read(cmd), std::find(std::begin(reads), std::end(reads), cmd) != std::end(reads))
+            << c;
+        EXPECT_EQ(physical_write(cmd),
+                  std::find(std::begin(writes), std::end(writes), cmd) != std::end(writes))
+            << c;
+    }
 }
 
 TEST(ProtocolFrame, EcatHeaderLengthAndType) {

@@ -2,6 +2,7 @@
 // against the simulated mechanics, limits, faults, touch probe and the factor group. Most tests drive the
 // dictionary directly in PREOP (the drive runs on the slave's timer ticks, like a master using SDO); the
 // cyclic modes are also tested end to end through process data in OP.
+// Long (about 740 lines) because it is one fixture for the whole drive: each test is short and reads alone.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,9 +13,9 @@
 
 #include "cia402/drive.hpp"
 #include "master/coe_client.hpp"
-#include "serve/in_process_link.hpp"
 #include "protocol/cia402.hpp"
 #include "protocol/cia402_objects.hpp"
+#include "serve/in_process_link.hpp"
 #include "test_support.hpp"
 
 namespace cia = vecat::protocol::cia402;
