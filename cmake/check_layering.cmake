@@ -33,7 +33,8 @@ set(LAYER_telemetry_types "")  # ... and idlc's generated sources
 set(LAYER_testing master cia402 faults telemetry serve)
 set(LAYER_esi device esc)
 set(LAYER_network cia402 esi)      # networks of mixed devices from a file
-set(LAYER_cli master telemetry cia402 faults esi serve esc report network)
+set(LAYER_replay network esc)     # replay of real captures against a line built from a file or the capture
+set(LAYER_cli master telemetry cia402 faults esi serve esc report network replay)
 
 # ---------------------------------------------------------------------------------------------------------
 if(NOT SOURCE_DIR OR NOT LINKS)

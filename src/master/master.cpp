@@ -12,6 +12,7 @@
 #include "protocol/fmmu.hpp"
 #include "protocol/registers.hpp"
 #include "protocol/sync_manager.hpp"
+#include "protocol/topology.hpp"
 
 namespace vecat::master {
 
@@ -249,12 +250,7 @@ bool Master::read_slave_information() {
         auto dl = read16(s.station, ra(Reg::DlStatus));
         if (!dl) return false;
         s.dl_status = *dl;
-        // Open with communication: DL status bits 9+2p..8+2p = 10b (ESC datasheet section II, 0x0110).
-        s.open_ports = 0;
-        for (unsigned p = 0; p < 4; ++p)
-            if ((s.dl_status & protocol::dl_status::communication(p)) &&
-                !(s.dl_status & protocol::dl_status::loop_closed(p)))
-                s.open_ports = static_cast<std::uint8_t>(s.open_ports | (1u << p));
+        s.open_ports = protocol::open_ports(s.dl_status);
         // The outcome of reset_slaves()' INIT request (SOEM's ecx_config_init reads it per slave too): a
         // master learns a state request's result from the AL status before it requests the next state.
         if (!read_al_status(s.station).ok) return false;
@@ -284,24 +280,13 @@ bool Master::read_slave_information() {
 }
 
 void Master::compute_topology() {
-    // Per slave: the open ports after port 0 not yet given to a slave, in the frame's order.
-    std::vector<std::vector<unsigned>> free(slaves_.size());
-    std::vector<std::size_t> path;  // slaves from the first to the current one that may have ports left
+    std::vector<std::uint8_t> open;
+    for (const auto& s : slaves_)
+        open.push_back(s.open_ports);
+    const auto up = protocol::topology_from_open_ports(open);
     for (std::size_t i = 0; i < slaves_.size(); ++i) {
-        SlaveInfo& s = slaves_[i];
-        for (unsigned p : protocol::kPortsAfterPort0)
-            if ((s.open_ports >> p) & 1u) free[i].push_back(p);
-        s.parent = -1;
-        s.parent_port = 0;
-        while (!path.empty() && free[path.back()].empty())
-            path.pop_back();
-        if (!path.empty()) {
-            const std::size_t up = path.back();
-            s.parent = static_cast<int>(up);
-            s.parent_port = free[up].front();
-            free[up].erase(free[up].begin());
-        }
-        path.push_back(i);
+        slaves_[i].parent = up[i].parent;
+        slaves_[i].parent_port = up[i].port;
     }
 }
 

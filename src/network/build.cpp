@@ -69,11 +69,7 @@ std::unique_ptr<esc::Application> process_image(const device::DeviceDescription&
     return std::make_unique<esc::ProcessImageApplication>(d.output_bytes(), d.input_bytes());
 }
 
-struct Made {
-    esc::DeviceModel model;
-    esc::ApplicationFactory factory;
-    esc::EscConfig esc;
-};
+using Made = DeviceParts;
 
 Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::string>& notes) {
     Made m;
@@ -107,28 +103,15 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
             if (!in) throw NetworkFileError(at + e.path + ": cannot be read");
             std::vector<std::uint8_t> img((std::istreambuf_iterator<char>(in)),
                                           std::istreambuf_iterator<char>());
-            const protocol::SiiInfo sii = protocol::parse_sii(img);
-            if (img.size() < 0x80 || !sii.checksum_ok || sii.identity.vendor_id == 0)
-                throw NetworkFileError(at + e.path + ": not an SII image (" + std::to_string(img.size()) +
-                                       " bytes, checksum " + (sii.checksum_ok ? "right" : "wrong") +
-                                       ", vendor " + std::to_string(sii.identity.vendor_id) + ")");
+            patch(img, e);
             std::vector<std::string> n;
-            d = device::description_from_sii(sii, &n);
+            try {
+                m = device_from_sii(std::move(img), n, [&](device::DeviceDescription& dd) { apply(dd, e); });
+            } catch (const NetworkFileError& x) {
+                throw NetworkFileError(at + e.path + ": " + x.what());
+            }
             for (const auto& x : n)
                 notes.push_back(at + e.path + ": " + x);
-            d.eeprom_size_bytes = static_cast<std::uint32_t>(img.size());
-            apply(d, e);
-            patch(img, e);
-            m.model = esc::DeviceModel::of(d);
-            m.model.sii_image = std::make_shared<const std::vector<std::uint8_t>>(std::move(img));
-            m.esc.port_descriptor = sii_descriptor(sii);
-            if (d.mailbox_protocols & device::mbx_proto::CoE)
-                m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
-                    return std::unique_ptr<esc::Application>(
-                        std::make_unique<coe::CoeApplication>(dd, objects));
-                };
-            else
-                m.factory = process_image;
             return m;
         }
         case Source::Coupler:
@@ -164,6 +147,29 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
 }
 
 }  // namespace
+
+DeviceParts device_from_sii(std::vector<std::uint8_t> img, std::vector<std::string>& notes,
+                            const std::function<void(device::DeviceDescription&)>& adjust) {
+    const protocol::SiiInfo sii = protocol::parse_sii(img);
+    if (img.size() < 0x80 || !sii.checksum_ok || sii.identity.vendor_id == 0)
+        throw NetworkFileError("not an SII image (" + std::to_string(img.size()) + " bytes, checksum " +
+                               (sii.checksum_ok ? "right" : "wrong") + ", vendor " +
+                               std::to_string(sii.identity.vendor_id) + ")");
+    DeviceParts m;
+    device::DeviceDescription d = device::description_from_sii(sii, &notes);
+    d.eeprom_size_bytes = static_cast<std::uint32_t>(img.size());
+    if (adjust) adjust(d);
+    m.model = esc::DeviceModel::of(d);
+    m.model.sii_image = std::make_shared<const std::vector<std::uint8_t>>(std::move(img));
+    m.esc.port_descriptor = sii_descriptor(sii);
+    if (d.mailbox_protocols & device::mbx_proto::CoE)
+        m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
+            return std::unique_ptr<esc::Application>(std::make_unique<coe::CoeApplication>(dd, objects));
+        };
+    else
+        m.factory = process_image;
+    return m;
+}
 
 std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept {
     std::uint8_t ports = 0;

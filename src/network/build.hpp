@@ -3,6 +3,7 @@
 // them, in one esc::Segment.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,6 +22,18 @@ struct BuiltNetwork {
 // device, an SII dump that cannot be read, a port cabled that the device does not have). file: the name
 // used in the messages.
 BuiltNetwork build_network(const NetworkFile& f, const std::string& file);
+
+// A device made from an SII EEPROM image (a dump, or one recovered from a capture): the image served byte
+// for byte, the description its categories give (adjust: overrides applied to it), a CoE application when
+// the image names CoE (else a bare process image), and the ports of its General category. Throws
+// NetworkFileError when the bytes are no SII image.
+struct DeviceParts {
+    esc::DeviceModel model;
+    esc::ApplicationFactory factory;
+    esc::EscConfig esc;
+};
+DeviceParts device_from_sii(std::vector<std::uint8_t> image, std::vector<std::string>& notes,
+                            const std::function<void(device::DeviceDescription&)>& adjust = {});
 
 // The ports a device has (bit p: port p), as its ESC's port descriptor (0x0007) says.
 std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept;

@@ -1,0 +1,35 @@
+#include "protocol/topology.hpp"
+
+#include "protocol/registers.hpp"
+
+namespace vecat::protocol {
+
+std::uint8_t open_ports(std::uint16_t dl_status) noexcept {
+    std::uint8_t open = 0;
+    for (unsigned p = 0; p < 4; ++p)
+        if ((dl_status & dl_status::communication(p)) && !(dl_status & dl_status::loop_closed(p)))
+            open = static_cast<std::uint8_t>(open | (1u << p));
+    return open;
+}
+
+std::vector<Upstream> topology_from_open_ports(std::span<const std::uint8_t> open) {
+    std::vector<Upstream> up(open.size());
+    // Per slave: the open ports after port 0 not yet given to a slave, in the frame's order.
+    std::vector<std::vector<unsigned>> free(open.size());
+    std::vector<std::size_t> path;  // slaves from the first to the current one that may have ports left
+    for (std::size_t i = 0; i < open.size(); ++i) {
+        for (unsigned p : kPortsAfterPort0)
+            if ((open[i] >> p) & 1u) free[i].push_back(p);
+        while (!path.empty() && free[path.back()].empty())
+            path.pop_back();
+        if (!path.empty()) {
+            const std::size_t parent = path.back();
+            up[i] = {static_cast<int>(parent), free[parent].front()};
+            free[parent].erase(free[parent].begin());
+        }
+        path.push_back(i);
+    }
+    return up;
+}
+
+}  // namespace vecat::protocol

@@ -1,0 +1,180 @@
+#include "replay/recover.hpp"
+
+#include <algorithm>
+#include <map>
+
+#include "protocol/frame.hpp"
+#include "protocol/registers.hpp"
+
+namespace vecat::replay {
+
+using protocol::addr;
+using protocol::Command;
+using protocol::Reg;
+
+std::size_t RecoveredSlave::sii_words_known() const {
+    return static_cast<std::size_t>(std::count(known.begin(), known.end(), 1));
+}
+
+namespace {
+
+// SII control/status (0x0502, ESC datasheet section II): bit 6 read size 8 bytes, bit 8 read command,
+// bit 15 busy.
+constexpr std::uint16_t kSiiRead8Bytes = 0x0040;
+constexpr std::uint16_t kSiiReadCommand = 0x0100;
+constexpr std::uint16_t kSiiBusy = 0x8000;
+constexpr std::size_t kMaxSiiWords = 0x8000;  // 64 KiB: the largest EEPROM with 32-bit addressing used
+
+bool auto_increment(Command c) {
+    return c == Command::APRD || c == Command::APWR || c == Command::APRW || c == Command::ARMW;
+}
+bool broadcast(Command c) {
+    return c == Command::BRD || c == Command::BWR || c == Command::BRW;
+}
+bool fixed(Command c) {
+    return c == Command::FPRD || c == Command::FPWR || c == Command::FPRW || c == Command::FRMW;
+}
+
+// A datagram's bytes [ado, ado + len) seen as register space: the byte at register a, if covered.
+struct Window {
+    std::uint16_t ado = 0;
+    std::size_t len = 0;
+    const std::uint8_t* data = nullptr;
+    bool covers(std::uint16_t a, std::size_t n = 1) const { return a >= ado && a + n <= ado + len; }
+    std::uint8_t at(std::uint16_t a) const { return data[a - ado]; }
+    std::uint16_t u16(std::uint16_t a) const { return ld_le16(data + (a - ado)); }
+    std::uint32_t u32(std::uint16_t a) const { return ld_le32(data + (a - ado)); }
+};
+
+struct SiiTracker {
+    std::uint32_t address = 0;
+    bool reading = false;  // the last command written was a read
+};
+
+class Recoverer {
+  public:
+    Recoverer(const Capture& c, const Pairing& p) : c_(c), p_(p) {}
+
+    RecoveredLine run() {
+        line_.slave_count = count_slaves();
+        line_.slaves.resize(line_.slave_count);
+        sii_.resize(line_.slave_count);
+        for (const Exchange& e : p_.exchanges)
+            exchange(e);
+        return std::move(line_);
+    }
+
+  private:
+    std::size_t count_slaves() const {
+        std::size_t n = 0;
+        for (const Exchange& e : p_.exchanges) {
+            const auto& f = c_.frames[e.reply].bytes;
+            const protocol::ParsedFrame pf = protocol::parse_frame(f);
+            for (std::size_t i = 0; i < pf.count; ++i) {
+                protocol::DatagramView d(const_cast<std::uint8_t*>(f.data()) + pf.offsets[i]);
+                if (d.command() == Command::BRD && d.ado() < protocol::kRegisterSpaceSize)
+                    n = std::max<std::size_t>(n, d.wkc());
+            }
+        }
+        return n;
+    }
+
+    std::optional<std::size_t> position(Command cmd, std::uint16_t adp) const {
+        if (auto_increment(cmd)) {
+            const std::size_t pos = static_cast<std::uint16_t>(0u - adp);
+            if (pos < line_.slave_count) return pos;
+        } else if (fixed(cmd)) {
+            if (auto it = station_.find(adp); it != station_.end()) return it->second;
+        }
+        return std::nullopt;
+    }
+
+    void exchange(const Exchange& e) {
+        const auto& rq = c_.frames[e.request].bytes;
+        const auto& rp = c_.frames[e.reply].bytes;
+        const protocol::ParsedFrame pq = protocol::parse_frame(rq);
+        const protocol::ParsedFrame pr = protocol::parse_frame(rp);
+        for (std::size_t i = 0; i < pr.count && i < pq.count; ++i) {
+            protocol::DatagramView q(const_cast<std::uint8_t*>(rq.data()) + pq.offsets[i]);
+            protocol::DatagramView r(const_cast<std::uint8_t*>(rp.data()) + pr.offsets[i]);
+            const Command cmd = r.command();
+            if (cmd >= Command::LRD && cmd <= Command::LRW) continue;
+            const std::uint16_t adp =
+                e.request_recorded ? q.adp() : request_adp(r.raw_command(), r.adp(), line_.slave_count);
+            const Window written{q.ado(), q.length(), e.request_recorded ? q.data() : r.data()};
+            const Window read{r.ado(), r.length(), r.data()};
+            if (protocol::physical_write(cmd) && r.wkc() > 0) {
+                if (broadcast(cmd)) {
+                    for (std::size_t s = 0; s < line_.slave_count; ++s)
+                        wrote(s, written);
+                } else if (auto s = position(cmd, adp)) {
+                    wrote(*s, written);
+                }
+            }
+            if ((cmd == Command::APRD || cmd == Command::FPRD || cmd == Command::APRW ||
+                 cmd == Command::FPRW) &&
+                r.wkc() >= 1)
+                if (auto s = position(cmd, adp)) was_read(*s, read);
+        }
+    }
+
+    void wrote(std::size_t s, const Window& w) {
+        if (w.covers(addr(Reg::StationAddress), 2)) {
+            const std::uint16_t station = w.u16(addr(Reg::StationAddress));
+            line_.slaves[s].station = station;
+            station_[station] = s;
+        }
+        SiiTracker& t = sii_[s];
+        if (w.covers(addr(Reg::SiiAddress), 4)) t.address = w.u32(addr(Reg::SiiAddress));
+        if (w.covers(addr(Reg::SiiControl), 2))
+            t.reading = (w.u16(addr(Reg::SiiControl)) & kSiiReadCommand) != 0;
+    }
+
+    void was_read(std::size_t s, const Window& w) {
+        RecoveredSlave& rs = line_.slaves[s];
+        for (std::uint16_t a = 0; a < kEscInfoBytes; ++a)
+            if (w.covers(a) && !rs.esc_info[a]) rs.esc_info[a] = w.at(a);
+        if (w.covers(addr(Reg::DlStatus), 2) && !rs.dl_status) rs.dl_status = w.u16(addr(Reg::DlStatus));
+        SiiTracker& t = sii_[s];
+        bool busy = false;
+        if (w.covers(addr(Reg::SiiControl), 2)) {
+            const std::uint16_t ctl = w.u16(addr(Reg::SiiControl));
+            busy = (ctl & kSiiBusy) != 0;
+            if (!rs.sii_read_8_bytes) rs.sii_read_8_bytes = (ctl & kSiiRead8Bytes) != 0;
+        }
+        if (w.covers(addr(Reg::SiiAddress), 4)) t.address = w.u32(addr(Reg::SiiAddress));
+        if (!t.reading || busy || !w.covers(addr(Reg::SiiData), 4)) return;
+        const std::size_t bytes =
+            rs.sii_read_8_bytes.value_or(true) && w.covers(addr(Reg::SiiData), 8) ? 8 : 4;
+        for (std::size_t k = 0; k < bytes / 2; ++k) {
+            const std::size_t word = t.address + k;
+            if (word >= kMaxSiiWords) break;
+            if (rs.sii.size() <= word) {
+                rs.sii.resize(word + 1, 0xFFFF);
+                rs.known.resize(word + 1, 0);
+            }
+            rs.sii[word] = w.u16(static_cast<std::uint16_t>(addr(Reg::SiiData) + 2 * k));
+            rs.known[word] = 1;
+        }
+    }
+
+    const Capture& c_;
+    const Pairing& p_;
+    RecoveredLine line_;
+    std::vector<SiiTracker> sii_;
+    std::map<std::uint16_t, std::size_t> station_;
+};
+
+}  // namespace
+
+std::uint16_t request_adp(std::uint8_t command, std::uint16_t reply_adp, std::size_t slave_count) noexcept {
+    const auto c = static_cast<Command>(command);
+    if (auto_increment(c) || broadcast(c)) return static_cast<std::uint16_t>(reply_adp - slave_count);
+    return reply_adp;
+}
+
+RecoveredLine recover_line(const Capture& c, const Pairing& p) {
+    return Recoverer(c, p).run();
+}
+
+}  // namespace vecat::replay

@@ -1,0 +1,43 @@
+// What a capture tells about the line it was taken on, so that the replay can build that line without a
+// network file: the number of slaves (working counters of broadcast reads), their station addresses (the
+// master's auto-increment writes of 0x0010), their ESC information registers (0x0000-0x0009) and DL status
+// (0x0110) as first read, and the SII EEPROM words the master read through the SII interface (0x0502-0x050F,
+// ESC datasheet section II 3.x / ETG.1000.4 6.4.5).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "replay/capture.hpp"
+
+namespace vecat::replay {
+
+inline constexpr std::size_t kEscInfoBytes = 10;  // 0x0000-0x0009: type .. features
+
+struct RecoveredSlave {
+    std::optional<std::uint16_t> station;  // configured station address
+    std::array<std::optional<std::uint8_t>, kEscInfoBytes> esc_info{};
+    std::optional<std::uint16_t> dl_status;
+    std::optional<bool> sii_read_8_bytes;  // 0x0502 bit 6, as the ESC reported it
+    // SII words read (index: word address), known[i] when word i was read.
+    std::vector<std::uint16_t> sii;
+    std::vector<std::uint8_t> known;
+    std::size_t sii_words_known() const;
+};
+
+struct RecoveredLine {
+    std::size_t slave_count = 0;  // from the broadcast reads' working counters
+    std::vector<RecoveredSlave> slaves;
+};
+
+// Walks every exchange in order. Needs the capture's slave count first for replies without their request
+// (auto-increment addresses in a reply have been counted up by every slave the frame passed).
+RecoveredLine recover_line(const Capture& c, const Pairing& p);
+
+// The request datagram's ADP for a datagram whose capture holds only the reply.
+std::uint16_t request_adp(std::uint8_t command, std::uint16_t reply_adp, std::size_t slave_count) noexcept;
+
+}  // namespace vecat::replay

@@ -1,0 +1,326 @@
+#include "replay/replay.hpp"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+
+#include "device/simple_devices.hpp"
+#include "network/build.hpp"
+#include "protocol/frame.hpp"
+#include "protocol/registers.hpp"
+#include "protocol/sii.hpp"
+#include "protocol/topology.hpp"
+
+namespace vecat::replay {
+
+using protocol::Command;
+
+double ReplayReport::wkc_percent() const {
+    return datagrams ? 100.0 * static_cast<double>(wkc_same) / static_cast<double>(datagrams) : 100.0;
+}
+
+double ReplayReport::data_percent() const {
+    return reads ? 100.0 * static_cast<double>(reads_same + reads_time + reads_counter) /
+                       static_cast<double>(reads)
+                 : 100.0;
+}
+
+namespace {
+
+constexpr std::size_t kSourceMac0 = 6;
+constexpr std::uint8_t kForwardedBit = 0x02;
+constexpr std::size_t kFramesPerTally = 8;
+constexpr std::uint64_t kMaxTicksPerGap = 40'000;  // a longer pause is skipped over
+
+bool pure_read(Command c) {
+    return c == Command::APRD || c == Command::FPRD || c == Command::BRD || c == Command::LRD;
+}
+bool pure_write(Command c) {
+    return c == Command::APWR || c == Command::FPWR || c == Command::BWR || c == Command::LWR;
+}
+bool logical(Command c) {
+    return c >= Command::LRD && c <= Command::LRW;
+}
+
+// The master's frame for a reply whose request the capture lacks: the forwarded bit cleared, the working
+// counters 0, auto-increment and broadcast addresses counted back, read data zeroed (masters send reads
+// with zeros). Read-write commands keep the reply's data: what was written is unknown (known[i] false).
+std::vector<std::uint8_t> rebuild_request(const std::vector<std::uint8_t>& reply, std::size_t slaves,
+                                          std::vector<std::uint8_t>& known) {
+    std::vector<std::uint8_t> f = reply;
+    f[kSourceMac0] = static_cast<std::uint8_t>(f[kSourceMac0] & ~kForwardedBit);
+    const protocol::ParsedFrame pf = protocol::parse_frame(f);
+    known.assign(pf.count, 1);
+    for (std::size_t i = 0; i < pf.count; ++i) {
+        protocol::DatagramView d = pf.datagram(f, i);
+        d.set_adp(request_adp(d.raw_command(), d.adp(), slaves));
+        d.set_wkc(0);
+        if (pure_read(d.command()))
+            std::fill_n(d.data(), d.length(), 0);
+        else if (!pure_write(d.command()))
+            known[i] = 0;
+    }
+    return f;
+}
+
+class Replayer {
+  public:
+    Replayer(const Capture& c, const Pairing& p, esc::Segment& line, const ReplayOptions& o)
+        : c_(c), p_(p), line_(line), o_(o) {}
+
+    ReplayReport run() {
+        r_.unanswered = p_.unanswered;
+        std::size_t slaves = line_.size();
+        for (const Exchange& e : p_.exchanges) {
+            const CapturedFrame& rq = c_.frames[e.request];
+            const CapturedFrame& rp = c_.frames[e.reply];
+            advance(rq.time_ns);
+            std::vector<std::uint8_t> known;
+            std::vector<std::uint8_t> frame =
+                e.request_recorded ? rq.bytes : rebuild_request(rp.bytes, slaves, known);
+            if (e.request_recorded) known.assign(protocol::kMaxDatagramsPerFrame, 1);
+            r_.rebuilt_requests += !e.request_recorded;
+            ++r_.exchanges;
+            std::size_t len = frame.size();
+            frame.resize(std::max(len, protocol::kMinEthFrame) + 64);
+            const bool replied = line_.process_frame(frame, len, rq.time_ns);
+            frame.resize(len);
+            compare(rp, replied ? &frame : nullptr, known);
+        }
+        return std::move(r_);
+    }
+
+  private:
+    void advance(std::uint64_t t) {
+        if (!started_) {
+            started_ = true;
+            last_tick_ = t;
+            return;
+        }
+        if (t > last_tick_ + kMaxTicksPerGap * o_.tick_ns) last_tick_ = t - kMaxTicksPerGap * o_.tick_ns;
+        while (last_tick_ + o_.tick_ns <= t) {
+            last_tick_ += o_.tick_ns;
+            line_.tick(last_tick_);
+        }
+    }
+
+    void compare(const CapturedFrame& recorded, const std::vector<std::uint8_t>* got,
+                 const std::vector<std::uint8_t>& known) {
+        const protocol::ParsedFrame pr = protocol::parse_frame(recorded.bytes);
+        protocol::ParsedFrame pg;
+        if (got) pg = protocol::parse_frame(*got);
+        for (std::size_t i = 0; i < pr.count; ++i) {
+            protocol::DatagramView want(const_cast<std::uint8_t*>(recorded.bytes.data()) + pr.offsets[i]);
+            const Command cmd = want.command();
+            ++r_.datagrams;
+            Tally& t = r_.by_address[{want.raw_command(), want.ado()}];
+            ++t.datagrams;
+            Difference d;
+            d.frame = recorded.number;
+            d.datagram = i;
+            d.command = want.raw_command();
+            d.adp = want.adp();
+            d.ado = want.ado();
+            d.recorded_wkc = want.wkc();
+            const bool has = got && pg.error == protocol::FrameError::None && i < pg.count;
+            const bool data_known = i < known.size() && known[i];
+            const bool counted =
+                data_known && (protocol::physical_read(cmd) || logical(cmd)) && cmd != Command::LWR;
+            if (!has) {
+                d.no_reply = d.working_counter = true;
+                ++t.wkc_differs;
+                if (counted) logical(cmd) ? ++r_.process_reads : ++r_.reads;
+                note(t, d);
+                continue;
+            }
+            protocol::DatagramView mine(const_cast<std::uint8_t*>(got->data()) + pg.offsets[i]);
+            d.replayed_wkc = mine.wkc();
+            if (mine.wkc() != want.wkc()) {
+                d.working_counter = true;
+                ++t.wkc_differs;
+                if (counted) logical(cmd) ? ++r_.process_reads : ++r_.reads;
+                note(t, d);
+                continue;
+            }
+            ++r_.wkc_same;
+            if (!counted) continue;
+            const std::size_t n = std::min<std::size_t>(want.length(), mine.length());
+            Verdict v = Verdict::Same;
+            for (std::size_t k = 0; k < n; ++k) {
+                if (want.data()[k] == mine.data()[k]) continue;
+                const Verdict b = logical(cmd) ? Verdict::ProcessData
+                                  : want.ado() + k < protocol::kRegisterSpaceSize
+                                      ? register_class(static_cast<std::uint16_t>(want.ado() + k))
+                                      : Verdict::Differs;
+                if (v == Verdict::Same) d.first_byte = static_cast<std::uint16_t>(want.ado() + k);
+                if (b > v) {
+                    v = b;
+                    if (b == Verdict::Differs) d.first_byte = static_cast<std::uint16_t>(want.ado() + k);
+                }
+            }
+            if (logical(cmd)) {
+                ++r_.process_reads;
+                r_.process_same += v == Verdict::Same;
+            } else {
+                ++r_.reads;
+                r_.reads_same += v == Verdict::Same;
+                r_.reads_time += v == Verdict::TimeDependent;
+                r_.reads_counter += v == Verdict::Counter;
+            }
+            if (v == Verdict::Same) continue;
+            d.verdict = v;
+            const std::size_t from = d.first_byte - want.ado();
+            const std::size_t shown = std::min(Difference::kShownBytes, n - from);
+            d.recorded.assign(want.data() + from, want.data() + from + shown);
+            d.replayed.assign(mine.data() + from, mine.data() + from + shown);
+            (v == Verdict::Differs ? t.data_differs : t.data_excused)++;
+            note(t, d);
+        }
+    }
+
+    void note(Tally& t, const Difference& d) {
+        if (t.frames.size() < kFramesPerTally) t.frames.push_back(d.frame);
+        if (r_.differences.size() < o_.max_differences) r_.differences.push_back(d);
+    }
+
+    const Capture& c_;
+    const Pairing& p_;
+    esc::Segment& line_;
+    const ReplayOptions& o_;
+    ReplayReport r_;
+    bool started_ = false;
+    std::uint64_t last_tick_ = 0;
+};
+
+// The SII image of a recovered slave: the words read, 0xFFFF elsewhere (an erased EEPROM), as large as its
+// size word (0x003E: (value + 1) kibibits) says, or large enough for the words read. A configuration area
+// read without its checksum word gets the checksum it must have had.
+std::vector<std::uint8_t> sii_image(const RecoveredSlave& s) {
+    namespace sii = protocol::sii;
+    const auto known = [&](unsigned w) { return w < s.known.size() && s.known[w]; };
+    std::size_t bytes = std::max<std::size_t>(2 * s.sii.size(), 2 * sii::FirstCategory);
+    if (known(sii::Size)) bytes = std::max<std::size_t>(bytes, (std::size_t{s.sii[sii::Size]} + 1) * 128);
+    bytes = (bytes + 127) / 128 * 128;
+    std::vector<std::uint8_t> img(bytes, 0xFF);
+    for (std::size_t w = 0; w < s.sii.size(); ++w)
+        if (s.known[w]) st_le16(img.data() + 2 * w, s.sii[w]);
+    if (!known(sii::Checksum)) img[2 * sii::Checksum] = protocol::sii_config_crc(ConstBytes(img.data(), 14));
+    return img;
+}
+
+esc::EscConfig recovered_config(const RecoveredSlave& s, esc::EscConfig cfg) {
+    const auto byte = [&](std::size_t a) { return s.esc_info[a]; };
+    if (byte(0)) cfg.type = *byte(0);
+    if (byte(1)) cfg.revision = *byte(1);
+    if (byte(2) && byte(3)) cfg.build = static_cast<std::uint16_t>(*byte(2) | *byte(3) << 8);
+    if (byte(4)) cfg.fmmu_count = *byte(4);
+    if (byte(5)) cfg.sm_count = *byte(5);
+    if (byte(6) && *byte(6) >= 8) cfg.ram_bytes = std::uint32_t{*byte(6)} * 1024;
+    if (byte(7)) cfg.port_descriptor = *byte(7);
+    if (byte(8) && byte(9)) cfg.features = static_cast<std::uint16_t>(*byte(8) | *byte(9) << 8);
+    if (s.sii_read_8_bytes) cfg.sii_read_8_bytes = *s.sii_read_8_bytes;
+    return cfg;
+}
+
+}  // namespace
+
+ReplayReport replay(const Capture& capture, const Pairing& pairing, esc::Segment& line,
+                    const ReplayOptions& options) {
+    return Replayer(capture, pairing, line, options).run();
+}
+
+std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
+                                                   std::vector<std::string>& notes) {
+    auto seg = std::make_unique<esc::Segment>();
+    for (std::size_t i = 0; i < line.slaves.size(); ++i) {
+        const RecoveredSlave& s = line.slaves[i];
+        const std::string at = "slave " + std::to_string(i) + ": ";
+        network::DeviceParts parts;
+        bool made = false;
+        if (s.sii_words_known() > 0) {
+            std::vector<std::string> n;
+            try {
+                parts = network::device_from_sii(sii_image(s), n);
+                made = true;
+                notes.push_back(at + "from " + std::to_string(s.sii_words_known()) +
+                                " SII words of the capture");
+            } catch (const std::exception& x) {
+                notes.push_back(at + "the SII words of the capture make no device (" + x.what() + ")");
+            }
+            for (const auto& x : n)
+                notes.push_back(at + x);
+        } else {
+            notes.push_back(at + "the capture holds no SII read: a bare device without PDI");
+        }
+        if (!made) {
+            const device::DeviceDescription d = device::coupler();
+            parts.model = esc::DeviceModel::of(d);
+            parts.factory = [](const device::DeviceDescription& dd) {
+                return std::unique_ptr<esc::Application>(
+                    std::make_unique<esc::ProcessImageApplication>(dd.output_bytes(), dd.input_bytes()));
+            };
+        }
+        parts.esc = recovered_config(s, parts.esc);
+        seg->add(
+            std::make_unique<esc::Slave>(parts.model, parts.esc, parts.factory(*parts.model.description)),
+            parts.factory);
+    }
+    // The tree, when the DL status of every slave was read; else a line.
+    const bool all = !line.slaves.empty() && std::all_of(line.slaves.begin(), line.slaves.end(),
+                                                         [](const auto& s) { return s.dl_status; });
+    if (all) {
+        std::vector<std::uint8_t> open;
+        for (const auto& s : line.slaves)
+            open.push_back(protocol::open_ports(*s.dl_status));
+        const auto up = protocol::topology_from_open_ports(open);
+        std::vector<int> parents;
+        std::vector<std::uint8_t> ports;
+        std::vector<std::uint32_t> delays(up.size(), 0);
+        for (const auto& u : up) {
+            parents.push_back(u.parent);
+            ports.push_back(static_cast<std::uint8_t>(u.parent < 0 ? 1 : u.port));
+        }
+        std::string why;
+        if (!seg->set_topology(parents, ports, delays, &why))
+            notes.push_back("the DL status of the slaves gives no tree (" + why + "): a line");
+    }
+    return seg;
+}
+
+std::string format_report(const ReplayReport& r) {
+    std::string s;
+    s += fmt::format(
+        "exchanges: {} ({} with the request rebuilt from the reply), {} master frames without reply\n",
+        r.exchanges, r.rebuilt_requests, r.unanswered);
+    s += fmt::format("working counter as recorded: {} of {} datagrams ({:.2f} %)\n", r.wkc_same, r.datagrams,
+                     r.wkc_percent());
+    s += fmt::format(
+        "register and memory reads: {} of {} as recorded ({:.2f} %): {} same, {} differ in time-dependent "
+        "values, "
+        "{} in counters\n",
+        r.reads_same + r.reads_time + r.reads_counter, r.reads, r.data_percent(), r.reads_same, r.reads_time,
+        r.reads_counter);
+    s += fmt::format("process data reads: {} of {} with the recorded inputs\n", r.process_same,
+                     r.process_reads);
+    bool header = false;
+    for (const auto& [key, t] : r.by_address) {
+        if (!t.wkc_differs && !t.data_differs && !t.data_excused) continue;
+        if (!header) {
+            s += "differences by command and address:\n";
+            header = true;
+        }
+        const auto cmd = static_cast<Command>(key.first);
+        std::string frames;
+        for (std::size_t f : t.frames)
+            frames += (frames.empty() ? "" : ", ") + std::to_string(f);
+        s += fmt::format(
+            "  {:<4} 0x{:04X} {:<22} {:>5} datagrams: working counter {:>4}, data {:>4} (+{} excused); "
+            "frames {}\n",
+            protocol::to_string(cmd), key.second,
+            logical(cmd) ? std::string("logical") : area_name(key.second), t.datagrams, t.wkc_differs,
+            t.data_differs, t.data_excused, frames);
+    }
+    return s;
+}
+
+}  // namespace vecat::replay
