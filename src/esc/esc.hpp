@@ -166,6 +166,10 @@ class Esc {
         bool ecat_writes = false;
         // mailbox
         bool mbx_full = false;
+        // Status 0x0805 bits 0 and 1 (ESC datasheet section II): interrupt write, set when the buffer was
+        // completely written, cleared when its first byte is read; interrupt read, set when it was completely
+        // read, cleared when its first byte is written. Either side (ECAT or PDI) may be the writer.
+        bool irq_write = false, irq_read = false;
         // buffered: buffer numbers 0..2 at start + n * length
         std::uint8_t buf_ecat = 0, buf_next = kNone, buf_pdi = 1;
         bool ecat_reading = false;

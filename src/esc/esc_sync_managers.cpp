@@ -53,6 +53,10 @@ bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size
     if (s.mailbox) {
         if (!s.mbx_full) return false;  // empty mailbox: not counted
         src = &mem_[s.start + off];
+        if (off == 0 && s.irq_write) {
+            s.irq_write = false;
+            update_sm_status(i);
+        }
     } else {
         if (!s.ecat_reading) {
             if (s.buf_next != SmState::kNone) {
@@ -65,9 +69,10 @@ bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size
     }
     copy_out(dst, src, n, or_into);
     if (off + n == s.length) {  // last byte read: buffer released
-        if (s.mailbox)
+        if (s.mailbox) {
             s.mbx_full = false;
-        else
+            s.irq_read = true;
+        } else
             s.ecat_reading = false;
         set_al_event(al_event::sm(i));
         update_sm_status(i);
@@ -94,8 +99,10 @@ bool Esc::sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, st
     if (s.mailbox) {
         if (s.mbx_full) return false;  // full mailbox: refused, not counted (masters retry)
         std::memcpy(&mem_[s.start + off], src, n);
+        if (off == 0) s.irq_read = false;
         if (off + n == s.length) {
             s.mbx_full = true;
+            s.irq_write = true;
             s.ever_written = true;
             ++s.complete_writes;
             set_al_event(al_event::sm(i));
@@ -165,6 +172,7 @@ void Esc::update_sm(unsigned i) {
         s.single = single;
         s.ecat_writes = c.ecat_writes();
         s.mbx_full = false;
+        s.irq_write = s.irq_read = false;
         s.ecat_reading = false;
         s.ever_written = false;
         s.buf_next = SmState::kNone;
@@ -206,7 +214,9 @@ void Esc::update_sm_status(unsigned i) {
     if (!s.active) {
         st = 0;
     } else if (s.mailbox) {
-        if (s.mbx_full) st = sm::StatusMailboxFull | sm::StatusIrqWrite;
+        if (s.mbx_full) st |= sm::StatusMailboxFull;
+        if (s.irq_write) st |= sm::StatusIrqWrite;
+        if (s.irq_read) st |= sm::StatusIrqRead;
     } else {
         const std::uint8_t last =
             s.buf_next != SmState::kNone ? s.buf_next : (s.ecat_writes ? s.buf_pdi : s.buf_ecat);
@@ -245,6 +255,8 @@ bool Esc::pdi_mailbox_take(unsigned i, Bytes out) {
     if (i >= cfg_.sm_count || !s.active || !s.mailbox || !s.ecat_writes || !s.mbx_full) return false;
     std::memcpy(out.data(), &mem_[s.start], std::min<std::size_t>(out.size(), s.length));
     s.mbx_full = false;
+    s.irq_write = false;
+    s.irq_read = true;
     clear_al_event(al_event::sm(i));
     update_sm_status(i);
     return true;
@@ -257,6 +269,8 @@ bool Esc::pdi_mailbox_put(unsigned i, ConstBytes data) {
     std::memcpy(&mem_[s.start], data.data(), n);
     std::memset(&mem_[s.start + n], 0, s.length - n);
     s.mbx_full = true;
+    s.irq_write = true;
+    s.irq_read = false;
     update_sm_status(i);
     return true;
 }
@@ -267,6 +281,8 @@ bool Esc::pdi_buffer_read(unsigned i, Bytes out) {
     if (s.mailbox) {  // 1-buffer mode: a complete buffer is taken, the last one stays readable
         if (s.mbx_full) {
             s.mbx_full = false;
+            s.irq_write = false;
+            s.irq_read = true;
             clear_al_event(al_event::sm(i));
             update_sm_status(i);
         }

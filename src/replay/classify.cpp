@@ -15,6 +15,8 @@ std::string_view to_string(Verdict v) noexcept {
             return "time-dependent";
         case Verdict::Counter:
             return "counter";
+        case Verdict::Timing:
+            return "timing";
         case Verdict::ProcessData:
             return "process data";
         case Verdict::Differs:

@@ -14,6 +14,8 @@ enum class Verdict : std::uint8_t {
     Same,
     TimeDependent,  // DC times, receive times, latches, SYNC start times (ESC datasheet section II 0x09xx)
     Counter,        // error and lost-link counters (0x0300-0x0313), watchdog counters (0x0442-0x0443)
+    Timing,         // vecat's reply is one the real device gave to the same read a little earlier or later:
+                    // the device got there at another time (a state change, a mailbox reply, an EEPROM read)
     ProcessData,    // logical reads: the inputs of the recorded machine
     Differs,        // behaviour
 };

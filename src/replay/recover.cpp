@@ -5,6 +5,7 @@
 
 #include "protocol/frame.hpp"
 #include "protocol/registers.hpp"
+#include "protocol/sii.hpp"
 
 namespace vecat::replay {
 
@@ -13,7 +14,7 @@ using protocol::Command;
 using protocol::Reg;
 
 std::size_t RecoveredSlave::sii_words_known() const {
-    return static_cast<std::size_t>(std::count(known.begin(), known.end(), 1));
+    return static_cast<std::size_t>(std::count_if(known.begin(), known.end(), [](auto k) { return k != 0; }));
 }
 
 namespace {
@@ -21,9 +22,25 @@ namespace {
 // SII control/status (0x0502, ESC datasheet section II): bit 6 read size 8 bytes, bit 8 read command,
 // bit 15 busy.
 constexpr std::uint16_t kSiiRead8Bytes = 0x0040;
+constexpr std::uint16_t kSiiTwoAddressBytes = 0x0080;
 constexpr std::uint16_t kSiiReadCommand = 0x0100;
 constexpr std::uint16_t kSiiBusy = 0x8000;
 constexpr std::size_t kMaxSiiWords = 0x8000;  // 64 KiB: the largest EEPROM with 32-bit addressing used
+
+// Registers an ESC loads from the SII configuration area at power-on (ESC datasheet section II, "EEPROM
+// content"; ETG.2010): a read of one of them, before the master wrote it, tells the word when the master did
+// not read the word itself.
+struct LoadedFromSii {
+    Reg reg;
+    unsigned word;
+};
+constexpr LoadedFromSii kLoadedFromSii[] = {
+    {Reg::PdiControl, protocol::sii::PdiControl},
+    {Reg::PdiConfiguration, protocol::sii::PdiConfig},
+    {Reg::DcPulseLength, protocol::sii::SyncImpulseLen},
+    {Reg::ExtendedPdiConfiguration, protocol::sii::PdiConfig2},
+    {Reg::StationAlias, protocol::sii::StationAlias},
+};
 
 bool auto_increment(Command c) {
     return c == Command::APRD || c == Command::APWR || c == Command::APRW || c == Command::ARMW;
@@ -49,6 +66,8 @@ struct Window {
 struct SiiTracker {
     std::uint32_t address = 0;
     bool reading = false;  // the last command written was a read
+    // Per kLoadedFromSii entry: the master wrote the register (its value no longer tells the SII word).
+    std::array<bool, std::size(kLoadedFromSii)> written{};
 };
 
 class Recoverer {
@@ -61,6 +80,18 @@ class Recoverer {
         sii_.resize(line_.slave_count);
         for (const Exchange& e : p_.exchanges)
             exchange(e);
+        // Configuration words the master did not read, from the registers the ESC loaded them into.
+        for (const Loaded& l : loaded_) {
+            RecoveredSlave& rs = line_.slaves[l.slave];
+            if (rs.sii.size() <= l.word) {
+                rs.sii.resize(l.word + 1, 0xFFFF);
+                rs.known.resize(l.word + 1, 0);
+            }
+            if (!rs.known[l.word]) {
+                rs.sii[l.word] = l.value;
+                rs.known[l.word] = 2;  // from a register
+            }
+        }
         return std::move(line_);
     }
 
@@ -136,11 +167,15 @@ class Recoverer {
             if (w.covers(a) && !rs.esc_info[a]) rs.esc_info[a] = w.at(a);
         if (w.covers(addr(Reg::DlStatus), 2) && !rs.dl_status) rs.dl_status = w.u16(addr(Reg::DlStatus));
         SiiTracker& t = sii_[s];
+        for (std::size_t k = 0; k < std::size(kLoadedFromSii); ++k)
+            if (w.covers(addr(kLoadedFromSii[k].reg), 2) && !t.written[k])
+                loaded_.push_back({s, kLoadedFromSii[k].word, w.u16(addr(kLoadedFromSii[k].reg))});
         bool busy = false;
         if (w.covers(addr(Reg::SiiControl), 2)) {
             const std::uint16_t ctl = w.u16(addr(Reg::SiiControl));
             busy = (ctl & kSiiBusy) != 0;
             if (!rs.sii_read_8_bytes) rs.sii_read_8_bytes = (ctl & kSiiRead8Bytes) != 0;
+            if (!rs.sii_two_address_bytes) rs.sii_two_address_bytes = (ctl & kSiiTwoAddressBytes) != 0;
         }
         if (w.covers(addr(Reg::SiiAddress), 4)) t.address = w.u32(addr(Reg::SiiAddress));
         if (!t.reading || busy || !w.covers(addr(Reg::SiiData), 4)) return;
@@ -162,6 +197,12 @@ class Recoverer {
     const Pairing& p_;
     RecoveredLine line_;
     std::vector<SiiTracker> sii_;
+    struct Loaded {
+        std::size_t slave;
+        unsigned word;
+        std::uint16_t value;
+    };
+    std::vector<Loaded> loaded_;
     std::map<std::uint16_t, std::size_t> station_;
 };
 

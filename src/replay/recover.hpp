@@ -21,8 +21,10 @@ struct RecoveredSlave {
     std::optional<std::uint16_t> station;  // configured station address
     std::array<std::optional<std::uint8_t>, kEscInfoBytes> esc_info{};
     std::optional<std::uint16_t> dl_status;
-    std::optional<bool> sii_read_8_bytes;  // 0x0502 bit 6, as the ESC reported it
-    // SII words read (index: word address), known[i] when word i was read.
+    std::optional<bool> sii_read_8_bytes;       // 0x0502 bit 6, as the ESC reported it
+    std::optional<bool> sii_two_address_bytes;  // 0x0502 bit 7: an EEPROM larger than 16 Kbit
+    // SII words (index: word address); known[i]: 1 word i was read, 2 it was recovered from a register the
+    // ESC loads from it (0x0140, 0x0150, 0x0152, 0x0982, 0x0012), 0 unknown.
     std::vector<std::uint16_t> sii;
     std::vector<std::uint8_t> known;
     std::size_t sii_words_known() const;

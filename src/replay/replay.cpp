@@ -20,7 +20,7 @@ double ReplayReport::wkc_percent() const {
 }
 
 double ReplayReport::data_percent() const {
-    return reads ? 100.0 * static_cast<double>(reads_same + reads_time + reads_counter) /
+    return reads ? 100.0 * static_cast<double>(reads_same + reads_time + reads_counter + reads_timing) /
                        static_cast<double>(reads)
                  : 100.0;
 }
@@ -69,9 +69,11 @@ class Replayer {
         : c_(c), p_(p), line_(line), o_(o) {}
 
     ReplayReport run() {
+        index_reads();
         r_.unanswered = p_.unanswered;
         std::size_t slaves = line_.size();
         for (const Exchange& e : p_.exchanges) {
+            current_ = static_cast<std::size_t>(&e - p_.exchanges.data());
             const CapturedFrame& rq = c_.frames[e.request];
             const CapturedFrame& rp = c_.frames[e.reply];
             advance(rq.time_ns);
@@ -91,6 +93,51 @@ class Replayer {
     }
 
   private:
+    // The same datagram (command, address, length) as recorded in every exchange, for the timing verdict.
+    struct Key {
+        std::uint8_t cmd;
+        std::uint32_t address;
+        std::uint16_t length;
+        auto operator<=>(const Key&) const = default;
+    };
+    struct Seen {
+        std::size_t exchange;
+        const std::uint8_t* datagram;  // in the recorded reply
+    };
+    static Key key_of(const protocol::DatagramView& d) {
+        return {d.raw_command(), ld_le32(d.data() - protocol::kDatagramHeaderSize + protocol::datagram::Address),
+                d.length()};
+    }
+    void index_reads() {
+        for (std::size_t x = 0; x < p_.exchanges.size(); ++x) {
+            const auto& f = c_.frames[p_.exchanges[x].reply].bytes;
+            const protocol::ParsedFrame pf = protocol::parse_frame(f);
+            for (std::size_t i = 0; i < pf.count; ++i) {
+                const std::uint8_t* h = f.data() + pf.offsets[i];
+                protocol::DatagramView d(const_cast<std::uint8_t*>(h));
+                seen_[key_of(d)].push_back({x, h});
+            }
+        }
+    }
+    // The real device answered the same datagram with this working counter (and data, when data is given)
+    // in a nearby exchange.
+    bool nearby(const protocol::DatagramView& recorded, std::uint16_t wkc, const std::uint8_t* data) const {
+        auto it = seen_.find(key_of(recorded));
+        if (it == seen_.end()) return false;
+        const std::uint64_t t = c_.frames[p_.exchanges[current_].reply].time_ns;
+        for (const Seen& s : it->second) {
+            const std::size_t dx = s.exchange > current_ ? s.exchange - current_ : current_ - s.exchange;
+            if (dx == 0 || dx > o_.timing_exchanges) continue;
+            const std::uint64_t ts = c_.frames[p_.exchanges[s.exchange].reply].time_ns;
+            if ((ts > t ? ts - t : t - ts) > o_.timing_ns) continue;
+            protocol::DatagramView other(const_cast<std::uint8_t*>(s.datagram));
+            if (other.wkc() != wkc) continue;
+            if (data && !std::equal(data, data + other.length(), other.data())) continue;
+            return true;
+        }
+        return false;
+    }
+
     void advance(std::uint64_t t) {
         if (!started_) {
             started_ = true;
@@ -137,6 +184,11 @@ class Replayer {
             d.replayed_wkc = mine.wkc();
             if (mine.wkc() != want.wkc()) {
                 d.working_counter = true;
+                if (nearby(want, mine.wkc(), nullptr)) {
+                    d.verdict = Verdict::Timing;
+                    ++r_.wkc_timing;
+                    ++t.wkc_timing;
+                }
                 ++t.wkc_differs;
                 if (counted) logical(cmd) ? ++r_.process_reads : ++r_.reads;
                 note(t, d);
@@ -158,6 +210,8 @@ class Replayer {
                     if (b == Verdict::Differs) d.first_byte = static_cast<std::uint16_t>(want.ado() + k);
                 }
             }
+            if (v > Verdict::Same && v != Verdict::ProcessData && nearby(want, mine.wkc(), mine.data()))
+                v = Verdict::Timing;
             if (logical(cmd)) {
                 ++r_.process_reads;
                 r_.process_same += v == Verdict::Same;
@@ -166,6 +220,7 @@ class Replayer {
                 r_.reads_same += v == Verdict::Same;
                 r_.reads_time += v == Verdict::TimeDependent;
                 r_.reads_counter += v == Verdict::Counter;
+                r_.reads_timing += v == Verdict::Timing;
             }
             if (v == Verdict::Same) continue;
             d.verdict = v;
@@ -188,6 +243,8 @@ class Replayer {
     esc::Segment& line_;
     const ReplayOptions& o_;
     ReplayReport r_;
+    std::map<Key, std::vector<Seen>> seen_;
+    std::size_t current_ = 0;
     bool started_ = false;
     std::uint64_t last_tick_ = 0;
 };
@@ -200,6 +257,8 @@ std::vector<std::uint8_t> sii_image(const RecoveredSlave& s) {
     const auto known = [&](unsigned w) { return w < s.known.size() && s.known[w]; };
     std::size_t bytes = std::max<std::size_t>(2 * s.sii.size(), 2 * sii::FirstCategory);
     if (known(sii::Size)) bytes = std::max<std::size_t>(bytes, (std::size_t{s.sii[sii::Size]} + 1) * 128);
+    // An ESC that reports two address bytes (0x0502 bit 7) has an EEPROM larger than 16 Kbit.
+    if (s.sii_two_address_bytes.value_or(false)) bytes = std::max<std::size_t>(bytes, 4096);
     bytes = (bytes + 127) / 128 * 128;
     std::vector<std::uint8_t> img(bytes, 0xFF);
     for (std::size_t w = 0; w < s.sii.size(); ++w)
@@ -292,14 +351,14 @@ std::string format_report(const ReplayReport& r) {
     s += fmt::format(
         "exchanges: {} ({} with the request rebuilt from the reply), {} master frames without reply\n",
         r.exchanges, r.rebuilt_requests, r.unanswered);
-    s += fmt::format("working counter as recorded: {} of {} datagrams ({:.2f} %)\n", r.wkc_same, r.datagrams,
-                     r.wkc_percent());
+    s += fmt::format("working counter as recorded: {} of {} datagrams ({:.2f} %); {} more as the device gave it "
+                     "to the same datagram shortly before or after (timing)\n",
+                     r.wkc_same, r.datagrams, r.wkc_percent(), r.wkc_timing);
     s += fmt::format(
         "register and memory reads: {} of {} as recorded ({:.2f} %): {} same, {} differ in time-dependent "
-        "values, "
-        "{} in counters\n",
-        r.reads_same + r.reads_time + r.reads_counter, r.reads, r.data_percent(), r.reads_same, r.reads_time,
-        r.reads_counter);
+        "values, {} in counters, {} by timing\n",
+        r.reads_same + r.reads_time + r.reads_counter + r.reads_timing, r.reads, r.data_percent(), r.reads_same,
+        r.reads_time, r.reads_counter, r.reads_timing);
     s += fmt::format("process data reads: {} of {} with the recorded inputs\n", r.process_same,
                      r.process_reads);
     bool header = false;

@@ -41,6 +41,7 @@ struct Difference {
 struct Tally {
     std::size_t datagrams = 0;
     std::size_t wkc_differs = 0;
+    std::size_t wkc_timing = 0;        // ... of which by timing
     std::size_t data_differs = 0;     // behaviour
     std::size_t data_excused = 0;     // time-dependent, counters, process data
     std::vector<std::size_t> frames;  // first few frames where something differs
@@ -56,6 +57,8 @@ struct ReplayReport {
     std::size_t reads_same = 0;
     std::size_t reads_time = 0;     // differ only in time-dependent bytes
     std::size_t reads_counter = 0;  // ... in counters (and time-dependent bytes)
+    std::size_t reads_timing = 0;   // the real device gave vecat's data to the same read shortly before or after
+    std::size_t wkc_timing = 0;     // working counters that differ the same way
     std::size_t process_reads = 0;  // logical reads
     std::size_t process_same = 0;
     std::vector<Difference> differences;                                 // the first max_differences
@@ -63,13 +66,16 @@ struct ReplayReport {
 
     double wkc_percent() const;
     // Register and memory reads whose data is the recorded one, or differs only where the values depend on
-    // time or counters.
+    // time, counters or the device's speed (timing).
     double data_percent() const;
 };
 
 struct ReplayOptions {
     std::size_t max_differences = 200;
     std::uint64_t tick_ns = 250'000;  // firmware ticks between frames, as the serve loop does
+    // How far (in exchanges, and in time) the same read is looked for when judging a difference as timing.
+    std::size_t timing_exchanges = 64;
+    std::uint64_t timing_ns = 500'000'000;
 };
 
 ReplayReport replay(const Capture& capture, const Pairing& pairing, esc::Segment& line,
