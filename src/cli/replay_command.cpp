@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <fstream>
 #include <string>
 
 #include "network/build.hpp"
@@ -18,6 +19,7 @@ struct ReplayArgs {
     double min_wkc = 99.9;
     double min_data = 99.9;
     bool differences = false;
+    std::string save_sii;
 } g_args;
 
 }  // namespace
@@ -36,6 +38,9 @@ CLI::App* add_replay_command(CLI::App& app) {
                   "Exit 1 below this percentage of register and memory reads with the recorded data, "
                   "time-dependent values and counters excepted (default 99.9)");
     r->add_flag("--differences", g_args.differences, "List every difference (the first 200)");
+    r->add_option("--save-sii", g_args.save_sii,
+                  "Write the SII image of each slave rebuilt from the capture to DIR/slave-N.bin (words the "
+                  "master did not read are 0xFFFF)");
     return r;
 }
 
@@ -72,6 +77,16 @@ int run_replay() {
         const replay::RecoveredLine rec = replay::recover_line(cap, pairing);
         line = replay::build_recovered_line(rec, notes);
         fmt::print("line rebuilt from the capture: {} slaves\n", rec.slave_count);
+        for (std::size_t i = 0; !a.save_sii.empty() && i < rec.slaves.size(); ++i) {
+            const std::string path = fmt::format("{}/slave-{}.bin", a.save_sii, i);
+            const auto img = replay::recovered_sii_image(rec.slaves[i]);
+            std::ofstream out(path, std::ios::binary);
+            out.write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));
+            if (!out) {
+                fmt::print(stderr, "vecat replay: cannot write {}\n", path);
+                return 2;
+            }
+        }
     }
     for (const auto& n : notes)
         fmt::print("note: {}\n", n);

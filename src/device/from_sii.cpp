@@ -1,5 +1,7 @@
 #include "device/from_sii.hpp"
 
+#include <map>
+
 namespace vecat::device {
 
 namespace {
@@ -21,6 +23,75 @@ std::vector<Pdo> pdos(const std::vector<protocol::SiiPdo>& in, const protocol::S
                                  sii.string_at(e.name_idx)});
         d.capacity = static_cast<std::uint8_t>(d.entries.size());
         out.push_back(std::move(d));
+    }
+    return out;
+}
+
+// A type of the SII entry's bit length when its data type is missing or of another length (an SII may leave
+// the type 0 or name a BITn type this catalogue does not list).
+DataType type_for(DataType t, unsigned bits) {
+    if (fixed_bit_length(t) == bits) return t;
+    switch (bits) {
+        case 1:
+            return DataType::Boolean;
+        case 16:
+            return DataType::Unsigned16;
+        case 24:
+            return DataType::Unsigned24;
+        case 32:
+            return DataType::Unsigned32;
+        case 64:
+            return DataType::Unsigned64;
+        default:
+            return DataType::Unsigned8;
+    }
+}
+
+// The application objects the PDOs map (ETG.2010 PDO entries: index, subindex, type, bit length, name): a
+// device emulated from its SII has no other description of them, and a mapping of an object the dictionary
+// lacks is invalid (0x0024/0x0025 on SAFEOP). Outputs (RxPDO) are writable, inputs (TxPDO) read-only.
+std::vector<ObjectDescription> mapped_objects(const DeviceDescription& d) {
+    std::map<std::uint16_t, std::map<std::uint8_t, EntryDescription>> objects;
+    std::map<std::uint16_t, std::string> names;
+    const auto add = [&](const std::vector<Pdo>& pdos, std::uint16_t acc) {
+        for (const auto& p : pdos)
+            for (const auto& e : p.entries) {
+                if (e.index == 0 || e.bit_length == 0) continue;  // a gap
+                if (e.index < 0x2000) continue;                   // communication area: generated
+                auto& subs = objects[e.index];
+                if (auto it = subs.find(e.subindex); it != subs.end()) {  // mapped both ways
+                    it->second.access |= acc & (access::RxPdoMappable | access::TxPdoMappable);
+                    continue;
+                }
+                EntryDescription ed;
+                ed.subindex = e.subindex;
+                ed.name = e.name.empty() ? "SubIndex " + std::to_string(e.subindex) : e.name;
+                ed.type = type_for(e.type, e.bit_length);
+                ed.bit_length = e.bit_length;
+                ed.access = acc;
+                ed.default_value.assign((e.bit_length + 7) / 8, 0);
+                subs[e.subindex] = std::move(ed);
+                if (!names.count(e.index)) names[e.index] = e.name.empty() ? p.name : e.name;
+            }
+    };
+    add(d.rx_pdos, access::RxMap);
+    add(d.tx_pdos, access::TxMap);
+    std::vector<ObjectDescription> out;
+    for (auto& [index, subs] : objects) {
+        ObjectDescription o;
+        o.index = index;
+        o.name = names[index];
+        if (subs.size() == 1 && subs.begin()->first == 0) {
+            o.code = ObjectCode::Var;
+            o.type = subs.begin()->second.type;
+            o.entries.push_back(std::move(subs.begin()->second));
+        } else {
+            std::vector<EntryDescription> entries;
+            for (auto& [sub, e] : subs)
+                if (sub != 0) entries.push_back(std::move(e));
+            o = make_record(index, names[index], std::move(entries));
+        }
+        out.push_back(std::move(o));
     }
     return out;
 }
@@ -54,7 +125,7 @@ DeviceDescription description_from_sii(const protocol::SiiInfo& sii, std::vector
     d.rx_pdos = pdos(sii.rx_pdos, sii);
     d.tx_pdos = pdos(sii.tx_pdos, sii);
     d.dc_modes = sii.dc_modes;
-    d.objects.clear();
+    d.objects = mapped_objects(d);
     if (notes) {
         for (const auto& e : sii.errors)
             notes->push_back("SII: " + e);

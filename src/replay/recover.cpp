@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <map>
 
+#include "protocol/fmmu.hpp"
 #include "protocol/frame.hpp"
 #include "protocol/registers.hpp"
 #include "protocol/sii.hpp"
+#include "protocol/sync_manager.hpp"
 
 namespace vecat::replay {
 
@@ -80,6 +82,8 @@ class Recoverer {
         sii_.resize(line_.slave_count);
         for (const Exchange& e : p_.exchanges)
             exchange(e);
+        blocks_from_writes(fmmu_wkc_, kFmmuBlocks, true);
+        blocks_from_writes(sm_wkc_, kSmBlocks, false);
         // Configuration words the master did not read, from the registers the ESC loaded them into.
         for (const Loaded& l : loaded_) {
             RecoveredSlave& rs = line_.slaves[l.slave];
@@ -134,6 +138,7 @@ class Recoverer {
                 e.request_recorded ? q.adp() : request_adp(r.raw_command(), r.adp(), line_.slave_count);
             const Window written{q.ado(), q.length(), e.request_recorded ? q.data() : r.data()};
             const Window read{r.ado(), r.length(), r.data()};
+            if (cmd == Command::BWR) count_block_write(r);
             if (protocol::physical_write(cmd) && r.wkc() > 0) {
                 if (broadcast(cmd)) {
                     for (std::size_t s = 0; s < line_.slave_count; ++s)
@@ -146,6 +151,40 @@ class Recoverer {
                  cmd == Command::FPRW) &&
                 r.wkc() >= 1)
                 if (auto s = position(cmd, adp)) was_read(*s, read);
+        }
+    }
+
+    // The working counter of a broadcast write to each whole FMMU (SyncManager) block.
+    void count_block_write(const protocol::DatagramView& r) {
+        const std::uint16_t a = r.ado();
+        if (a >= protocol::fmmu_addr(0) && a < protocol::fmmu_addr(kFmmuBlocks) &&
+            (a - protocol::fmmu_addr(0)) % protocol::kFmmuSize == 0 && r.length() >= protocol::kFmmuSize)
+            note_block(fmmu_wkc_[(a - protocol::fmmu_addr(0)) / protocol::kFmmuSize], r.wkc());
+        if (a >= protocol::sm_addr(0) && a < protocol::sm_addr(kSmBlocks) &&
+            (a - protocol::sm_addr(0)) % protocol::kSmSize == 0 && r.length() >= protocol::kSmSize)
+            note_block(sm_wkc_[(a - protocol::sm_addr(0)) / protocol::kSmSize], r.wkc());
+    }
+    static void note_block(std::optional<std::uint16_t>& slot, std::uint16_t wkc) {
+        slot = std::max<std::uint16_t>(slot.value_or(0), wkc);
+    }
+
+    template <std::size_t N>
+    void blocks_from_writes(const std::array<std::optional<std::uint16_t>, N>& wkc, std::size_t blocks,
+                            bool fmmu) {
+        const std::size_t n = line_.slave_count;
+        if (n == 0) return;
+        // Every block written, counts not growing, all slaves counted at block 0.
+        for (std::size_t k = 0; k < blocks; ++k)
+            if (!wkc[k] || *wkc[k] > n || (k > 0 && *wkc[k] > *wkc[k - 1])) return;
+        if (*wkc[0] != n) return;
+        std::vector<std::uint8_t> counts;  // largest first
+        for (std::size_t c = blocks; c > 0; --c) {
+            const std::size_t with = *wkc[c - 1] - (c < blocks ? *wkc[c] : 0);  // slaves with exactly c
+            counts.insert(counts.end(), with, static_cast<std::uint8_t>(c));
+        }
+        for (std::size_t k = 0; k < n; ++k) {
+            auto& rs = line_.slaves[k];
+            (fmmu ? rs.fmmus_from_writes : rs.sms_from_writes) = counts[k];
         }
     }
 
@@ -197,6 +236,9 @@ class Recoverer {
     const Pairing& p_;
     RecoveredLine line_;
     std::vector<SiiTracker> sii_;
+    static constexpr std::size_t kFmmuBlocks = 16, kSmBlocks = 16;  // the register space's blocks
+    std::array<std::optional<std::uint16_t>, kFmmuBlocks> fmmu_wkc_{};
+    std::array<std::optional<std::uint16_t>, kSmBlocks> sm_wkc_{};
     struct Loaded {
         std::size_t slave;
         unsigned word;

@@ -23,6 +23,9 @@ struct RecoveredSlave {
     std::optional<std::uint16_t> dl_status;
     std::optional<bool> sii_read_8_bytes;       // 0x0502 bit 6, as the ESC reported it
     std::optional<bool> sii_two_address_bytes;  // 0x0502 bit 7: an EEPROM larger than 16 Kbit
+    // FMMU and SyncManager counts (0x0004, 0x0005) when the master did not read them: worked out from the
+    // working counters of its broadcast writes to the 16 FMMU and SyncManager blocks (see recover_line).
+    std::optional<std::uint8_t> fmmus_from_writes, sms_from_writes;
     // SII words (index: word address); known[i]: 1 word i was read, 2 it was recovered from a register the
     // ESC loads from it (0x0140, 0x0150, 0x0152, 0x0982, 0x0012), 0 unknown.
     std::vector<std::uint16_t> sii;
@@ -35,8 +38,12 @@ struct RecoveredLine {
     std::vector<RecoveredSlave> slaves;
 };
 
-// Walks every exchange in order. Needs the capture's slave count first for replies without their request
-// (auto-increment addresses in a reply have been counted up by every slave the frame passed).
+// Walks every exchange in order. A broadcast write to FMMU block k is counted by the slaves that have more
+// than k FMMUs (ESC datasheet section I: writes to absent registers are not counted), so the working counters
+// of the writes to blocks 0..15 give how many slaves have each count; which slave has which is not in them:
+// the larger counts go to the first slaves (a coupler, with the larger ESC, comes before its terminals).
+// Needs the capture's slave count first for replies without their request (auto-increment addresses in a
+// reply have been counted up by every slave the frame passed).
 RecoveredLine recover_line(const Capture& c, const Pairing& p);
 
 // The request datagram's ADP for a datagram whose capture holds only the reply.

@@ -105,8 +105,8 @@ class Replayer {
         const std::uint8_t* datagram;  // in the recorded reply
     };
     static Key key_of(const protocol::DatagramView& d) {
-        return {d.raw_command(), ld_le32(d.data() - protocol::kDatagramHeaderSize + protocol::datagram::Address),
-                d.length()};
+        return {d.raw_command(),
+                ld_le32(d.data() - protocol::kDatagramHeaderSize + protocol::datagram::Address), d.length()};
     }
     void index_reads() {
         for (std::size_t x = 0; x < p_.exchanges.size(); ++x) {
@@ -249,10 +249,12 @@ class Replayer {
     std::uint64_t last_tick_ = 0;
 };
 
+}  // namespace
+
 // The SII image of a recovered slave: the words read, 0xFFFF elsewhere (an erased EEPROM), as large as its
 // size word (0x003E: (value + 1) kibibits) says, or large enough for the words read. A configuration area
 // read without its checksum word gets the checksum it must have had.
-std::vector<std::uint8_t> sii_image(const RecoveredSlave& s) {
+std::vector<std::uint8_t> recovered_sii_image(const RecoveredSlave& s) {
     namespace sii = protocol::sii;
     const auto known = [&](unsigned w) { return w < s.known.size() && s.known[w]; };
     std::size_t bytes = std::max<std::size_t>(2 * s.sii.size(), 2 * sii::FirstCategory);
@@ -267,11 +269,15 @@ std::vector<std::uint8_t> sii_image(const RecoveredSlave& s) {
     return img;
 }
 
+namespace {
+
 esc::EscConfig recovered_config(const RecoveredSlave& s, esc::EscConfig cfg) {
     const auto byte = [&](std::size_t a) { return s.esc_info[a]; };
     if (byte(0)) cfg.type = *byte(0);
     if (byte(1)) cfg.revision = *byte(1);
     if (byte(2) && byte(3)) cfg.build = static_cast<std::uint16_t>(*byte(2) | *byte(3) << 8);
+    if (s.fmmus_from_writes) cfg.fmmu_count = *s.fmmus_from_writes;
+    if (s.sms_from_writes) cfg.sm_count = *s.sms_from_writes;
     if (byte(4)) cfg.fmmu_count = *byte(4);
     if (byte(5)) cfg.sm_count = *byte(5);
     if (byte(6) && *byte(6) >= 8) cfg.ram_bytes = std::uint32_t{*byte(6)} * 1024;
@@ -299,7 +305,7 @@ std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
         if (s.sii_words_known() > 0) {
             std::vector<std::string> n;
             try {
-                parts = network::device_from_sii(sii_image(s), n);
+                parts = network::device_from_sii(recovered_sii_image(s), n);
                 made = true;
                 notes.push_back(at + "from " + std::to_string(s.sii_words_known()) +
                                 " SII words of the capture");
@@ -320,6 +326,14 @@ std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
             };
         }
         parts.esc = recovered_config(s, parts.esc);
+        const std::size_t info = static_cast<std::size_t>(
+            std::count_if(s.esc_info.begin(), s.esc_info.end(), [](const auto& b) { return b.has_value(); }));
+        notes.push_back(
+            at + fmt::format("ESC type 0x{:02X} rev {} build {}, {} FMMUs, {} SMs, {} KiB, ports 0x{:02X}, "
+                             "features 0x{:04X} ({} of {} information bytes from the capture)",
+                             parts.esc.type, parts.esc.revision, parts.esc.build, parts.esc.fmmu_count,
+                             parts.esc.sm_count, parts.esc.ram_bytes / 1024, parts.esc.port_descriptor,
+                             parts.esc.features, info, kEscInfoBytes));
         seg->add(
             std::make_unique<esc::Slave>(parts.model, parts.esc, parts.factory(*parts.model.description)),
             parts.factory);
@@ -351,14 +365,15 @@ std::string format_report(const ReplayReport& r) {
     s += fmt::format(
         "exchanges: {} ({} with the request rebuilt from the reply), {} master frames without reply\n",
         r.exchanges, r.rebuilt_requests, r.unanswered);
-    s += fmt::format("working counter as recorded: {} of {} datagrams ({:.2f} %); {} more as the device gave it "
-                     "to the same datagram shortly before or after (timing)\n",
-                     r.wkc_same, r.datagrams, r.wkc_percent(), r.wkc_timing);
+    s += fmt::format(
+        "working counter as recorded: {} of {} datagrams ({:.2f} %); {} more as the device gave it "
+        "to the same datagram shortly before or after (timing)\n",
+        r.wkc_same, r.datagrams, r.wkc_percent(), r.wkc_timing);
     s += fmt::format(
         "register and memory reads: {} of {} as recorded ({:.2f} %): {} same, {} differ in time-dependent "
         "values, {} in counters, {} by timing\n",
-        r.reads_same + r.reads_time + r.reads_counter + r.reads_timing, r.reads, r.data_percent(), r.reads_same,
-        r.reads_time, r.reads_counter, r.reads_timing);
+        r.reads_same + r.reads_time + r.reads_counter + r.reads_timing, r.reads, r.data_percent(),
+        r.reads_same, r.reads_time, r.reads_counter, r.reads_timing);
     s += fmt::format("process data reads: {} of {} with the recorded inputs\n", r.process_same,
                      r.process_reads);
     bool header = false;

@@ -41,7 +41,7 @@ struct Difference {
 struct Tally {
     std::size_t datagrams = 0;
     std::size_t wkc_differs = 0;
-    std::size_t wkc_timing = 0;        // ... of which by timing
+    std::size_t wkc_timing = 0;       // ... of which by timing
     std::size_t data_differs = 0;     // behaviour
     std::size_t data_excused = 0;     // time-dependent, counters, process data
     std::vector<std::size_t> frames;  // first few frames where something differs
@@ -57,8 +57,9 @@ struct ReplayReport {
     std::size_t reads_same = 0;
     std::size_t reads_time = 0;     // differ only in time-dependent bytes
     std::size_t reads_counter = 0;  // ... in counters (and time-dependent bytes)
-    std::size_t reads_timing = 0;   // the real device gave vecat's data to the same read shortly before or after
-    std::size_t wkc_timing = 0;     // working counters that differ the same way
+    std::size_t reads_timing =
+        0;                       // the real device gave vecat's data to the same read shortly before or after
+    std::size_t wkc_timing = 0;  // working counters that differ the same way
     std::size_t process_reads = 0;  // logical reads
     std::size_t process_same = 0;
     std::vector<Difference> differences;                                 // the first max_differences
@@ -86,6 +87,9 @@ ReplayReport replay(const Capture& capture, const Pairing& pairing, esc::Segment
 // ESC information registers it reported and the tree its DL status gives.
 std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
                                                    std::vector<std::string>& notes);
+
+// The SII image of a recovered slave: the words the capture holds, 0xFFFF elsewhere (an erased EEPROM).
+std::vector<std::uint8_t> recovered_sii_image(const RecoveredSlave& s);
 
 // The report as text: figures, then the differences per command and address with frame numbers.
 std::string format_report(const ReplayReport& r);

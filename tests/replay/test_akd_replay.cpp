@@ -12,6 +12,7 @@
 
 #include "master/coe_client.hpp"
 #include "net/pcapng_writer.hpp"
+#include "net/recording_link.hpp"
 #include "pcapng_reader.hpp"
 #include "shared_data.hpp"
 #include "test_support.hpp"
@@ -19,26 +20,6 @@
 using namespace vecat;
 
 namespace {
-
-// A link that records every frame it carries.
-class RecordingLink final : public net::Link {
-  public:
-    RecordingLink(net::Link& inner, net::PcapngWriter& w) : inner_(inner), w_(w) {}
-    bool send(ConstBytes f) override {
-        w_.write(f, t_ += 1000, 2);
-        return inner_.send(f);
-    }
-    long receive(Bytes b, std::int64_t timeout_us) override {
-        const long n = inner_.receive(b, timeout_us);
-        if (n > 0) w_.write(ConstBytes(b.data(), static_cast<std::size_t>(n)), t_ += 1000, 1);
-        return n;
-    }
-
-  private:
-    net::Link& inner_;
-    net::PcapngWriter& w_;
-    std::uint64_t t_ = 1'700'000'000'000'000'000ull;
-};
 
 struct Mailbox {
     std::vector<std::uint8_t> bytes;  // header + payload
@@ -80,7 +61,7 @@ TEST(Replay, SoemRequestsToARealAkdGetRepliesOfTheSameLayout) {
     {
         test::Bench b(1);
         net::PcapngWriter w(out);
-        RecordingLink rec(b.link, w);
+        net::RecordingLink rec(b.link, w);
         master::Master m(rec);
         std::string why;
         ASSERT_TRUE(m.startup(protocol::AlState::PreOp, &why)) << why;
