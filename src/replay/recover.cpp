@@ -108,7 +108,7 @@ class Recoverer {
             for (std::size_t i = 0; i < pf.count; ++i) {
                 protocol::DatagramView d(const_cast<std::uint8_t*>(f.data()) + pf.offsets[i]);
                 if (d.command() == Command::BRD && d.ado() < protocol::kRegisterSpaceSize)
-                    n = std::max<std::size_t>(n, d.wkc());
+                    n = std::max<std::size_t>(n, std::min<std::size_t>(d.wkc(), kMaxRecoveredSlaves));
             }
         }
         return n;

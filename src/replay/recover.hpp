@@ -16,6 +16,8 @@
 namespace vecat::replay {
 
 inline constexpr std::size_t kEscInfoBytes = 10;  // 0x0000-0x0009: type .. features
+// At most this many slaves are rebuilt (a broadcast working counter can claim up to 65,535).
+inline constexpr std::size_t kMaxRecoveredSlaves = 1024;
 
 struct RecoveredSlave {
     std::optional<std::uint16_t> station;  // configured station address
