@@ -453,9 +453,11 @@ void Port::monitor(const LocalState& local, bool valid) {
             if (limit > 0 && std::abs(local.torque_nm - inv * remote) > limit)
                 pending_ = error::TorqueDifference;
         }
-        const bool gantry =
-            mode_->setting == Setting::PconGantryMaster || mode_->setting == Setting::PconGantrySlave;
-        if (!pending_ && gantry && control && layout_ == Layout::Standard && partner_.system_error)
+        // 39-02: the other axis reports an error (SystemError, bit 14 of its TWINsync status word, table
+        // 4.5), in every operation mode with the standard mapping: a fault of either drive stops both
+        // (chapter 7; TwinCAT NC's error propagation INSTANTANEOUS, TX1250 3.1). The extended mapping has no
+        // status word and no monitoring (4.1.2).
+        if (!pending_ && control && layout_ == Layout::Standard && partner_.system_error)
             pending_ = error::OtherAxis;
     }
     status_.comm_status = bits ? bits : comm_status::NoError;
