@@ -348,7 +348,9 @@ void Port::receive(std::uint64_t t_ns, const LocalState& local) {
         status_.link_ok = false;
         status_.synchronised = false;
         pending_.reset();
-        if (c_->comm_status) c_->comm_status->set(std::uint16_t{0});
+        // Nothing monitored, nothing wrong: P2619 bit 0 "no error" (table 4.1).
+        status_.comm_status = comm_status::NoError;
+        if (c_->comm_status) c_->comm_status->set(comm_status::NoError);
         return;
     }
     apply_fault_injection();

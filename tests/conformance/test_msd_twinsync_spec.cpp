@@ -241,5 +241,36 @@ TEST_F(MsdTwinsync, MsdTwinsync_7_ErrorsOnlyInControl) {
     EXPECT_FALSE(drive(kSlave).twinsync_error());
 }
 
+// 4.1, table 4.1, P2619 TOPT_TWIN_CommStatus "bit 0: no error": it reads "no error" whenever no error
+// bit is set: at power-on and with TWINsync OFF (nothing monitored, nothing wrong) as well as with a
+// working link; with a fault it shows the error bit alone.
+TEST_F(MsdTwinsync, MsdTwinsync_4_1_P2619ReadsNoError) {
+    for (std::size_t d : {kMaster, kSlave}) {
+        SCOPED_TRACE(d);
+        EXPECT_EQ(par(d, p::CommStatus).get<std::uint16_t>(), comm_status::NoError)
+            << "power-on, TWINsync OFF";
+        master::CoeClient c(b.master, static_cast<std::uint16_t>(0x1001 + d));
+        const auto r = c.upload(object_index(p::CommStatus), 0);
+        ASSERT_EQ(r.data.size(), 2u);
+        EXPECT_EQ(ld_le16(r.data.data()), comm_status::NoError) << "read by SDO";
+    }
+    for (int i = 0; i < 10; ++i)
+        step(0, 0);
+    EXPECT_EQ(par(kMaster, p::CommStatus).get<std::uint16_t>(), comm_status::NoError) << "still OFF";
+    configure(kCouplings[3]);  // SCON
+    for (int i = 0; i < 10; ++i)
+        step(0, 0);
+    EXPECT_EQ(par(kMaster, p::CommStatus).get<std::uint16_t>(), comm_status::NoError) << "link up";
+    e(kMaster, 0x2104, 1).set<std::uint8_t>(1);  // cable break
+    for (int i = 0; i < 20; ++i)
+        step(0, 0);
+    EXPECT_EQ(par(kSlave, p::CommStatus).get<std::uint16_t>(), comm_status::CommunicationLost);
+    e(kMaster, 0x2104, 1).set<std::uint8_t>(0);
+    par(kSlave, p::Mode).set<std::uint16_t>(0);  // OFF again
+    drive(kSlave).twinsync_port().reconfigure();
+    step(0, 0);
+    EXPECT_EQ(par(kSlave, p::CommStatus).get<std::uint16_t>(), comm_status::NoError) << "OFF again";
+}
+
 }  // namespace
 }  // namespace vecat::cia402::conformance
