@@ -193,10 +193,14 @@ void DriveCore::run_state_machine(DriveIo& io) {
         active_fault_ != 0 &&
         (io.parameters.simulated_fault != 0 || mech_.overcurrent() || !mech_.encoder_ok() ||
          coupling_.error_present(io.twinsync) || sm_.state() != State::Fault);
-    // Issue 28: the velocity is the encoder's, frozen by an encoder fault, so a PV axis with such a fault
-    // may never come to rest here and stays in FAULT REACTION ACTIVE.
-    const bool at_rest = std::abs(axis_.velocity) <= axis_.standstill_velocity &&
-                         (axis_.loop != LoopMode::Position || axis_.profile.done());
+    // A stop ramp ends at rest. Without an encoder (fault 0x7305) the drive can neither brake under control
+    // (its position and velocity loops read a frozen encoder and would drive the motor away) nor tell
+    // that the axis stands: the ramp ends at once, so the fault reaction ends in FAULT (transition 14)
+    // with the power stage disabled and the motor coasting, as 0x605E = 0 "disable drive function, motor
+    // free to rotate" (CiA 402 6.2; the HIWIN guide, chapter 6: in FAULT "the drive has de-magnetized the
+    // motor"). src/cia402/README.md, "Fault reaction without an encoder".
+    const bool at_rest = !mech_.encoder_ok() || (std::abs(axis_.velocity) <= axis_.standstill_velocity &&
+                                                 (axis_.loop != LoopMode::Position || axis_.profile.done()));
     sm_.update(axis_.controlword, fault_present, at_rest, io.parameters.options);
     const State now = sm_.state();
     if (now != before) {
@@ -210,9 +214,13 @@ void DriveCore::run_state_machine(DriveIo& io) {
             on_mode_change();
         }
     }
-    // Issue 28: clearing the stop ramp here every period in which the state machine stops nothing also
-    // forgets a halt ramp of the mode, so profile position never resumes its move after a halt.
-    if (sm_.stop() == StopKind::None) axis_.stopping = StopKind::None;
+    // A stop of the state machine (transitions 5/8 with a slow-down, quick stop, fault reaction) that
+    // ended leaves no ramp behind. A halt ramp (controlword bit 8) is the mode's: the mode ends it when the
+    // halt is released and goes on with its motion (CiA 402 6.5.3, HIWIN guide 9.1.1).
+    if (sm_.stop() == StopKind::None && state_machine_stopped_) {
+        axis_.stopping = StopKind::None;
+        state_machine_stopped_ = false;
+    }
 }
 
 void DriveCore::apply_gains(const DriveParameters& c) {
@@ -278,6 +286,7 @@ void DriveCore::hold_disabled() {
     axis_.velocity_cmd = 0;
     axis_.torque_cmd = 0;
     axis_.torque_ff = 0;
+    axis_.stopping = StopKind::None;  // no ramp runs without torque
     // Once is enough: only a mode's step gives it something to drop again.
     if (!modes_disabled_) {
         for (OperationMode* m : modes_)
@@ -301,6 +310,7 @@ void DriveCore::run_setpoints(DriveIo& io, double dt) {
         coupling_.release(axis_);
     } else if (sm_.stop() != StopKind::None) {
         run_stop(sm_.stop(), dt);
+        state_machine_stopped_ = true;
         coupling_.release(axis_);
     } else if (follow) {
         coupling_.follow(axis_, io.twinsync);

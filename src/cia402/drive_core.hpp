@@ -95,7 +95,8 @@ class DriveCore {
     std::array<OperationMode*, 7> modes_{&pp_, &pv_, &pt_, &hm_, &csp_, &csv_, &cst_};
     Mode mode_ = Mode::None;
     OperationMode* active_ = nullptr;
-    bool modes_disabled_ = false;  // every mode's disable() ran, and no step since
+    bool modes_disabled_ = false;         // every mode's disable() ran, and no step since
+    bool state_machine_stopped_ = false;  // a stop of the state machine ran (its ramp is in axis_.stopping)
 
     std::uint64_t steps_ = 0;
     std::uint32_t override_ppm_ = 1'000'000;

@@ -50,8 +50,8 @@ void ProfilePositionMode::step(Axis& a, double dt) {
         return;
     }
     if (a.stopping != StopKind::None) {
-        // Halt released: continue to the target. (Issue 28: DriveCore::step clears `stopping` every period
-        // in which the state machine stops nothing, so this is never reached after a halt.)
+        // Halt released (bit 8 = 0: "execute positioning", CiA 402 6.5.3; HIWIN guide 9.1.1): the move goes
+        // on from where the halt ramp is towards its target.
         a.stopping = StopKind::None;
         if (moving_) start_move(a, target_);
     }

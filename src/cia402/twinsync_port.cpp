@@ -348,7 +348,9 @@ void Port::receive(std::uint64_t t_ns, const LocalState& local) {
         status_.link_ok = false;
         status_.synchronised = false;
         pending_.reset();
-        if (c_->comm_status) c_->comm_status->set(std::uint16_t{0});
+        // Nothing monitored, nothing wrong: P2619 bit 0 "no error" (table 4.1).
+        status_.comm_status = comm_status::NoError;
+        if (c_->comm_status) c_->comm_status->set(comm_status::NoError);
         return;
     }
     apply_fault_injection();
@@ -453,9 +455,11 @@ void Port::monitor(const LocalState& local, bool valid) {
             if (limit > 0 && std::abs(local.torque_nm - inv * remote) > limit)
                 pending_ = error::TorqueDifference;
         }
-        const bool gantry =
-            mode_->setting == Setting::PconGantryMaster || mode_->setting == Setting::PconGantrySlave;
-        if (!pending_ && gantry && control && layout_ == Layout::Standard && partner_.system_error)
+        // 39-02: the other axis reports an error (SystemError, bit 14 of its TWINsync status word, table
+        // 4.5), in every operation mode with the standard mapping: a fault of either drive stops both
+        // (chapter 7; TwinCAT NC's error propagation INSTANTANEOUS, TX1250 3.1). The extended mapping has no
+        // status word and no monitoring (4.1.2).
+        if (!pending_ && control && layout_ == Layout::Standard && partner_.system_error)
             pending_ = error::OtherAxis;
     }
     status_.comm_status = bits ? bits : comm_status::NoError;

@@ -107,7 +107,9 @@ std::vector<ObjectDescription> twinsync_objects() {
                            std::vector<std::int64_t>(8, 0)));
     o.push_back(var(tp::Statusword, "TOPT_TWIN_Statusword", DT::Unsigned16, ROT));
     o.push_back(var(tp::SyncTicks, "TOPT_TWIN_SyncTicks", DT::Integer16, RW, 20));
-    o.push_back(var(tp::CommStatus, "TOPT_TWIN_CommStatus", DT::Unsigned16, ROT));
+    // Table 4.1: bit 0 "no error", also before the link runs.
+    o.push_back(
+        var(tp::CommStatus, "TOPT_TWIN_CommStatus", DT::Unsigned16, ROT, twinsync::comm_status::NoError));
     o.push_back(real(tp::SystemLoad, "TOPT_TWIN_SystemLoad (ns)", RO));
     o.push_back(make_array(ix(tp::CurrentError), pname(tp::CurrentError, "Current error (number, location)"),
                            DT::Unsigned16, ROT, {0, 0}));

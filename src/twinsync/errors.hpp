@@ -1,8 +1,10 @@
 // The errors of the TWINsync monitoring (MSD TWINsync specification CB08759-001 chapter 7) as MSD error
-// numbers, and the bits of P2619 that report them.
+// numbers (the bits of P2619 that report them are parameters.hpp's comm_status).
 #pragma once
 
 #include <cstdint>
+
+#include "twinsync/parameters.hpp"
 
 namespace vecat::twinsync {
 
@@ -21,14 +23,5 @@ inline constexpr ErrorId SpeedDifference{39, 0};     // gantry: speed (or positi
 inline constexpr ErrorId TorqueDifference{39, 1};    // torque difference
 inline constexpr ErrorId OtherAxis{39, 2};           // error detected on the other axis
 }  // namespace error
-
-// P2619 bits. vecat reads bit 0 "no error" as set while no error bit is.
-namespace comm_status {
-inline constexpr std::uint16_t NoError = 1u << 0;
-inline constexpr std::uint16_t CommunicationLost = 1u << 1;
-inline constexpr std::uint16_t SwitchingFrequency = 1u << 2;
-inline constexpr std::uint16_t ModeConflict = 1u << 3;
-inline constexpr std::uint16_t DriveComState = 1u << 5;
-}  // namespace comm_status
 
 }  // namespace vecat::twinsync

@@ -96,4 +96,13 @@ enum class SyncSelection : std::uint16_t {
 // P2651 bits.
 inline constexpr std::uint32_t kConfigNoSlaveStateCheck = 1u << 2;
 
+// P2619 TOPT_TWIN_CommStatus bits (table 4.1). Bit 0 "no error" is set while no error bit is.
+namespace comm_status {
+inline constexpr std::uint16_t NoError = 1u << 0;
+inline constexpr std::uint16_t CommunicationLost = 1u << 1;
+inline constexpr std::uint16_t SwitchingFrequency = 1u << 2;
+inline constexpr std::uint16_t ModeConflict = 1u << 3;
+inline constexpr std::uint16_t DriveComState = 1u << 5;
+}  // namespace comm_status
+
 }  // namespace vecat::twinsync
