@@ -27,7 +27,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         VECAT_FUZZ_CHECK(e.request_recorded == (e.reply != e.request));
     }
     replay::RecoveredLine line = replay::recover_line(c, p);
-    VECAT_FUZZ_CHECK(line.slaves.size() == line.slave_count && line.slave_count <= replay::kMaxRecoveredSlaves);
+    VECAT_FUZZ_CHECK(line.slaves.size() == line.slave_count &&
+                     line.slave_count <= replay::kMaxRecoveredSlaves);
     if (line.slave_count > 16) return 0;  // a long line costs time, not coverage
     std::vector<std::string> notes;
     auto seg = replay::build_recovered_line(line, notes);

@@ -15,6 +15,8 @@
 #include "fuzz_support.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
+#include "net/pcapng_writer.hpp"
+#include "net/recording_link.hpp"
 #include "protocol/cia402_objects.hpp"
 #include "serve/in_process_link.hpp"
 
@@ -194,6 +196,22 @@ int main(int argc, char** argv) {
     write_seed(out / "esi", ne, Seed(esi.begin(), esi.end()));
     const std::string small = esi::write_esi(compact_drive(dev));
     write_seed(out / "esi", ne, Seed(small.begin(), small.end()));
-    std::printf("seeds: %u frame, %u mailbox, %u sii, %u esi in %s\n", nf, nm, ns, ne, out.c_str());
+    // Capture target: a pcapng of the project master resetting one drive, giving it its address and reading
+    // the start of its SII (both directions), short enough for the fuzzer's input size.
+    {
+        fs::create_directories(out / "capture");
+        auto one = cia402::make_drive_segment(dev, 1);
+        net::InProcessLink inner(*one);
+        net::PcapngWriter w((out / "capture" / "seed-0000").string());
+        net::RecordingLink rec(inner, w);
+        master::Master m1(rec);
+        m1.reset_slaves();
+        m1.assign_station_addresses();
+        for (std::uint32_t word = 0; word < 0x48; word += 2)
+            m1.read_sii_dword(0x1001, word);
+        w.flush();
+    }
+    std::printf("seeds: %u frame, %u mailbox, %u sii, %u esi, 1 capture in %s\n", nf, nm, ns, ne,
+                out.c_str());
     return 0;
 }
