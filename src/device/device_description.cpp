@@ -27,6 +27,22 @@ const SyncManagerConfig* DeviceDescription::sm_of_type(SmType t) const {
     return nullptr;
 }
 
+std::optional<BootMailbox> DeviceDescription::bootstrap_mailbox() const {
+    const auto* out = sm_of_type(SmType::MailboxOut);
+    const auto* in = sm_of_type(SmType::MailboxIn);
+    if (!bootstrap_supported || !out || !in) return std::nullopt;
+    BootMailbox b = boot_mailbox;
+    if (b.out_length == 0) {
+        b.out_start = out->start;
+        b.out_length = out->length;
+    }
+    if (b.in_length == 0) {
+        b.in_start = in->start;
+        b.in_length = in->length;
+    }
+    return b;
+}
+
 std::optional<unsigned> DeviceDescription::sm_index_of_type(SmType t) const {
     for (unsigned i = 0; i < sync_managers.size(); ++i)
         if (sync_managers[i].type == t) return i;
@@ -42,7 +58,14 @@ DeviceDescription default_drive() {
     d.order_code = "VECAT-SD402";
     d.group_type = "ServoDrives";
     d.group_name = "Servo drives";
-    d.mailbox_protocols = mbx_proto::CoE;
+    // CoE, and FoE with the BOOT state (firmware update, src/foe/README.md).
+    d.mailbox_protocols = mbx_proto::CoE | mbx_proto::FoE;
+    d.foe_details = foe_details::Enable;
+    d.bootstrap_supported = true;
+    // The bootstrap mailbox is larger than the standard one, as in real devices (the bootloader moves
+    // firmware in bigger FoE packets): 512 bytes each way from 0x1800, in the process RAM that the process
+    // data SyncManagers use outside BOOT.
+    d.boot_mailbox = {0x1800, 0x0200, 0x1A00, 0x0200};
     d.coe_details = coe_details::Sdo | coe_details::SdoInfo | coe_details::PdoAssign |
                     coe_details::PdoConfig | coe_details::CompleteAccess;
     d.ebus_current_ma = 0;
