@@ -62,10 +62,9 @@ DeviceDescription default_drive() {
     d.mailbox_protocols = mbx_proto::CoE | mbx_proto::FoE;
     d.foe_details = foe_details::Enable;
     d.bootstrap_supported = true;
-    // The bootstrap mailbox is larger than the standard one, as in real devices (the bootloader moves
-    // firmware in bigger FoE packets): 512 bytes each way from 0x1800, in the process RAM that the process
-    // data SyncManagers use outside BOOT.
-    d.boot_mailbox = {0x1800, 0x0200, 0x1A00, 0x0200};
+    // The bootstrap mailbox is the standard one (boot_mailbox left 0). A master must disable SM0/SM1 before
+    // it can move them (ESC datasheet: the SyncManager configuration is locked while enabled), which SOEM's
+    // firm_update sample does not do (SOEM pull request #483): with the same mailbox it works unmodified.
     d.coe_details = coe_details::Sdo | coe_details::SdoInfo | coe_details::PdoAssign |
                     coe_details::PdoConfig | coe_details::CompleteAccess;
     d.ebus_current_ma = 0;

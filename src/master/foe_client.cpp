@@ -133,6 +133,12 @@ bool configure_boot_mailbox(Master& m, const SlaveInfo& s) {
     const std::uint16_t start[2] = {sii.boot_rx_mbx_offset, sii.boot_tx_mbx_offset};
     const std::uint16_t len[2] = {sii.boot_rx_mbx_size, sii.boot_tx_mbx_size};
     for (unsigned i = 0; i < 2; ++i) {
+        // Disabled first: the ESC keeps start, length and control while the SM is enabled (IgH clears the
+        // SyncManagers in INIT; SOEM pull request #483 added the same to firm_update).
+        std::uint8_t disabled = 0;
+        const auto off =
+            m.fpwr(s.station, static_cast<std::uint16_t>(sm_addr(i) + sm::Activate), Bytes(&disabled, 1));
+        if (!off || *off != 1) return false;
         std::uint8_t b[SmConfig::kSize];
         SmConfig::master(start[i], len[i], sii.sync_managers[i].control).pack(b);
         const auto w = m.fpwr(s.station, sm_addr(i), b);

@@ -54,8 +54,8 @@ class FoeClient {
 };
 
 // SM0/SM1 of a slave as the SII's bootstrap mailbox (words 0x0014-0x0017), with the control bytes of its SII
-// SyncM category (as SOEM's firm_update writes them before it requests BOOT). False without bootstrap
-// mailbox.
+// SyncM category, each disabled before it is written (the ESC ignores a new configuration of an enabled SM).
+// False without bootstrap mailbox.
 bool configure_boot_mailbox(Master& m, const SlaveInfo& s);
 
 }  // namespace vecat::master
