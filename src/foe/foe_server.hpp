@@ -59,6 +59,8 @@ class FoeServer final : public esc::MailboxProtocol {
     FoeState state() const { return state_; }
     const FoeCounters& counters() const { return counters_; }
     const FileStore& store() const { return store_; }
+    // Bytes of the transfer in progress held in memory (at most max_file_size).
+    std::size_t buffered() const { return buf_.size(); }
     // The revision a firmware file received in BOOT will set on BOOT -> INIT.
     std::optional<std::uint32_t> pending_revision() const { return pending_revision_; }
 

@@ -57,8 +57,9 @@ device::DeviceDescription big_boot_mailbox() {
 
 // One drive with an FoE server behind the project's master.
 struct FoeBench {
-    explicit FoeBench(foe::FoeOptions opt = {}, device::DeviceDescription dev = device::default_drive())
-        : b(1, {}, std::move(dev)) {
+    explicit FoeBench(foe::FoeOptions opt = {}, device::DeviceDescription dev = device::default_drive(),
+                      SegmentFactory make = &coe::make_coe_segment)
+        : b(1, {}, std::move(dev), make) {
         attached = foe::attach_foe(*b.seg, opt);
     }
     std::uint16_t station() { return b.master.slaves()[0].station; }
@@ -142,6 +143,29 @@ TEST(FoeDevice, OnlyDevicesDeclaringFoeGetAServer) {
     FoeBench without({}, d);
     EXPECT_EQ(without.attached, 0u);
     EXPECT_EQ(foe::foe_server(without.b.slave()), nullptr);
+}
+
+// A device of a network file without CoE (a process image only) but with FoE and bootstrap.
+std::unique_ptr<esc::Segment> plain_segment(const device::DeviceDescription& d, std::size_t n,
+                                            const esc::EscConfig& cfg) {
+    auto seg = std::make_unique<esc::Segment>();
+    for (std::size_t i = 0; i < n; ++i)
+        seg->add(std::make_unique<esc::Slave>(d, cfg, std::make_unique<esc::ProcessImageApplication>(0, 0)));
+    return seg;
+}
+
+TEST(FoeDevice, ADeviceWithoutCoeUpdatesItsSii) {
+    auto d = device::default_drive();
+    d.mailbox_protocols = device::mbx_proto::FoE;
+    d.rx_pdos.clear();
+    d.tx_pdos.clear();
+    FoeBench f({}, d, &plain_segment);
+    ASSERT_EQ(f.attached, 1u);
+    f.to_boot();
+    const auto w = f.client().write("io.efw", firmware(0x00000005));
+    ASSERT_TRUE(w.ok()) << w.error_text;
+    ASSERT_TRUE(f.b.master.request_state(f.station(), AlState::Init));
+    EXPECT_EQ(f.sii_revision(), 5u);
 }
 
 // ---- BOOT transitions (ETG.1000.6 6.4, Table 9; AL status codes of Table 11)
