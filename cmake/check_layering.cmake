@@ -19,6 +19,7 @@ set(LAYER_twinsync common twinsync_parameters)  # TWINsync telegram, mapping, li
 set(LAYER_device common protocol twinsync_parameters)  # device descriptions (the dictionary content)
 set(LAYER_esc protocol device)     # the emulated ESC, the slave, the segment
 set(LAYER_coe esc device)          # object dictionary, SDO server, PDO mapping
+set(LAYER_foe esc)                 # FoE server, its files, the bootloader of the BOOT state
 set(LAYER_motion protocol)         # profile generator, mechanics, homing, CiA 402 state machine, touch probe
 set(LAYER_drive_core motion twinsync)  # the drive core, its operation modes, the TWINsync coupling: no EtherCAT
 set(LAYER_cia402 drive_core coe twinsync)  # the CoE adapter of the drive core, the TWINsync port
@@ -34,7 +35,7 @@ set(LAYER_testing master cia402 faults telemetry serve)
 set(LAYER_esi device esc)
 set(LAYER_network cia402 esi)      # networks of mixed devices from a file
 set(LAYER_replay network esc)     # replay of real captures against a line built from a file or the capture
-set(LAYER_cli master telemetry cia402 faults esi serve esc report network replay)
+set(LAYER_cli master telemetry cia402 faults esi serve esc report network replay foe)
 
 # ---------------------------------------------------------------------------------------------------------
 if(NOT SOURCE_DIR OR NOT LINKS)

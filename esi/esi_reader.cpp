@@ -534,7 +534,10 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
     if (auto mbx = dev.child("Mailbox")) {
         if (mbx.child("AoE")) d.mailbox_protocols |= mp::AoE;
         if (mbx.child("EoE")) d.mailbox_protocols |= mp::EoE;
-        if (mbx.child("FoE")) d.mailbox_protocols |= mp::FoE;
+        if (mbx.child("FoE")) {
+            d.mailbox_protocols |= mp::FoE;
+            d.foe_details = device::foe_details::Enable;  // ETG.2000: the SII General FoE details of <FoE>
+        }
         if (mbx.child("SoE")) d.mailbox_protocols |= mp::SoE;
         if (mbx.child("VoE")) d.mailbox_protocols |= mp::VoE;
         if (auto coe = mbx.child("CoE")) {
@@ -581,6 +584,11 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
         if (w(3) != 0)
             notes.push_back(fmt::format("ConfigData word 3 (PDI config 2) 0x{:04X} is not kept", w(3)));
         d.bootstrap_supported = static_cast<bool>(ee.child("BootStrap"));
+        // BootStrap: 8 bytes, the SII words 0x14-0x17 (receive mailbox offset and size, send mailbox offset
+        // and size).
+        const auto bs = parse_hex_bytes(txt(ee.child("BootStrap")));
+        if (bs.size() >= 8)
+            d.boot_mailbox = {ld_le16(&bs[0]), ld_le16(&bs[2]), ld_le16(&bs[4]), ld_le16(&bs[6])};
         if (ee.child("Data"))
             notes.push_back("Eeprom Data (a complete image) is not used; the SII is generated");
     }

@@ -349,12 +349,12 @@ std::string write_esi(const device::DeviceDescription& d) {
     text(ee, "ConfigData", hex_bytes(cfg));
     const auto* mo = d.sm_of_type(device::SmType::MailboxOut);
     const auto* mi = d.sm_of_type(device::SmType::MailboxIn);
-    if (d.bootstrap_supported && mo && mi) {
+    if (const auto boot = d.bootstrap_mailbox()) {
         std::vector<std::uint8_t> bs(8, 0);
-        st_le16(bs.data(), mo->start);
-        st_le16(bs.data() + 2, mo->length);
-        st_le16(bs.data() + 4, mi->start);
-        st_le16(bs.data() + 6, mi->length);
+        st_le16(bs.data(), boot->out_start);
+        st_le16(bs.data() + 2, boot->out_length);
+        st_le16(bs.data() + 4, boot->in_start);
+        st_le16(bs.data() + 6, boot->in_length);
         text(ee, "BootStrap", hex_bytes(bs));
     }
 

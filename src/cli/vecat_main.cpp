@@ -25,6 +25,7 @@
 #include "esi/esi_check.hpp"
 #include "esi/esi_reader.hpp"
 #include "esi/esi_writer.hpp"
+#include "foe/foe_server.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/privileges.hpp"
@@ -125,9 +126,10 @@ struct RunOptions {
     vecat::net::RealtimeOptions rt;
     std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
     std::string downstream;
-    std::string network_path;  // --network: the devices and their cabling from a file
-    std::string report_path;   // --report: JUnit XML of the checks on the master
-    bool report_fail = false;  // --report-fail: exit 3 when a check failed
+    std::string network_path;    // --network: the devices and their cabling from a file
+    std::string report_path;     // --report: JUnit XML of the checks on the master
+    bool report_fail = false;    // --report-fail: exit 3 when a check failed
+    vecat::foe::FoeOptions foe;  // --foe-dir, --foe-max-size, --foe-password
 };
 
 // Serves until stop. ready (when given) is set once the serve loop runs; messages go to log. vecat run
@@ -136,7 +138,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
                  sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, network_path,
-                 report_path, report_fail] = o;
+                 report_path, report_fail, foe_opts] = o;
     std::string why;
     for (const std::string& i : {iface, downstream}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -174,6 +176,9 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
                              dev.identity.vendor_id, dev.identity.product_code);
     }
     if (!param_dir.empty() && !attach_parameter_stores(*seg, param_dir, log)) return 1;
+    // FoE and the BOOT state's firmware update for every device that declares FoE (src/foe/README.md).
+    if (const auto n = vecat::foe::attach_foe(*seg, foe_opts); n > 0 && !foe_opts.dir.empty())
+        fmt::print(log, "vecat: FoE files of {} slave(s) in {}/slave-N\n", n, foe_opts.dir);
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
         seg->slave(i).esc().dc().set_drift_ppm(i % 2 ? -drift_ppm : drift_ppm, vecat::net::monotonic_ns());
@@ -449,6 +454,15 @@ int main(int argc, char** argv) {
             ->check(CLI::Range(-1000.0, 1000.0));
         c->add_option("--param-dir", ro.param_dir,
                       "Keep each slave's parameters (0x1010 store / 0x1011 restore) in DIR/slave-N.param");
+        c->add_option("--foe-dir", ro.foe.dir,
+                      "Keep the FoE files of each slave in DIR/slave-N (without it: in memory); firmware "
+                      "files (*.efw) are written there in BOOT");
+        c->add_option("--foe-max-size", ro.foe.max_file_size,
+                      "Largest file an FoE write or read may have, in bytes (larger: FoE error 0x8003)")
+            ->capture_default_str();
+        c->add_option("--foe-password", ro.foe.password,
+                      "Password every FoE request must carry (0x... accepted; a wrong one: FoE error 0x800A)")
+            ->capture_default_str();
         add_esi_options(c, true);
         vecat::cli::add_run_fault_options(c, ro.fault_opts);
         vecat::cli::add_telemetry_options(c, ro.telemetry);

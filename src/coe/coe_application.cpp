@@ -74,6 +74,11 @@ void CoeApplication::attach(esc::Slave& slave) {
     sync_->attach(slave);
 }
 
+void CoeApplication::on_revision_change(std::uint32_t revision) {
+    if (auto* e = od_.find(protocol::obj::identity::revision)) e->set(revision);
+    identity_.revision = revision;
+}
+
 esc::OpReadiness CoeApplication::op_readiness(std::uint64_t now_ns, std::uint64_t since_ns) {
     return sync_->op_readiness(now_ns, since_ns);
 }

@@ -66,6 +66,8 @@ class CoeApplication : public esc::Application {
     bool refresh_inputs(Bytes inputs) override;
     void attach(esc::Slave& slave) override;
     esc::OpReadiness op_readiness(std::uint64_t now_ns, std::uint64_t since_ns) override;
+    // A firmware update (the bootloader, src/foe): 0x1018:03 reports the new revision.
+    void on_revision_change(std::uint32_t revision) override;
 
     // Parameter persistence (0x1010/0x1011) in the file at path: applies the stored set now. A corrupted
     // or foreign file leaves the defaults and queues an emergency 0x6300 (data set) with "PRM" and the

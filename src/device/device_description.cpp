@@ -27,6 +27,22 @@ const SyncManagerConfig* DeviceDescription::sm_of_type(SmType t) const {
     return nullptr;
 }
 
+std::optional<BootMailbox> DeviceDescription::bootstrap_mailbox() const {
+    const auto* out = sm_of_type(SmType::MailboxOut);
+    const auto* in = sm_of_type(SmType::MailboxIn);
+    if (!bootstrap_supported || !out || !in) return std::nullopt;
+    BootMailbox b = boot_mailbox;
+    if (b.out_length == 0) {
+        b.out_start = out->start;
+        b.out_length = out->length;
+    }
+    if (b.in_length == 0) {
+        b.in_start = in->start;
+        b.in_length = in->length;
+    }
+    return b;
+}
+
 std::optional<unsigned> DeviceDescription::sm_index_of_type(SmType t) const {
     for (unsigned i = 0; i < sync_managers.size(); ++i)
         if (sync_managers[i].type == t) return i;
@@ -42,7 +58,13 @@ DeviceDescription default_drive() {
     d.order_code = "VECAT-SD402";
     d.group_type = "ServoDrives";
     d.group_name = "Servo drives";
-    d.mailbox_protocols = mbx_proto::CoE;
+    // CoE, and FoE with the BOOT state (firmware update, src/foe/README.md).
+    d.mailbox_protocols = mbx_proto::CoE | mbx_proto::FoE;
+    d.foe_details = foe_details::Enable;
+    d.bootstrap_supported = true;
+    // The bootstrap mailbox is the standard one (boot_mailbox left 0). A master must disable SM0/SM1 before
+    // it can move them (ESC datasheet: the SyncManager configuration is locked while enabled), which SOEM's
+    // firm_update sample does not do (SOEM pull request #483): with the same mailbox it works unmodified.
     d.coe_details = coe_details::Sdo | coe_details::SdoInfo | coe_details::PdoAssign |
                     coe_details::PdoConfig | coe_details::CompleteAccess;
     d.ebus_current_ma = 0;

@@ -80,6 +80,21 @@ inline constexpr std::uint16_t SoE = 0x0010;
 inline constexpr std::uint16_t VoE = 0x0020;
 }  // namespace mbx_proto
 
+// FoE details byte of the SII General category (ETG.2010 General: bit 0 "FoE enabled").
+namespace foe_details {
+inline constexpr std::uint8_t Enable = 0x01;
+}  // namespace foe_details
+
+// The bootstrap mailbox (ETG.2010 SII words 0x0014-0x0017, ETG.2000 Eeprom/BootStrap): where SM0 (master to
+// slave) and SM1 (slave to master) lie in the BOOT state.
+struct BootMailbox {
+    std::uint16_t out_start = 0;
+    std::uint16_t out_length = 0;
+    std::uint16_t in_start = 0;
+    std::uint16_t in_length = 0;
+    friend bool operator==(const BootMailbox&, const BootMailbox&) = default;
+};
+
 // CoE details byte of the SII General category.
 namespace coe_details {
 inline constexpr std::uint8_t Sdo = 0x01;
@@ -115,6 +130,8 @@ struct DeviceDescription {
     std::uint8_t general_flags = 0;
     std::int16_t ebus_current_ma = 0;
     bool bootstrap_supported = false;
+    // The bootstrap mailbox when bootstrap_supported; lengths 0: the standard mailbox's area and lengths.
+    BootMailbox boot_mailbox{};
 
     std::vector<SyncManagerConfig> sync_managers;  // SM0.. in order
     std::vector<FmmuUsage> fmmus;
@@ -135,6 +152,10 @@ struct DeviceDescription {
     unsigned input_bytes() const;
     const SyncManagerConfig* sm_of_type(SmType t) const;
     std::optional<unsigned> sm_index_of_type(SmType t) const;
+    // The bootstrap mailbox in effect (boot_mailbox, or the standard mailbox where it leaves the lengths 0);
+    // nullopt when the device has no bootstrap or no mailbox. The SII, the ESI and the slave's BOOT check
+    // all take it from here.
+    std::optional<BootMailbox> bootstrap_mailbox() const;
 };
 
 // Every object of the device's dictionary, sorted by index: the generated communication area

@@ -113,6 +113,9 @@ DeviceDescription description_from_sii(const protocol::SiiInfo& sii, std::vector
     d.coe_details = sii.coe_details;
     d.foe_details = sii.foe_details;
     d.eoe_details = sii.eoe_details;
+    d.bootstrap_supported = sii.boot_rx_mbx_size != 0 && sii.boot_tx_mbx_size != 0;
+    d.boot_mailbox = {sii.boot_rx_mbx_offset, sii.boot_rx_mbx_size, sii.boot_tx_mbx_offset,
+                      sii.boot_tx_mbx_size};
     d.general_flags = sii.flags;
     d.ebus_current_ma = sii.ebus_current;
     d.sync_managers.clear();

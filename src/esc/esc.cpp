@@ -94,6 +94,10 @@ unsigned Esc::pdi_take_sync_pulses(std::uint64_t now_ns, SyncPulse* out, unsigne
     return n;
 }
 
+void Esc::pdi_write_eeprom_word(unsigned word, std::uint16_t value) {
+    if (2 * word + 1 < eeprom_.size()) st_le16(&eeprom_[2 * word], value);
+}
+
 void Esc::reload_eeprom() {
     auto word = [&](unsigned w) -> std::uint16_t {
         return 2 * w + 1 < eeprom_.size() ? ld_le16(&eeprom_[2 * w]) : 0xFFFF;

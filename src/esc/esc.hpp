@@ -147,6 +147,10 @@ class Esc {
     // its alias when DL control enables alias addressing.
     bool addressed_fixed(std::uint16_t adp) const;
 
+    // The slave's firmware writes its own EEPROM (a firmware update writes the new revision into the SII,
+    // words 0x000C/0x000D). A word past the EEPROM's end is not written.
+    void pdi_write_eeprom_word(unsigned word, std::uint16_t value);
+
     // Reloads the ESC configuration area from the EEPROM (as at power-on and on an SII reload command).
     void reload_eeprom();
 

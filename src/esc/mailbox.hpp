@@ -5,6 +5,7 @@
 #include <cstddef>
 
 #include "common/bytes.hpp"
+#include "protocol/al_status.hpp"
 #include "protocol/mailbox.hpp"
 
 namespace vecat::esc {
@@ -32,8 +33,13 @@ class MailboxProtocol {
     virtual void handle(const protocol::MailboxHeader& h, ConstBytes payload, MailboxReplySink& out) = 0;
     // Called while the slave is running so a protocol can send unsolicited messages (emergencies).
     virtual void poll(MailboxReplySink&) {}
-    // The mailbox was reset (state INIT): forget transfers in progress.
+    // The mailbox was reset (state INIT or BOOT): forget transfers in progress.
     virtual void reset() {}
+    // Served in the BOOT state too. ETG.1000.6 6.4 (the BOOT state): only FoE runs there (the bootloader);
+    // a request of any other protocol there gets the mailbox error "unsupported protocol".
+    virtual bool served_in_boot() const { return false; }
+    // The AL state changed (after reset() when the mailbox was reset).
+    virtual void on_state_change(protocol::AlState /*from*/, protocol::AlState /*to*/) {}
 };
 
 }  // namespace vecat::esc

@@ -89,11 +89,11 @@ std::vector<std::uint8_t> build_sii_image(const device::DeviceDescription& d) {
         word(sii::StdRxMailboxSize, mbx_out->length);
         word(sii::StdTxMailboxOffset, mbx_in->start);
         word(sii::StdTxMailboxSize, mbx_in->length);
-        if (d.bootstrap_supported) {
-            word(sii::BootRxMailboxOffset, mbx_out->start);
-            word(sii::BootRxMailboxSize, mbx_out->length);
-            word(sii::BootTxMailboxOffset, mbx_in->start);
-            word(sii::BootTxMailboxSize, mbx_in->length);
+        if (const auto boot = d.bootstrap_mailbox()) {
+            word(sii::BootRxMailboxOffset, boot->out_start);
+            word(sii::BootRxMailboxSize, boot->out_length);
+            word(sii::BootTxMailboxOffset, boot->in_start);
+            word(sii::BootTxMailboxSize, boot->in_length);
         }
         word(sii::MailboxProtocol, d.mailbox_protocols);
     }
@@ -116,7 +116,7 @@ std::vector<std::uint8_t> build_sii_image(const device::DeviceDescription& d) {
         w.u8(name_idx);
         w.u8(0);  // reserved
         w.u8((d.mailbox_protocols & device::mbx_proto::CoE) ? d.coe_details : 0);
-        w.u8(d.foe_details);
+        w.u8((d.mailbox_protocols & device::mbx_proto::FoE) ? d.foe_details : 0);
         w.u8(d.eoe_details);
         w.u8(0);  // SoE channels
         w.u8(0);  // DS402 channels

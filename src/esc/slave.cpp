@@ -151,9 +151,12 @@ Slave::Slave(const DeviceModel& model, EscConfig esc_cfg, std::unique_ptr<Applic
     sm_in_ = idx(device::SmType::Inputs);
     // Mailbox buffers of the mailbox sizes the description declares (an ESI may declare more than the
     // usual 1486 bytes; a master fills such a mailbox with several datagrams).
+    const auto boot = desc_.bootstrap_mailbox();
     const auto mbx_size = [&](device::SmType t) {
         const auto* c = desc_.sm_of_type(t);
-        return std::max<std::size_t>(kMaxMailboxSize, c ? c->length : 0);
+        const std::size_t boot_len =
+            !boot ? 0 : (t == device::SmType::MailboxOut ? boot->out_length : boot->in_length);
+        return std::max<std::size_t>({kMaxMailboxSize, c ? c->length : std::size_t{0}, boot_len});
     };
     rx_.resize(mbx_size(device::SmType::MailboxOut));
     last_reply_.resize(mbx_size(device::SmType::MailboxIn));
@@ -195,10 +198,9 @@ void Slave::enter(AlState to, std::uint64_t now_ns) {
     if (to == AlState::Init || to == AlState::Boot) {
         set_sm_group(false, false);
         set_sm_group(true, false);
-        if (auto* coe = app_->mailbox_protocol(MailboxType::CoE)) coe->reset();
-        q_head_ = q_count_ = 0;
-        last_counter_ = 0;
-        last_reply_len_ = 0;
+        reset_mailbox();
+        // BOOT: the mailbox runs on the bootstrap mailbox configuration (checked by CheckBoot).
+        if (to == AlState::Boot) set_sm_group(true, true);
     } else if (to == AlState::PreOp) {
         if (rank(from) > rank(AlState::PreOp)) set_sm_group(false, false);
         if (from == AlState::Init) set_sm_group(true, true);
@@ -210,7 +212,39 @@ void Slave::enter(AlState to, std::uint64_t now_ns) {
     op_pending_ = false;
     state_ = to;
     app_->on_state_change(from, to);
+    for (auto& p : own_protocols_)
+        p->on_state_change(from, to);
     (void)now_ns;
+}
+
+void Slave::reset_mailbox() {
+    if (auto* coe = app_->mailbox_protocol(MailboxType::CoE)) coe->reset();
+    for (auto& p : own_protocols_)
+        p->reset();
+    q_head_ = q_count_ = 0;
+    last_counter_ = 0;
+    last_reply_len_ = 0;
+}
+
+void Slave::add_mailbox_protocol(std::unique_ptr<MailboxProtocol> p) {
+    own_protocols_.push_back(std::move(p));
+}
+
+MailboxProtocol* Slave::mailbox_protocol(MailboxType t) {
+    for (auto& p : own_protocols_)
+        if (p->type() == t) return p.get();
+    return app_->mailbox_protocol(t);
+}
+
+std::uint32_t Slave::sii_revision() const {
+    const auto& ee = esc_.eeprom();
+    return 2 * protocol::sii::RevisionNo + 3 < ee.size() ? ld_le32(&ee[2 * protocol::sii::RevisionNo]) : 0;
+}
+
+void Slave::apply_firmware_revision(std::uint32_t revision) {
+    esc_.pdi_write_eeprom_word(protocol::sii::RevisionNo, static_cast<std::uint16_t>(revision));
+    esc_.pdi_write_eeprom_word(protocol::sii::RevisionNo + 1, static_cast<std::uint16_t>(revision >> 16));
+    app_->on_revision_change(revision);
 }
 
 void Slave::set_error(AlStatusCode code, AlState stay, std::uint64_t now_ns) {
@@ -231,6 +265,23 @@ void Slave::raise_error(AlStatusCode code, AlState fallback) {
     const AlState target = rank(fallback) < rank(state_) ? fallback : state_;
     set_error(code, target, 0);
     publish_status();
+}
+
+// INIT -> BOOT (ETG.1000.6 6.4, Table 9; AL status codes of ETG.1000.6 Table 11): a device without bootstrap
+// answers 0x0013; SM0 and SM1 must be the bootstrap mailbox of the SII (words 0x0014-0x0017), else 0x0015.
+AlStatusCode Slave::check_boot_mailbox_config() const {
+    const auto boot = desc_.bootstrap_mailbox();
+    if (!boot) return AlStatusCode::BootstrapNotSupported;
+    if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0) return AlStatusCode::InvalidMailboxConfigBoot;
+    const auto c0 = esc_.sm_config(static_cast<unsigned>(sm_mbx_out_));
+    const auto c1 = esc_.sm_config(static_cast<unsigned>(sm_mbx_in_));
+    const bool ok0 = c0.ecat_enabled && c0.valid && c0.start == boot->out_start &&
+                     c0.length == boot->out_length &&
+                     (c0.control & 0x0F) == (sm::CtrlModeMailbox | sm::CtrlDirWrite);
+    const bool ok1 = c1.ecat_enabled && c1.valid && c1.start == boot->in_start &&
+                     c1.length == boot->in_length &&
+                     (c1.control & 0x0F) == (sm::CtrlModeMailbox | sm::CtrlDirRead);
+    return ok0 && ok1 ? AlStatusCode::NoError : AlStatusCode::InvalidMailboxConfigBoot;
 }
 
 AlStatusCode Slave::check_mailbox_config() const {
@@ -333,9 +384,12 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
                 set_error(code, AlState::Init, now_ns);
             break;
         case AlAction::CheckBoot:
-            set_error(desc_.bootstrap_supported ? AlStatusCode::InvalidMailboxConfigBoot
-                                                : AlStatusCode::BootstrapNotSupported,
-                      AlState::Init, now_ns);
+            code = check_boot_mailbox_config();
+            if (code == AlStatusCode::NoError) code = app_->check_transition(state_, to);
+            if (code == AlStatusCode::NoError)
+                enter(to, now_ns);
+            else
+                set_error(code, AlState::Init, now_ns);
             break;
         case AlAction::CheckProcessData:
             // The application first checks its mapping (0x0024/0x0025), then the SMs are compared with it.
@@ -404,7 +458,9 @@ void Slave::service_mailbox() {
             ++counters_.mailbox_duplicates;  // the same request again: executed once only
         } else {
             if (h->counter != 0) last_counter_ = h->counter;
-            MailboxProtocol* proto = app_->mailbox_protocol(static_cast<MailboxType>(h->type));
+            MailboxProtocol* proto = mailbox_protocol(static_cast<MailboxType>(h->type));
+            // In BOOT the bootloader serves FoE alone (ETG.1000.6 6.4): CoE and the rest are unsupported.
+            if (proto && state_ == AlState::Boot && !proto->served_in_boot()) proto = nullptr;
             const ConstBytes payload(rx_.data() + kMailboxHeaderSize, h->length);
             if (interceptor_ && interceptor_->intercept(*this, *h, payload, proto, sink)) {
                 // taken over by fault injection
@@ -415,7 +471,11 @@ void Slave::service_mailbox() {
             }
         }
     }
-    if (auto* coe = app_->mailbox_protocol(MailboxType::CoE)) coe->poll(*sink_);
+    if (state_ != AlState::Boot) {
+        if (auto* coe = app_->mailbox_protocol(MailboxType::CoE)) coe->poll(*sink_);
+        for (auto& p : own_protocols_)
+            p->poll(*sink_);
+    }
     send_pending_replies();
 }
 
@@ -454,7 +514,7 @@ void Slave::run(std::uint64_t now_ns) {
         }
     }
     if (op_pending_) try_enter_op(now_ns);
-    if (state_ != AlState::Init && state_ != AlState::Boot) service_mailbox();
+    if (state_ != AlState::Init) service_mailbox();
     if (rank(state_) >= rank(AlState::SafeOp)) exchange_process_data(now_ns);
     deliver_sync_pulses(now_ns);
     app_->tick(now_ns);

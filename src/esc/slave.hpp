@@ -59,6 +59,9 @@ class Application {
     // SAFEOP -> OP waits until the outputs are valid and the application is ready (e.g. SYNC0 running);
     // called at the request and on every run while the transition waits (waiting since since_ns).
     virtual OpReadiness op_readiness(std::uint64_t /*now_ns*/, std::uint64_t /*since_ns*/) { return {}; }
+    // A firmware update took effect (Slave::apply_firmware_revision): the device now reports this revision
+    // (a CoE device in 0x1018:03).
+    virtual void on_revision_change(std::uint32_t /*revision*/) {}
 };
 
 // A process image without behaviour: keeps the last outputs and serves inputs set from outside.
@@ -93,7 +96,7 @@ enum class AlAction : std::uint8_t {
     Stay,              // requested state == current state
     Down,              // allowed without checks
     CheckMailbox,      // INIT -> PREOP
-    CheckBoot,         // INIT -> BOOT
+    CheckBoot,         // INIT -> BOOT: bootstrap supported, SM0/SM1 as the SII's bootstrap mailbox
     CheckProcessData,  // PREOP -> SAFEOP
     CheckOutputs,      // SAFEOP -> OP: waits for valid outputs
     Refuse,            // 0x0011 invalid requested state change
@@ -146,6 +149,17 @@ class Slave {
     const SlaveCounters& counters() const { return counters_; }
     void set_mailbox_interceptor(MailboxInterceptor* i) { interceptor_ = i; }
 
+    // A mailbox protocol of the slave's own firmware beside the application's (FoE and the bootloader,
+    // src/foe): asked first for its type. The slave owns it.
+    void add_mailbox_protocol(std::unique_ptr<MailboxProtocol> p);
+    // The protocol serving a type: the slave's own, else the application's; nullptr when none.
+    MailboxProtocol* mailbox_protocol(protocol::MailboxType t);
+    // The firmware update: the revision in the SII (words 0x000C/0x000D of the EEPROM) becomes revision, and
+    // the application is told (Application::on_revision_change). Called by the bootloader on BOOT -> INIT.
+    void apply_firmware_revision(std::uint32_t revision);
+    // The revision the SII holds now.
+    std::uint32_t sii_revision() const;
+
     static constexpr std::uint64_t kOutputsValidTimeoutNs = 1'000'000'000;  // SAFEOP -> OP wait
 
   private:
@@ -156,6 +170,8 @@ class Slave {
     bool outputs_valid() const;
     void publish_status();
     protocol::AlStatusCode check_mailbox_config() const;
+    protocol::AlStatusCode check_boot_mailbox_config() const;
+    void reset_mailbox();
     protocol::AlStatusCode check_process_data_config() const;
     // The process data of this direction goes through its SyncManager; false: through an FMMU alone (the
     // SM is virtual, or declared not enabled and left off by the master).
@@ -197,6 +213,7 @@ class Slave {
     std::array<SyncPulse, kMaxPulsesPerRun> pulses_{};
     SlaveCounters counters_;
     MailboxInterceptor* interceptor_ = nullptr;
+    std::vector<std::unique_ptr<MailboxProtocol>> own_protocols_;
     friend class SlaveReplySink;
 };
 

@@ -10,6 +10,7 @@
 #include "protocol/al_status.hpp"
 #include "protocol/coe.hpp"
 #include "protocol/fmmu.hpp"
+#include "protocol/foe.hpp"
 #include "protocol/frame.hpp"
 #include "protocol/mailbox.hpp"
 #include "protocol/registers.hpp"
@@ -215,6 +216,75 @@ TEST(ProtocolMailbox, ErrorReplyAndMessages) {
     EXPECT_EQ(b, (Raw<4>{0x01, 0x00, 0x02, 0x00}));
     EXPECT_EQ(describe(MailboxError::InvalidSize), "The length of data is inconsistent");
     EXPECT_EQ(make_mailbox_error(Bytes(b.data(), 3), MailboxError::Syntax), 0u);
+}
+
+// ---- FoE (ETG.1000.6 5.8)
+
+TEST(ProtocolFoe, WriteRequestFromSpecificationBytes) {
+    // Write request (opcode 2), reserved, password 0x12345678, file name "fw.efw".
+    const Raw<12> spec = {0x02, 0x00, 0x78, 0x56, 0x34, 0x12, 'f', 'w', '.', 'e', 'f', 'w'};
+    const auto m = parse_foe(spec);
+    ASSERT_TRUE(m);
+    EXPECT_EQ(m->op, FoeOpCode::Write);
+    EXPECT_EQ(m->value, 0x12345678u);
+    EXPECT_EQ(m->text(), "fw.efw");
+    Raw<12> b{};
+    ASSERT_EQ(write_foe_request(b, FoeOpCode::Write, 0x12345678, "fw.efw"), spec.size());
+    EXPECT_EQ(b, spec);
+}
+
+TEST(ProtocolFoe, EveryMessageRoundTrips) {
+    std::array<std::uint8_t, 32> b{};
+    const Raw<3> data = {1, 2, 3};
+    ASSERT_EQ(write_foe_data(b, 7, data), kFoeHeaderSize + 3);
+    auto m = parse_foe(ConstBytes(b.data(), kFoeHeaderSize + 3));
+    ASSERT_TRUE(m);
+    EXPECT_EQ(m->op, FoeOpCode::Data);
+    EXPECT_EQ(m->value, 7u);
+    EXPECT_TRUE(std::equal(m->tail.begin(), m->tail.end(), data.begin(), data.end()));
+
+    ASSERT_EQ(write_foe_ack(b, 0x01020304), kFoeHeaderSize);
+    EXPECT_EQ((std::array<std::uint8_t, 6>{b[0], b[1], b[2], b[3], b[4], b[5]}),
+              (std::array<std::uint8_t, 6>{0x04, 0x00, 0x04, 0x03, 0x02, 0x01}));
+    m = parse_foe(ConstBytes(b.data(), kFoeHeaderSize));
+    EXPECT_EQ(m->op, FoeOpCode::Ack);
+    EXPECT_EQ(m->value, 0x01020304u);
+    EXPECT_TRUE(m->tail.empty());
+
+    // Error: code 0x8001 little-endian, then the text of Table 93.
+    const std::size_t n = write_foe_error(b, FoeError::NotFound);
+    ASSERT_EQ(n, kFoeHeaderSize + describe(FoeError::NotFound).size());
+    EXPECT_EQ(b[0], 0x05);
+    EXPECT_EQ(b[2], 0x01);
+    EXPECT_EQ(b[3], 0x80);
+    m = parse_foe(ConstBytes(b.data(), n));
+    EXPECT_EQ(static_cast<FoeError>(m->value), FoeError::NotFound);
+    EXPECT_EQ(m->text(), "Not found");
+
+    // Busy: done and entire, two 16-bit fields in place of the packet number.
+    const std::size_t nb = write_foe_busy(b, 3, 10, "erasing");
+    m = parse_foe(ConstBytes(b.data(), nb));
+    EXPECT_EQ(m->op, FoeOpCode::Busy);
+    EXPECT_EQ(b[2], 3);
+    EXPECT_EQ(b[4], 10);
+    EXPECT_EQ(m->busy_done(), 3);
+    EXPECT_EQ(m->busy_entire(), 10);
+    EXPECT_EQ(m->text(), "erasing");
+}
+
+TEST(ProtocolFoe, TruncatedAndUnknownAreRefusedAndWritersAreBounded) {
+    const Raw<6> unknown = {0x07, 0, 0, 0, 0, 0};
+    EXPECT_FALSE(parse_foe(unknown));
+    const Raw<5> shorter = {0x03, 0, 1, 0, 0};
+    EXPECT_FALSE(parse_foe(shorter));
+    const Raw<6> zero = {0x00, 0, 0, 0, 0, 0};
+    EXPECT_FALSE(parse_foe(zero));
+    std::array<std::uint8_t, 8> b{};
+    EXPECT_EQ(write_foe_ack(Bytes(b.data(), 5), 1), 0u);
+    EXPECT_EQ(write_foe_request(b, FoeOpCode::Read, 0, "longer than eight"), b.size());  // name cut
+    EXPECT_EQ(foe_data_capacity(0xF6), 0xF6u - 12);
+    EXPECT_EQ(foe_data_capacity(10), 0u);
+    EXPECT_EQ(describe(FoeError::ProgramError), "Program error");
 }
 
 // ---- CoE (ETG.1000.6 5.6, CiA 301)
