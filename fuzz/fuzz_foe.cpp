@@ -123,12 +123,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                 break;
             }
             case 3: {
-                std::uint8_t status = 0;
-                fuzz::transact(*seg, protocol::Command::FPRD, st, protocol::sm_addr(1) + protocol::sm::Status,
-                               Bytes(&status, 1), now);
-                buf.assign(sm1.length, 0);
-                const auto wkc = fuzz::transact(*seg, protocol::Command::FPRD, st, sm1.start, buf, now);
-                if (wkc == 1 && (status & protocol::sm::StatusMailboxFull)) check_reply(buf);
+                if (fuzz::read_mailbox(*seg, st, sm1, buf, now)) check_reply(buf);
                 break;
             }
             case 4: {

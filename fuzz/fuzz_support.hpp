@@ -93,6 +93,18 @@ inline std::uint16_t fpwr(esc::Segment& seg, std::uint16_t station, std::uint16_
     return transact(seg, protocol::Command::FPWR, station, ado, Bytes(b.data(), b.size()), now_ns);
 }
 
+// Reads the read mailbox (SM1 of the description) into buf when its status says "full" (otherwise the read
+// sees plain memory). True when buf holds a reply.
+inline bool read_mailbox(esc::Segment& seg, std::uint16_t station, const device::SyncManagerConfig& sm1,
+                         std::vector<std::uint8_t>& buf, std::uint64_t now_ns) {
+    std::uint8_t status = 0;
+    transact(seg, protocol::Command::FPRD, station, protocol::sm_addr(1) + protocol::sm::Status,
+             Bytes(&status, 1), now_ns);
+    buf.assign(sm1.length, 0);
+    const auto wkc = transact(seg, protocol::Command::FPRD, station, sm1.start, buf, now_ns);
+    return wkc == 1 && (status & protocol::sm::StatusMailboxFull);
+}
+
 inline constexpr std::uint16_t kFirstStation = 0x1001;
 
 // Station addresses 0x1001.. by position, SM0/SM1 from the description, then AL control PREOP: the slaves

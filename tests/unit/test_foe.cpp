@@ -1,7 +1,8 @@
-// FoE (ETG.1000.6 5.8) and the BOOT state: the FoE server's state machine (read, write, packet numbers,
-// busy, every FoE error code the device produces), the INIT <-> BOOT transitions with their AL status codes,
-// and the firmware update that changes the revision in the SII and in 0x1018:03. Driven by the project's
-// master over an in-process link, on the wire layout of protocol/foe.hpp.
+// FoE (ETG.1000.6 5.8) and the BOOT state (about 600 lines: one protocol, each error code its own test):
+// the FoE server's state machine (read, write, packet numbers, busy, every FoE error code the device
+// produces), the INIT <-> BOOT transitions with their AL status codes, and the firmware update that changes
+// the revision in the SII and in 0x1018:03. Driven by the project's master over an in-process link, on the
+// wire layout of protocol/foe.hpp.
 #include <gtest/gtest.h>
 
 #include <filesystem>
