@@ -19,6 +19,7 @@ struct ReplayArgs {
     double min_wkc = 99.9;
     double min_data = 99.9;
     bool differences = false;
+    std::size_t max_differences = 200;
     std::string save_sii;
 } g_args;
 
@@ -37,7 +38,9 @@ CLI::App* add_replay_command(CLI::App& app) {
     r->add_option("--min-data", g_args.min_data,
                   "Exit 1 below this percentage of register and memory reads with the recorded data, "
                   "time-dependent values and counters excepted (default 99.9)");
-    r->add_flag("--differences", g_args.differences, "List every difference (the first 200)");
+    r->add_flag("--differences", g_args.differences, "List the differences (the first --max-differences)");
+    r->add_option("--max-differences", g_args.max_differences,
+                  "How many differences --differences lists (default 200)");
     r->add_option("--save-sii", g_args.save_sii,
                   "Write the SII image of each slave rebuilt from the capture to DIR/slave-N.bin (words the "
                   "master did not read are 0xFFFF)");
@@ -90,7 +93,9 @@ int run_replay() {
     }
     for (const auto& n : notes)
         fmt::print("note: {}\n", n);
-    const replay::ReplayReport r = replay::replay(cap, pairing, *line);
+    replay::ReplayOptions options;
+    options.max_differences = a.max_differences;
+    const replay::ReplayReport r = replay::replay(cap, pairing, *line, options);
     fmt::print("{}", replay::format_report(r));
     if (a.differences)
         for (const auto& d : r.differences)

@@ -27,10 +27,11 @@ DeviceDescription base(std::uint32_t product, std::string name, std::string orde
 }
 
 // A device without PDI (ESC datasheet section I: PDI control 0x0140 = 0x00, "interface deactivated"):
-// the ESC forwards and answers registers and the SII, nothing else.
+// the ESC forwards and answers registers and the SII, nothing else. With no µController to set AL status,
+// the ESC does it itself: device emulation, 0x0141 bit 0 (a real EK1100's SII word 0 is 0x0D00).
 DeviceDescription no_pdi(std::uint32_t product, std::string name, std::string order) {
     DeviceDescription d = base(product, std::move(name), std::move(order), "SystemBk", "System couplers");
-    d.pdi_control = 0x0000;
+    d.pdi_control = 0x0100;
     d.ebus_current_ma = -2000;  // what a coupler feeds into the E-bus (negative: supply)
     return d;
 }

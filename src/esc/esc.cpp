@@ -41,6 +41,9 @@ constexpr std::uint16_t kDefaultWatchdogDivider = 2498;  // (2498 + 2) x 40 ns =
 constexpr std::uint16_t kDefaultWatchdogTime = 1000;     // 1000 x 100 us = 100 ms
 constexpr std::uint16_t kDcFirst = 0x0900;               // the DC unit's registers: 0x0900-0x09FF
 constexpr std::uint16_t kDcSize = 0x0100;
+constexpr std::uint16_t kDcSystemTimeFirst = 0x0910;  // the system time unit: 0x0910-0x09FF
+constexpr std::uint16_t kDcEnd = kDcFirst + kDcSize;
+constexpr std::uint8_t kSiiStatusBits = 0x3E;  // 0x0502 bits 1-5 (see EscConfig::sii_status_bits)
 
 bool overlaps(std::uint32_t lo, std::uint32_t hi, std::uint32_t a, std::uint32_t len) {
     return lo < a + len && hi >= a;  // hi inclusive
@@ -62,6 +65,9 @@ Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
     cfg_.fmmu_count = static_cast<std::uint8_t>(std::min<unsigned>(cfg_.fmmu_count, kMaxFmmus));
     cfg_.sm_count = static_cast<std::uint8_t>(std::min<unsigned>(cfg_.sm_count, kMaxSms));
     cfg_.ram_bytes = static_cast<std::uint32_t>(mem_.size() - kRegisterSpaceSize);
+    if (!cfg_.dc_system_time_unit)
+        for (unsigned a = kDcSystemTimeFirst; a < kDcEnd; ++a)
+            wmask_.set(a, 0, false);
     if (eeprom_.size() % 2) eeprom_.push_back(0xFF);
 
     mem_[addr(Reg::Type)] = cfg_.type;
@@ -81,6 +87,7 @@ Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
     mem_[addr(Reg::WatchdogStatusProcessData)] = 0x01;
     std::uint16_t sii = 0;
     if (cfg_.sii_read_8_bytes) sii |= sii_ctrl::Read8Bytes;
+    sii |= cfg_.sii_status_bits & kSiiStatusBits;
     if (eeprom_.size() > 2048) sii |= sii_ctrl::TwoAddressBytes;
     st_le16(&mem_[addr(Reg::SiiControl)], sii);
     reload_eeprom();
@@ -166,8 +173,11 @@ void Esc::set_port_link(unsigned port, bool up) {
 void Esc::update_dl_status() {
     if (port_changes_) ++*port_changes_;  // links or loop settings may have changed: the way of frames too
     const std::uint16_t ctrl = ld_le16(&mem_[addr(Reg::SiiControl)]);
-    std::uint16_t v = dl_status::PdiWatchdogOk;
+    std::uint16_t v = 0;
     if (!(ctrl & sii_ctrl::NotLoaded)) v |= dl_status::PdiOperational;
+    // Without a PDI (0x0140 = 0, e.g. an EK1100) nothing reloads the PDI watchdog: it shows expired
+    // (ESC datasheet section II 0x0110 bit 1; the EK1100 of ../shared/data/pcap reads 0x..31).
+    if (mem_[addr(Reg::PdiControl)] != 0) v |= dl_status::PdiWatchdogOk;
     for (unsigned p = 0; p < 4; ++p) {
         const bool implemented = ((cfg_.port_descriptor >> (2 * p)) & 0x3) != 0;
         if (implemented && port_link(p))
@@ -390,8 +400,12 @@ bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_i
         const std::size_t rem = n - pos;
         std::size_t run;
         if (cur > 0xFFFF) break;  // past the 16-bit address space: nothing there
-        if (cur < kRegisterSpaceSize) {
+        if (cur < kRegisterSpaceSize && absent_dc_unit(cur)) {
+            run = std::min<std::size_t>(rem, kDcEnd - cur);  // not there: the frame keeps its data
+        } else if (cur < kRegisterSpaceSize) {
             run = std::min<std::size_t>(rem, kRegisterSpaceSize - cur);
+            if (!cfg_.dc_system_time_unit && cur < kDcSystemTimeFirst)
+                run = std::min<std::size_t>(run, kDcSystemTimeFirst - cur);
             refresh_dynamic_registers(static_cast<std::uint16_t>(cur),
                                       static_cast<std::uint16_t>(cur + run - 1), t);
             copy_out(dst + pos, &mem_[cur], run, or_into);
@@ -439,6 +453,7 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
             run = std::min<std::size_t>(rem, kRegisterSpaceSize - cur);
             for (std::size_t k = 0; k < run; ++k) {
                 const std::uint32_t ad = cur + static_cast<std::uint32_t>(k);
+                if (absent_dc_unit(ad)) continue;  // not there: not written, not counted
                 std::uint8_t m = wmask_.mask[ad];
                 if (ad - addr(Reg::AlControl) < 2u) {
                     if (al_control_refused) continue;  // still unread by the PDI: not written, not counted
@@ -492,6 +507,10 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
     if (al_control_written) {
         al_control_unread_ = true;
         set_al_event(al_event::AlControl);
+        // Device emulation: the ESC itself sets AL status to the value written to AL control (ESC
+        // datasheet section II 0x0130, 0x0141 bit 0); an acknowledge (bit 4) shows as the error indication.
+        if (device_emulation())
+            std::memcpy(&mem_[addr(Reg::AlStatus)], &mem_[addr(Reg::AlControl)], 2);
     }
     if (reg_lo <= reg_hi) {
         if (sii_cmd_written) sii_command(written_sii_cmd_);
@@ -508,8 +527,16 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
 // ---------------------------------------------------------------------------------------------
 // Register side effects
 
+bool Esc::absent_dc_unit(std::uint32_t a) const {
+    return !cfg_.dc_system_time_unit && a >= kDcSystemTimeFirst && a < kDcEnd;
+}
+
+bool Esc::device_emulation() const {
+    return (mem_[addr(Reg::EscConfiguration)] & protocol::esc_config::DeviceEmulation) != 0;
+}
+
 bool Esc::al_control_refuses_writes() const {
-    return al_control_unread_ && !(mem_[addr(Reg::EscConfiguration)] & protocol::esc_config::DeviceEmulation);
+    return al_control_unread_ && !device_emulation();
 }
 
 void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTiming& /*t*/) {

@@ -26,6 +26,13 @@ struct EscConfig {
                              protocol::feature::EnhancedLinkMii | protocol::feature::SeparateFcsErrors |
                              protocol::feature::EnhancedDcSyncActivation;
     bool sii_read_8_bytes = true;
+    // Further read-only bits of SII control/status 0x0502 (bits 1-5: bit 5 EEPROM emulation by the PDI,
+    // bits 1-4 reserved, which some ESCs read as 1: an EL2828 shows 0x50).
+    std::uint8_t sii_status_bits = 0;
+    // The DC system time unit (0x0910-0x09FF: system time, offset, delay, time loop, SYNC and latch). Some
+    // ESCs that report DC in 0x0008 have the receive times (0x0900-0x090F) only: they neither read nor
+    // write the rest, and count no access to it (EL2828, EL1004, EK1914, EL3004 in ../shared/data/pcap).
+    bool dc_system_time_unit = true;
     double dc_drift_ppm = 0.0;        // local clock drift against the host clock
     std::uint64_t dc_initial_ns = 0;  // local time at power-on
 };
@@ -77,6 +84,9 @@ class Esc {
     // Reads AL control like a PDI does: clears the AL control event.
     std::uint16_t pdi_read_al_control();
     void pdi_write_al_status(std::uint8_t status, std::uint16_t code);
+    // Device emulation (0x0141 bit 0, from SII word 0): the ESC sets AL status from AL control itself;
+    // devices without a µController (couplers, simple I/O terminals) have it.
+    bool device_emulation() const;
     std::uint8_t al_status() const { return mem_[protocol::addr(protocol::Reg::AlStatus)]; }
     std::uint16_t al_status_code() const {
         return ld_le16(&mem_[protocol::addr(protocol::Reg::AlStatusCode)]);
@@ -200,6 +210,7 @@ class Esc {
     bool ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_into, const FrameTiming& t);
     bool ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t);
     bool al_control_refuses_writes() const;
+    bool absent_dc_unit(std::uint32_t a) const;  // in the system time unit of an ESC without one
     // Where a SyncManager of span bytes may lie: in the process RAM, or on the digital output register
     // of an ESC with a digital I/O PDI.
     bool sm_area_exists(std::uint32_t start, std::uint32_t span) const;

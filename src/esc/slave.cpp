@@ -169,11 +169,13 @@ Slave::Slave(const DeviceModel& model, EscConfig esc_cfg, std::unique_ptr<Applic
     set_sm_group(true, false);
     set_sm_group(false, false);
     publish_status();
+    constructed_ = true;
 }
 
 Slave::~Slave() = default;
 
 void Slave::set_sm_group(bool mailbox, bool active) {
+    if (esc_.device_emulation()) return;  // no PDI that could deactivate a SyncManager
     const int a = mailbox ? sm_mbx_out_ : sm_out_;
     const int b = mailbox ? sm_mbx_in_ : sm_in_;
     if (a >= 0) esc_.pdi_deactivate_sm(static_cast<unsigned>(a), !active);
@@ -181,6 +183,7 @@ void Slave::set_sm_group(bool mailbox, bool active) {
 }
 
 void Slave::publish_status() {
+    if (esc_.device_emulation() && !constructed_) return;  // the ESC keeps AL status itself
     std::uint8_t st = static_cast<std::uint8_t>(state_);
     std::uint16_t code = static_cast<std::uint16_t>(code_);
     if (error_) {
@@ -347,6 +350,13 @@ void Slave::write_inputs(unsigned len) {
 
 void Slave::handle_al_control(std::uint64_t now_ns) {
     const std::uint16_t ctrl = esc_.pdi_read_al_control();
+    if (esc_.device_emulation()) {
+        // The ESC has set AL status to the value written, without any check (ESC datasheet section II
+        // 0x0130); the device follows the state it shows.
+        const std::uint8_t req = ctrl & kAlStateMask;
+        if (is_valid_state(req)) enter(static_cast<AlState>(req), now_ns);
+        return;
+    }
     const std::uint8_t req = ctrl & kAlStateMask;
     const bool ack = ctrl & kAlErrorFlag;
     ident_ = (ctrl & kAlIdentFlag) != 0;
@@ -508,7 +518,7 @@ void Slave::run(std::uint64_t now_ns) {
     if (ev & al_event::WatchdogProcessData) {
         esc_.pdi_clear_al_event(al_event::WatchdogProcessData);
         ++counters_.watchdog_expiries;
-        if (state_ == AlState::Op) {
+        if (state_ == AlState::Op && !esc_.device_emulation()) {  // else the outputs only go to 0
             set_error(AlStatusCode::SyncManagerWatchdog, AlState::SafeOp, now_ns);
             publish_status();
         }

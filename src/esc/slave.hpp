@@ -191,6 +191,7 @@ class Slave {
     std::unique_ptr<Application> app_;
     protocol::AlState state_ = protocol::AlState::Init;
     bool error_ = false;
+    bool constructed_ = false;  // AL status written once at power-up, also under device emulation
     protocol::AlStatusCode code_ = protocol::AlStatusCode::NoError;
     bool ident_ = false;
     bool op_pending_ = false;

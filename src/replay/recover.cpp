@@ -151,7 +151,17 @@ class Recoverer {
                  cmd == Command::FPRW) &&
                 r.wkc() >= 1)
                 if (auto s = position(cmd, adp)) was_read(*s, read);
+            if (e.request_recorded && !broadcast(cmd) && in_dc_system_time_unit(r))
+                if (auto s = position(cmd, adp)) {
+                    auto& unit = line_.slaves[*s].dc_system_time_unit;
+                    unit = unit.value_or(false) || r.wkc() > 0;
+                }
         }
+    }
+
+    static bool in_dc_system_time_unit(const protocol::DatagramView& r) {
+        constexpr std::uint16_t first = addr(Reg::DcSystemTime), end = 0x0A00;
+        return r.length() > 0 && r.ado() >= first && r.ado() + r.length() <= end;
     }
 
     // The working counter of a broadcast write to each whole FMMU (SyncManager) block.
@@ -215,6 +225,7 @@ class Recoverer {
             busy = (ctl & kSiiBusy) != 0;
             if (!rs.sii_read_8_bytes) rs.sii_read_8_bytes = (ctl & kSiiRead8Bytes) != 0;
             if (!rs.sii_two_address_bytes) rs.sii_two_address_bytes = (ctl & kSiiTwoAddressBytes) != 0;
+            if (!rs.sii_status_bits) rs.sii_status_bits = static_cast<std::uint8_t>(ctl & 0x3E);
         }
         if (w.covers(addr(Reg::SiiAddress), 4)) t.address = w.u32(addr(Reg::SiiAddress));
         if (!t.reading || busy || !w.covers(addr(Reg::SiiData), 4)) return;

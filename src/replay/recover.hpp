@@ -25,6 +25,10 @@ struct RecoveredSlave {
     std::optional<std::uint16_t> dl_status;
     std::optional<bool> sii_read_8_bytes;       // 0x0502 bit 6, as the ESC reported it
     std::optional<bool> sii_two_address_bytes;  // 0x0502 bit 7: an EEPROM larger than 16 Kbit
+    std::optional<std::uint8_t> sii_status_bits;  // 0x0502 bits 1-5 as read (esc::EscConfig::sii_status_bits)
+    // Whether the ESC has the DC system time unit (esc::EscConfig::dc_system_time_unit): a datagram to this
+    // slave alone within 0x0910-0x09FF counted (true) or not counted (false; only when none counted).
+    std::optional<bool> dc_system_time_unit;
     // FMMU and SyncManager counts (0x0004, 0x0005) when the master did not read them: worked out from the
     // working counters of its broadcast writes to the 16 FMMU and SyncManager blocks (see recover_line).
     std::optional<std::uint8_t> fmmus_from_writes, sms_from_writes;

@@ -251,6 +251,29 @@ class Replayer {
 
 }  // namespace
 
+namespace {
+
+// The PDI control word (SII word 0: 0x0140 and 0x0141) of a device whose capture does not tell it. Only an
+// ESC with a digital I/O PDI has the digital output register 0x0F00-0x0F03, so a SyncManager there says
+// digital I/O; a device without SyncManagers and without a mailbox has no PDI at all. Neither has a
+// µController to set AL status, so both have device emulation (0x0141 bit 0). Anything else is a device
+// with a µController on an SPI PDI (the PDI type is not visible on the wire).
+std::uint16_t presumed_pdi_control(const std::vector<std::uint8_t>& img) {
+    const protocol::SiiInfo info = protocol::parse_sii(img);
+    constexpr std::uint16_t kDeviceEmulation = std::uint16_t{protocol::esc_config::DeviceEmulation} << 8;
+    constexpr std::uint16_t kDigitalIo = 0x04, kSpi = 0x05;
+    for (const auto& sm : info.sync_managers)
+        if (sm.start >= protocol::addr(protocol::Reg::DigitalOutputData) &&
+            sm.start < protocol::addr(protocol::Reg::DigitalOutputData) + protocol::kDigitalOutputSize)
+            return kDeviceEmulation | kDigitalIo;
+    const bool mailbox = (info.std_rx_mbx_size != 0 && info.std_rx_mbx_size != 0xFFFF) ||
+                         (info.mailbox_protocols != 0 && info.mailbox_protocols != 0xFFFF);
+    if (info.sync_managers.empty() && !mailbox) return kDeviceEmulation;
+    return kSpi;
+}
+
+}  // namespace
+
 // The SII image of a recovered slave: the words read, 0xFFFF elsewhere (an erased EEPROM), as large as its
 // size word (0x003E: (value + 1) kibibits) says, or large enough for the words read. A configuration area
 // read without its checksum word gets the checksum it must have had.
@@ -265,6 +288,11 @@ std::vector<std::uint8_t> recovered_sii_image(const RecoveredSlave& s) {
     std::vector<std::uint8_t> img(bytes, 0xFF);
     for (std::size_t w = 0; w < s.sii.size(); ++w)
         if (s.known[w]) st_le16(img.data() + 2 * w, s.sii[w]);
+    // Configuration words neither read nor loaded into a register the master read: 0, as on most devices;
+    // the PDI control word from what the device must have (ESC datasheet section II 0x0140, 0x0F00).
+    for (unsigned w = sii::PdiConfig; w < sii::Checksum; ++w)
+        if (!known(w)) st_le16(img.data() + 2 * w, 0);
+    if (!known(sii::PdiControl)) st_le16(img.data() + 2 * sii::PdiControl, presumed_pdi_control(img));
     if (!known(sii::Checksum)) img[2 * sii::Checksum] = protocol::sii_config_crc(ConstBytes(img.data(), 14));
     return img;
 }
@@ -284,6 +312,8 @@ esc::EscConfig recovered_config(const RecoveredSlave& s, esc::EscConfig cfg) {
     if (byte(7)) cfg.port_descriptor = *byte(7);
     if (byte(8) && byte(9)) cfg.features = static_cast<std::uint16_t>(*byte(8) | *byte(9) << 8);
     if (s.sii_read_8_bytes) cfg.sii_read_8_bytes = *s.sii_read_8_bytes;
+    if (s.dc_system_time_unit) cfg.dc_system_time_unit = *s.dc_system_time_unit;
+    if (s.sii_status_bits) cfg.sii_status_bits = *s.sii_status_bits;
     return cfg;
 }
 

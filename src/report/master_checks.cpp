@@ -155,7 +155,9 @@ void MasterChecks::check_al_control(std::size_t i, std::uint8_t control) {
     const std::uint8_t state = control & 0x0F;
     const std::uint8_t status = e.al_status();
     const std::uint8_t current = status & 0x0F;
-    if ((status & protocol::kAlErrorFlag) && !(control & protocol::kAlErrorFlag) &&
+    // Under device emulation the error indication is the echo of an acknowledge the master wrote (the ESC
+    // copies AL control to AL status, ESC datasheet section II 0x0130): there is no error to acknowledge.
+    if ((status & protocol::kAlErrorFlag) && !(control & protocol::kAlErrorFlag) && !e.device_emulation() &&
         !found(Rule::AlErrorNotAcknowledged, i))
         find(Rule::AlErrorNotAcknowledged, i,
              fmt::format("{} requested (AL control 0x{:02X}) while the AL status 0x{:02X} shows an error (AL "

@@ -1,0 +1,119 @@
+// ESC variants that real lines show and vecat's own drive does not have: device emulation (the ESC sets AL
+// status itself), no PDI, an ESC without the DC system time unit, further read-only bits of 0x0502. Each
+// was found by replaying ../shared/data/pcap (docs/replay.md) and follows the ESC datasheet section II.
+#include <gtest/gtest.h>
+
+#include "device/simple_devices.hpp"
+#include "esc/esc.hpp"
+#include "esc/sii_image.hpp"
+#include "esc/slave.hpp"
+#include "test_support.hpp"
+
+using namespace vecat;
+using namespace vecat::esc;
+using namespace vecat::protocol;
+
+namespace {
+
+// One datagram to one ESC (auto-increment address 0); returns the working counter, data read back into
+// `data`.
+std::uint16_t datagram(Esc& esc, Command cmd, std::uint16_t ado, std::vector<std::uint8_t>& data) {
+    std::vector<std::uint8_t> buf(10 + data.size() + 2, 0);
+    buf[0] = static_cast<std::uint8_t>(cmd);
+    st_le16(&buf[4], ado);
+    st_le16(&buf[6], static_cast<std::uint16_t>(data.size()));
+    std::copy(data.begin(), data.end(), buf.begin() + 10);
+    DatagramView d(buf.data());
+    esc.process(d, FrameTiming{1000, 2000});
+    std::copy(buf.begin() + 10, buf.begin() + 10 + static_cast<long>(data.size()), data.begin());
+    return d.wkc();
+}
+std::uint16_t write(Esc& esc, std::uint16_t ado, std::vector<std::uint8_t> data, Command cmd = Command::APWR) {
+    return datagram(esc, cmd, ado, data);
+}
+std::uint16_t read(Esc& esc, std::uint16_t ado, std::vector<std::uint8_t>& data, Command cmd = Command::APRD) {
+    return datagram(esc, cmd, ado, data);
+}
+
+}  // namespace
+
+// Section II 0x0130: with device emulation the ESC sets AL status to the value written to AL control, at
+// once and without any check; an acknowledge shows as the error indication (an EK1100 reads 0x11 after a
+// master wrote INIT + acknowledge). The slave follows the state and never writes AL status.
+TEST(DeviceEmulation, AlStatusIsTheValueWrittenToAlControl) {
+    Slave slave(device::coupler(), EscConfig{}, std::make_unique<ProcessImageApplication>(0, 0));
+    Esc& esc = slave.esc();
+    ASSERT_TRUE(esc.device_emulation());
+    EXPECT_EQ(esc.al_status(), 0x01);  // INIT at power-up
+    EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x11, 0x00}), 1);
+    EXPECT_EQ(esc.peek16(addr(Reg::AlStatus)), 0x0011);  // before any firmware ran
+    slave.run(1'000'000);
+    EXPECT_EQ(esc.peek16(addr(Reg::AlStatus)), 0x0011);
+    EXPECT_EQ(esc.al_status_code(), 0);
+    // OP straight from INIT: no check refuses it.
+    EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x08, 0x00}), 1);
+    slave.run(2'000'000);
+    EXPECT_EQ(esc.peek16(addr(Reg::AlStatus)), 0x0008);
+    EXPECT_EQ(slave.state(), AlState::Op);
+    EXPECT_EQ(esc.al_status_code(), 0);
+}
+
+// Without device emulation the firmware answers, with its checks: INIT -> OP is refused.
+TEST(DeviceEmulation, WithoutItTheFirmwareChecksTheRequest) {
+    auto dev = device::coupler();
+    dev.pdi_control = 0x0005;
+    Slave slave(dev, EscConfig{}, std::make_unique<ProcessImageApplication>(0, 0));
+    Esc& esc = slave.esc();
+    ASSERT_FALSE(esc.device_emulation());
+    EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x08, 0x00}), 1);
+    slave.run(1'000'000);
+    EXPECT_EQ(esc.al_status(), 0x11);
+    EXPECT_EQ(esc.al_status_code(), static_cast<std::uint16_t>(AlStatusCode::InvalidRequestedStateChange));
+}
+
+// Section II 0x0110 bit 1: without a PDI nothing reloads the PDI watchdog (an EK1100 reads 0x..31); with
+// one it shows reloaded.
+TEST(NoPdi, DlStatusShowsThePdiWatchdogExpired) {
+    Esc coupler{EscConfig{}, build_sii_image(device::coupler())};
+    EXPECT_EQ(coupler.peek16(addr(Reg::DlStatus)) & dl_status::PdiWatchdogOk, 0);
+    EXPECT_NE(coupler.peek16(addr(Reg::DlStatus)) & dl_status::PdiOperational, 0);
+    Esc drive{EscConfig{}, build_sii_image(device::default_drive())};
+    EXPECT_NE(drive.peek16(addr(Reg::DlStatus)) & dl_status::PdiWatchdogOk, 0);
+}
+
+// An ESC that reports DC (0x0008) but has the receive times only: reads and writes of 0x0910-0x09FF are
+// not counted and leave the frame's data as it was (EL2828/EL1004/EK1914/EL3004 of ../shared/data/pcap).
+TEST(NoDcSystemTimeUnit, CountsNoAccessPastTheReceiveTimes) {
+    EscConfig cfg;
+    cfg.dc_system_time_unit = false;
+    Esc esc{cfg, build_sii_image(device::coupler())};
+    Esc full{EscConfig{}, build_sii_image(device::coupler())};
+    std::vector<std::uint8_t> d(8, 0xAA);
+    EXPECT_EQ(read(esc, addr(Reg::DcRecvTimeEcatPu), d), 0);
+    EXPECT_EQ(d, std::vector<std::uint8_t>(8, 0xAA));
+    EXPECT_EQ(read(full, addr(Reg::DcRecvTimeEcatPu), d), 1);
+    EXPECT_EQ(write(esc, addr(Reg::DcSystemTimeOffset), std::vector<std::uint8_t>(8, 1)), 0);
+    EXPECT_EQ(write(esc, addr(Reg::DcSystemTime), std::vector<std::uint8_t>(4, 1), Command::BWR), 0);
+    EXPECT_EQ(write(esc, addr(Reg::DcActivation), {0x03}), 0);
+    EXPECT_EQ(write(full, addr(Reg::DcActivation), {0x03}), 1);
+    // The receive times are there: a write of port 0's latches them, reads count.
+    EXPECT_EQ(write(esc, addr(Reg::DcRecvTimePort0), {0, 0, 0, 0}), 1);
+    std::vector<std::uint8_t> rt(16, 0);
+    EXPECT_EQ(read(esc, addr(Reg::DcRecvTimePort0), rt), 1);
+    // A read that covers both counts for the receive times; the bytes past them keep the frame's data.
+    std::vector<std::uint8_t> both(24, 0xAA);
+    EXPECT_EQ(read(esc, addr(Reg::DcRecvTimePort0), both), 1);
+    EXPECT_EQ(std::vector<std::uint8_t>(both.begin() + 16, both.end()), std::vector<std::uint8_t>(8, 0xAA));
+}
+
+// Section II 0x0502: bits 1-5 are read-only (bit 5 EEPROM emulation, 1-4 reserved); an ESC shows what it
+// has there (an EL2828 reads 0x50), and a write of the register does not change them.
+TEST(SiiStatusBits, ShownAndKeptAcrossCommands) {
+    EscConfig cfg;
+    cfg.sii_status_bits = 0x10;
+    Esc esc{cfg, build_sii_image(device::coupler())};
+    EXPECT_EQ(esc.peek(addr(Reg::SiiControl)), 0x50);
+    EXPECT_EQ(write(esc, addr(Reg::SiiAddress), {0, 0, 0, 0}), 1);
+    EXPECT_EQ(write(esc, addr(Reg::SiiControl), {0x00, 0x01}), 1);  // read word 0
+    EXPECT_EQ(esc.peek(addr(Reg::SiiControl)) & 0x3E, 0x10);
+}
