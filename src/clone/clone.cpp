@@ -48,6 +48,13 @@ std::string why_info_refused(const master::CoeClient& c) {
            std::string(protocol::describe(c.last_abort()));
 }
 
+// Text from the device (its SII strings) on one comment line: control characters become spaces.
+std::string comment(std::string s) {
+    for (char& c : s)
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) c = ' ';
+    return s;
+}
+
 // A name for the network file: letters, digits, '-', '_' and '.'.
 std::string device_name(std::size_t position, const std::string& sii_name) {
     std::string s = "slave" + std::to_string(position);
@@ -345,14 +352,14 @@ std::string network_text(const CloneResult& r) {
     o << "# Made by vecat clone from a line of " << r.devices.size() << " devices; served by\n"
       << "#   vecat run --network network.yaml\n";
     for (const auto& n : r.notes)
-        o << "# " << n << "\n";
+        o << "# " << comment(n) << "\n";
     o << "devices:\n";
     for (const auto& d : r.devices) {
         o << "  - name: " << d.name << "\n";
         if (!d.description.empty())
-            o << "    # " << d.description << ", station alias " << d.station_alias << "\n";
+            o << "    # " << comment(d.description) << ", station alias " << d.station_alias << "\n";
         for (const auto& m : d.missing)
-            o << "    # missing: " << m << "\n";
+            o << "    # missing: " << comment(m) << "\n";
         o << "    sii: " << d.name << ".sii.bin\n";
         if (d.dictionary) o << "    dictionary: " << d.name << ".dictionary.yaml\n";
         if (d.parent >= 0)
@@ -363,20 +370,25 @@ std::string network_text(const CloneResult& r) {
         if (e.any()) {
             o << "    esc: {";
             const char* sep = "";
+            // digits 0: decimal; else hexadecimal of that many digits.
             const auto field = [&](const char* key, const auto& v, int digits) {
                 if (!v) return;
-                o << sep << key << ": " << hex(static_cast<unsigned>(*v), digits);
+                o << sep << key << ": ";
+                if (digits)
+                    o << hex(static_cast<unsigned>(*v), digits);
+                else
+                    o << static_cast<unsigned>(*v);
                 sep = ", ";
             };
             field("type", e.type, 2);
             field("revision", e.revision, 2);
             field("build", e.build, 4);
-            if (e.fmmus) o << sep << "fmmus: " << unsigned{*e.fmmus}, sep = ", ";
-            if (e.syncmanagers) o << sep << "syncmanagers: " << unsigned{*e.syncmanagers}, sep = ", ";
-            if (e.ram_kib) o << sep << "ram_kib: " << unsigned{*e.ram_kib}, sep = ", ";
+            field("fmmus", e.fmmus, 0);
+            field("syncmanagers", e.syncmanagers, 0);
+            field("ram_kib", e.ram_kib, 0);
             field("port_descriptor", e.port_descriptor, 2);
             field("features", e.features, 4);
-            if (e.sii_read_bytes) o << sep << "sii_read_bytes: " << *e.sii_read_bytes;
+            field("sii_read_bytes", e.sii_read_bytes, 0);
             o << "}\n";
         }
     }

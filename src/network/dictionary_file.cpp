@@ -225,6 +225,13 @@ std::string quoted(const std::string& s) {
     return out + "\"";
 }
 
+// Text on one comment line: a line break or other control character in it would end the comment.
+std::string comment(std::string s) {
+    for (char& c : s)
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) c = ' ';
+    return s;
+}
+
 std::string hex_number(unsigned v, int digits) {
     char buf[16];
     std::snprintf(buf, sizeof buf, "0x%0*x", digits, v);
@@ -326,11 +333,11 @@ DeviceDictionary read_dictionary_file(const std::string& path) {
 std::string write_dictionary(const DeviceDictionary& d, const std::vector<std::string>& header) {
     std::ostringstream o;
     for (const auto& h : header)
-        o << "# " << h << "\n";
+        o << "# " << comment(h) << "\n";
     if (!d.missing.empty()) {
         o << "# Not read from the device (" << d.missing.size() << "):\n";
         for (const auto& m : d.missing)
-            o << "#   " << m << "\n";
+            o << "#   " << comment(m) << "\n";
     }
     o << "sdo_information: " << (d.sdo_information ? "true" : "false") << "\n";
     if (!d.missing.empty()) {

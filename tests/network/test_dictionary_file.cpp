@@ -33,7 +33,7 @@ DeviceDictionary sample() {
     d.values[{0x1008, 0}] = {'c', 'o', 'p', 'y'};
     d.objects.back().declared_max_subindex = static_cast<std::uint8_t>(d.objects.back().max_subindex() + 3);
     d.sdo_information = false;
-    d.missing = {"0x2000:01: upload refused (0x06010001)", "second line"};
+    d.missing = {"0x2000:01: upload refused (0x06010001)", "second line\nsdo_information: maybe"};
     return d;
 }
 
