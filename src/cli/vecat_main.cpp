@@ -13,10 +13,10 @@
 
 #include "cia402/drive.hpp"
 #include "cia402/profile_generator.hpp"
+#include "cli/clone_command.hpp"
 #include "cli/demo.hpp"
 #include "cli/exec.hpp"
 #include "cli/fault_cli.hpp"
-#include "cli/clone_command.hpp"
 #include "cli/replay_command.hpp"
 #include "cli/telemetry_commands.hpp"
 #include "coe/coe_application.hpp"
