@@ -35,7 +35,8 @@ set(LAYER_testing master cia402 faults telemetry serve)
 set(LAYER_esi device esc)
 set(LAYER_network cia402 esi)      # networks of mixed devices from a file
 set(LAYER_replay network esc)     # replay of real captures against a line built from a file or the capture
-set(LAYER_cli master telemetry cia402 faults esi serve esc report network replay foe)
+set(LAYER_clone master network)    # vecat clone: a line read with the master, written as a network file
+set(LAYER_cli master telemetry cia402 faults esi serve esc report network replay foe clone)
 
 # ---------------------------------------------------------------------------------------------------------
 if(NOT SOURCE_DIR OR NOT LINKS)

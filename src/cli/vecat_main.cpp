@@ -13,6 +13,7 @@
 
 #include "cia402/drive.hpp"
 #include "cia402/profile_generator.hpp"
+#include "cli/clone_command.hpp"
 #include "cli/demo.hpp"
 #include "cli/exec.hpp"
 #include "cli/fault_cli.hpp"
@@ -521,6 +522,7 @@ int main(int argc, char** argv) {
     network_chk->add_option("file", network_file, "Network file (YAML)")->required();
     auto* scope = vecat::cli::add_scope_command(app);
     auto* replay = vecat::cli::add_replay_command(app);
+    auto* clone = vecat::cli::add_clone_command(app);
 
     CLI11_PARSE(app, argc, argv);
     vecat::esi::DeviceSelector sel;
@@ -546,6 +548,7 @@ int main(int argc, char** argv) {
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
     if (*replay) return vecat::cli::run_replay();
+    if (*clone) return vecat::cli::run_clone();
     if (*network_chk) return cmd_network_check(network_file);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);

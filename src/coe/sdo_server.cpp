@@ -158,6 +158,10 @@ void SdoServer::handle(const protocol::MailboxHeader&, ConstBytes p, MailboxRepl
             sdo_request(p, out);
             return;
         case CoeService::SdoInformation:
+            if (!info_served_) {
+                mailbox_error(MailboxError::ServiceNotSupported, out);
+                return;
+            }
             sdo_info(p, out);
             return;
         default:

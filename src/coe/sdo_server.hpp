@@ -56,6 +56,11 @@ class SdoServer final : public esc::MailboxProtocol {
 
     static constexpr std::size_t kEmergencySlots = 8;
 
+    // A device without SDO information (SII CoE details without it, ETG.2010): its requests are answered
+    // with the mailbox error "service not supported" (ETG.1000.4 Table 30), as such devices do. A copy of
+    // one made by vecat clone is served so. Served by default.
+    void set_information_served(bool served) { info_served_ = served; }
+
   private:
     struct Idle {};
     struct Upload {
@@ -111,6 +116,7 @@ class SdoServer final : public esc::MailboxProtocol {
     std::function<AlState()> state_;
     std::vector<std::uint8_t> buf_;  // transfer buffer, sized once from the dictionary
     std::vector<std::uint8_t> info_buf_;
+    bool info_served_ = true;
 
     Transfer transfer_ = Idle{};
     // Since when the transfer has not moved: set by the first tick() after a change (the server has no

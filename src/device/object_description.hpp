@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -72,8 +73,14 @@ struct ObjectDescription {
     ObjectCode code = ObjectCode::Var;
     DataType type = DataType::Unsigned8;    // object data type shown by SDO information (ARRAY: element type)
     std::vector<EntryDescription> entries;  // VAR: exactly subindex 0; ARRAY/RECORD: subindex 0 (count) first
+    // The max subindex SDO information reports when it is not the last entry's: a dictionary read from a
+    // device whose description of some subindexes could not be read (network/dictionary_file.hpp).
+    std::optional<std::uint8_t> declared_max_subindex;
 
-    std::uint8_t max_subindex() const { return entries.empty() ? 0 : entries.back().subindex; }
+    std::uint8_t max_subindex() const {
+        if (declared_max_subindex) return *declared_max_subindex;
+        return entries.empty() ? 0 : entries.back().subindex;
+    }
     const EntryDescription* entry(std::uint8_t sub) const {
         for (const auto& e : entries)
             if (e.subindex == sub) return &e;

@@ -183,9 +183,12 @@ class Master {
     // Timeouts and retries may change after start-up (cyclic code wants one try and a deadline).
     MasterOptions& options() { return opt_; }
 
-  private:
+    // From the receive times configure_dc() latched: the time from the parent's arrival at port 0 until the
+    // frame leaves it through `port`, and the propagation delay of the cable between a slave and its parent.
     static std::int64_t departure(const SlaveInfo& up, unsigned port);
     static std::int64_t cable_delay(const SlaveInfo& up, const SlaveInfo& s);
+
+  private:
     std::size_t build_frame(std::span<DatagramRequest> dgs);
     bool wait_reply(std::span<DatagramRequest> dgs);
 

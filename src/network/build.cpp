@@ -104,9 +104,18 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
             std::vector<std::uint8_t> img((std::istreambuf_iterator<char>(in)),
                                           std::istreambuf_iterator<char>());
             patch(img, e);
+            std::shared_ptr<const DeviceDictionary> dict;
+            if (!e.dictionary.empty()) {
+                try {
+                    dict = std::make_shared<const DeviceDictionary>(read_dictionary_file(e.dictionary));
+                } catch (const DictionaryFileError& x) {
+                    throw NetworkFileError(at + x.what());
+                }
+            }
             std::vector<std::string> n;
             try {
-                m = device_from_sii(std::move(img), n, [&](device::DeviceDescription& dd) { apply(dd, e); });
+                m = device_from_sii(
+                    std::move(img), n, [&](device::DeviceDescription& dd) { apply(dd, e); }, dict);
             } catch (const NetworkFileError& x) {
                 throw NetworkFileError(at + e.path + ": " + x.what());
             }
@@ -149,7 +158,8 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
 }  // namespace
 
 DeviceParts device_from_sii(std::vector<std::uint8_t> img, std::vector<std::string>& notes,
-                            const std::function<void(device::DeviceDescription&)>& adjust) {
+                            const std::function<void(device::DeviceDescription&)>& adjust,
+                            std::shared_ptr<const DeviceDictionary> dictionary) {
     const protocol::SiiInfo sii = protocol::parse_sii(img);
     if (img.size() < 0x80 || !sii.checksum_ok || sii.identity.vendor_id == 0)
         throw NetworkFileError("not an SII image (" + std::to_string(img.size()) + " bytes, checksum " +
@@ -159,16 +169,48 @@ DeviceParts device_from_sii(std::vector<std::uint8_t> img, std::vector<std::stri
     device::DeviceDescription d = device::description_from_sii(sii, &notes);
     d.eeprom_size_bytes = static_cast<std::uint32_t>(img.size());
     if (adjust) adjust(d);
+    const bool coe = (d.mailbox_protocols & device::mbx_proto::CoE) != 0;
+    if (dictionary && !coe) {
+        notes.push_back("dictionary: not used, the SII names no CoE mailbox");
+        dictionary.reset();
+    }
+    if (dictionary) d.objects = dictionary->objects;
     m.model = esc::DeviceModel::of(d);
     m.model.sii_image = std::make_shared<const std::vector<std::uint8_t>>(std::move(img));
     m.esc.port_descriptor = sii_descriptor(sii);
-    if (d.mailbox_protocols & device::mbx_proto::CoE)
+    if (dictionary) {
+        // Exactly the objects read, none generated; the values uploaded set after the dictionary is made,
+        // so that SDO information still reports the described defaults. The mapping is read again from them.
+        m.model.dictionary =
+            std::make_shared<const std::vector<device::ObjectDescription>>(dictionary->objects);
+        m.factory = [objects = m.model.dictionary, dictionary](const device::DeviceDescription& dd) {
+            auto app = std::make_unique<coe::CoeApplication>(dd, objects);
+            for (const auto& [at, bytes] : dictionary->values)
+                if (coe::Entry* e = app->dictionary().find(at.first, at.second))
+                    e->assign(ConstBytes(bytes.data(), bytes.size()));
+            app->process_data().rebuild();
+            app->sdo_server().set_information_served(dictionary->sdo_information);
+            return std::unique_ptr<esc::Application>(std::move(app));
+        };
+    } else if (coe)
         m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
             return std::unique_ptr<esc::Application>(std::make_unique<coe::CoeApplication>(dd, objects));
         };
     else
         m.factory = process_image;
     return m;
+}
+
+void apply_esc(esc::EscConfig& cfg, const EscOverride& o) {
+    if (o.type) cfg.type = *o.type;
+    if (o.revision) cfg.revision = *o.revision;
+    if (o.build) cfg.build = *o.build;
+    if (o.fmmus) cfg.fmmu_count = *o.fmmus;
+    if (o.syncmanagers) cfg.sm_count = *o.syncmanagers;
+    if (o.ram_kib) cfg.ram_bytes = 1024u * *o.ram_kib;
+    if (o.port_descriptor) cfg.port_descriptor = *o.port_descriptor;
+    if (o.features) cfg.features = *o.features;
+    if (o.sii_read_bytes) cfg.sii_read_8_bytes = *o.sii_read_bytes == 8;
 }
 
 std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept {
@@ -185,6 +227,10 @@ BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
     for (const DeviceEntry& e : f.devices) {
         const std::string at = file + ":" + std::to_string(e.line) + ": " + e.name + ": ";
         Made m = make_device(e, at, b.notes);
+        apply_esc(m.esc, e.esc);
+        if (e.esc.ram_kib && *e.esc.ram_kib < 8)
+            b.notes.push_back(at + "esc: ram_kib " + std::to_string(*e.esc.ram_kib) +
+                              ": the emulated ESC has at least 8 KiB of process RAM and reports 8");
         ports.push_back(ports_of(m.esc));
         b.segment->add(std::make_unique<esc::Slave>(m.model, m.esc, m.factory(*m.model.description)),
                        m.factory);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "esc/segment.hpp"
+#include "network/dictionary_file.hpp"
 #include "network/network_file.hpp"
 
 namespace vecat::network {
@@ -32,8 +33,14 @@ struct DeviceParts {
     esc::ApplicationFactory factory;
     esc::EscConfig esc;
 };
+// dictionary: the object dictionary read from the device (a dictionary file) served instead of the
+// generated one: exactly its objects, starting at its values, SDO information refused if it says so.
 DeviceParts device_from_sii(std::vector<std::uint8_t> image, std::vector<std::string>& notes,
-                            const std::function<void(device::DeviceDescription&)>& adjust = {});
+                            const std::function<void(device::DeviceDescription&)>& adjust = {},
+                            std::shared_ptr<const DeviceDictionary> dictionary = {});
+
+// The ESC registers of a network file's esc: key applied to a configuration.
+void apply_esc(esc::EscConfig& cfg, const EscOverride& o);
 
 // The ports a device has (bit p: port p), as its ESC's port descriptor (0x0007) says.
 std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept;

@@ -96,6 +96,44 @@ void parse_identity(const Reader& r, const YAML::Node& n, IdentityOverride& id) 
     }
 }
 
+void parse_esc(const Reader& r, const YAML::Node& n, EscOverride& esc) {
+    if (!n.IsMap())
+        r.fail(
+            n,
+            "esc: a map of type, revision, build, fmmus, syncmanagers, ram_kib, port_descriptor, features, "
+            "sii_read_bytes");
+    for (const auto& item : n) {
+        const std::string key = r.scalar(item.first, "esc key");
+        const YAML::Node& v = item.second;
+        const auto u8 = [&] { return static_cast<std::uint8_t>(r.number(v, "esc: " + key, 0xFF)); };
+        const auto u16 = [&] { return static_cast<std::uint16_t>(r.number(v, "esc: " + key, 0xFFFF)); };
+        if (key == "type")
+            esc.type = u8();
+        else if (key == "revision")
+            esc.revision = u8();
+        else if (key == "build")
+            esc.build = u16();
+        else if (key == "fmmus")
+            esc.fmmus = u8();
+        else if (key == "syncmanagers")
+            esc.syncmanagers = u8();
+        else if (key == "ram_kib")
+            esc.ram_kib = u8();
+        else if (key == "port_descriptor")
+            esc.port_descriptor = u8();
+        else if (key == "features")
+            esc.features = u16();
+        else if (key == "sii_read_bytes") {
+            esc.sii_read_bytes = static_cast<unsigned>(r.number(v, "esc: sii_read_bytes", 8));
+            if (*esc.sii_read_bytes != 4 && *esc.sii_read_bytes != 8)
+                r.fail(v, "esc: sii_read_bytes: 4 or 8");
+        } else
+            r.fail(item.first, "esc: unknown key " + key +
+                                   " (type, revision, build, fmmus, syncmanagers, ram_kib, port_descriptor, "
+                                   "features, sii_read_bytes)");
+    }
+}
+
 DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string& folder) {
     if (!n.IsMap()) r.fail(n, "a device is a map (name:, and device:, esi: or sii:)");
     DeviceEntry d;
@@ -148,16 +186,26 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
             d.station_alias = static_cast<std::uint16_t>(r.number(v, key, 0xFFFF));
         } else if (key == "identity") {
             parse_identity(r, v, d.identity);
+        } else if (key == "dictionary") {
+            d.dictionary = r.scalar(v, key);
+            d.dictionary_line = Reader::line(v);
+            if (d.dictionary.empty()) r.fail(v, "dictionary: the path of a dictionary file");
+            if (std::filesystem::path(d.dictionary).is_relative())
+                d.dictionary = (std::filesystem::path(folder) / d.dictionary).string();
+        } else if (key == "esc") {
+            parse_esc(r, v, d.esc);
         } else {
             r.fail(item.first, "unknown key " + key +
                                    " (name, device, esi, sii, type, product, revision, channels, upstream, "
-                                   "cable_delay_ns, alias, identity)");
+                                   "cable_delay_ns, alias, identity, dictionary, esc)");
         }
     }
     if (d.name.empty()) r.fail(d.line, "a device without name:");
     if (sources != 1) r.fail(d.line, d.name + ": give exactly one of device:, esi: and sii:");
     if (esi_keys_line && d.source != Source::Esi)
         r.fail(*esi_keys_line, d.name + ": type:, product: and revision: select a device of an esi: file");
+    if (d.dictionary_line && d.source != Source::Sii)
+        r.fail(d.dictionary_line, d.name + ": dictionary: is for an sii: device");
     if (channels_line && !is_io(d.source))
         r.fail(*channels_line, d.name + ": channels: is for the built-in I/O terminals");
     return d;

@@ -12,6 +12,10 @@
 //     - name: axis                   # without upstream: the device before it in the list, port 1
 //       esi: drives/vendor.xml       # or sii: dumps/el2004.bin
 //       type: VENDOR-DRIVE-1
+//     - name: copy                   # a device read by vecat clone: its SII, its dictionary, its ESC
+//       sii: copy.sii.bin
+//       dictionary: copy.dictionary.yaml
+//       esc: {type: 0x11, port_descriptor: 0x0f}
 //
 // Every problem is reported with the line of the file it is on; nothing half-checked is returned.
 #pragma once
@@ -47,6 +51,21 @@ struct IdentityOverride {
     std::optional<std::uint32_t> vendor_id, product_code, revision, serial;
 };
 
+// The ESC's own registers 0x0000-0x0009 (type, revision, build, FMMU and SyncManager counts, RAM size, port
+// descriptor, features) and the SII read size (0x0502 bit 6), when a device's must be those of a real one
+// (vecat clone writes them): every one given replaces the default of the device's source.
+struct EscOverride {
+    std::optional<std::uint8_t> type, revision;
+    std::optional<std::uint16_t> build;
+    std::optional<std::uint8_t> fmmus, syncmanagers, ram_kib, port_descriptor;
+    std::optional<std::uint16_t> features;
+    std::optional<unsigned> sii_read_bytes;  // 4 or 8
+    bool any() const {
+        return type || revision || build || fmmus || syncmanagers || ram_kib || port_descriptor || features ||
+               sii_read_bytes;
+    }
+};
+
 struct DeviceEntry {
     unsigned line = 0;  // of the entry in the file
     std::string name;
@@ -61,6 +80,11 @@ struct DeviceEntry {
     std::uint32_t cable_delay_ns = kDefaultCableDelayNs;  // of the cable into port 0
     std::optional<std::uint16_t> station_alias;
     IdentityOverride identity;
+    // sii: the object dictionary from a dictionary file (dictionary_file.hpp) instead of the one generated
+    // from the SII's PDOs; empty: none. Resolved like path.
+    std::string dictionary;
+    unsigned dictionary_line = 0;
+    EscOverride esc;
 };
 
 // The checked file. devices are in the order the frame reaches them (the first is cabled to the master,
