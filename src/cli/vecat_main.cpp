@@ -32,6 +32,8 @@
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
 #include "network/build.hpp"
+#include "network/eni.hpp"
+#include "network/eni_network.hpp"
 #include "report/master_checks.hpp"
 #include "serve/server.hpp"
 
@@ -127,10 +129,65 @@ struct RunOptions {
     std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
     std::string downstream;
     std::string network_path;    // --network: the devices and their cabling from a file
+    std::string eni_path;        // --eni: the network of an ENI (EtherCATConfig) file
+    std::string esi_dir;         // --esi-dir: vendor ESI files for the devices an ENI names
     std::string report_path;     // --report: JUnit XML of the checks on the master
     bool report_fail = false;    // --report-fail: exit 3 when a check failed
     vecat::foe::FoeOptions foe;  // --foe-dir, --foe-max-size, --foe-password
 };
+
+// The network of a network file, or of an ENI (a file whose first character is '<': XML); an ENI's notes go
+// to notes, or to stderr.
+vecat::network::NetworkFile read_network(const std::string& file, const std::string& esi_dir,
+                                         std::vector<std::string>* notes = nullptr) {
+    std::ifstream in(file);
+    char first = 0;
+    while (in.get(first) && std::isspace(static_cast<unsigned char>(first))) {
+    }
+    if (first != '<') return vecat::network::read_network_file(file);
+    auto n = vecat::network::network_from_eni(vecat::network::read_eni_file(file), {esi_dir});
+    for (const auto& x : n.notes)
+        if (notes)
+            notes->push_back(x);
+        else
+            fmt::print(stderr, "vecat: {}\n", x);
+    return std::move(n.file);
+}
+
+// vecat network from-eni: the network file of an ENI, and the SII images of the devices made from the ENI
+// alone beside it.
+int cmd_network_from_eni(const std::string& eni_file, const std::string& out, const std::string& esi_dir) {
+    namespace fs = std::filesystem;
+    try {
+        const auto eni = vecat::network::read_eni_file(eni_file);
+        const auto n = vecat::network::network_from_eni(eni, {esi_dir});
+        const fs::path folder =
+            fs::path(out).parent_path().empty() ? fs::path(".") : fs::path(out).parent_path();
+        const auto text = vecat::network::network_file_from_eni(eni, n, folder.string());
+        for (const auto& [name, bytes] : text.files) {
+            std::ofstream f(folder / name, std::ios::binary);
+            f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+            if (!f) {
+                fmt::print(stderr, "vecat: cannot write {}\n", (folder / name).string());
+                return 1;
+            }
+        }
+        std::ofstream y(out);
+        y << text.yaml;
+        if (!y) {
+            fmt::print(stderr, "vecat: cannot write {}\n", out);
+            return 1;
+        }
+        for (const auto& x : n.notes)
+            fmt::print("note: {}\n", x);
+        fmt::print("{}: {} devices ({} SII images beside it)\n", out, n.file.devices.size(),
+                   text.files.size());
+        return 0;
+    } catch (const vecat::network::NetworkFileError& e) {
+        fmt::print(stderr, "{}\n", e.what());
+        return 1;
+    }
+}
 
 // Serves until stop. ready (when given) is set once the serve loop runs; messages go to log. vecat run
 // gives g_stop and stdout; vecat exec its own flag and stderr (COMMAND's output stays its own).
@@ -138,7 +195,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
                  sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, network_path,
-                 report_path, report_fail, foe_opts] = o;
+                 eni_path, esi_dir, report_path, report_fail, foe_opts] = o;
     std::string why;
     for (const std::string& i : {iface, downstream}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -155,10 +212,10 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     }
     std::unique_ptr<vecat::esc::Segment> seg;
     std::string served;  // what the start line names
-    if (!network_path.empty()) {
+    if (!network_path.empty() || !eni_path.empty()) {
+        const std::string& file = eni_path.empty() ? network_path : eni_path;
         try {
-            auto built =
-                vecat::network::build_network(vecat::network::read_network_file(network_path), network_path);
+            auto built = vecat::network::build_network(read_network(file, esi_dir), file);
             for (const auto& n : built.notes)
                 fmt::print(stderr, "vecat: {}\n", n);
             seg = std::move(built.segment);
@@ -166,7 +223,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             fmt::print(stderr, "vecat: {}\n", e.what());
             return 1;
         }
-        served = fmt::format("network {} ({} devices)", network_path, seg->size());
+        served = fmt::format("network {} ({} devices)", file, seg->size());
     } else {
         auto loaded = load_device(esi_path, sel, true);
         if (!loaded) return 1;
@@ -269,11 +326,13 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
 }
 
 // vecat network check: the devices in the order the frame reaches them, where each is cabled, what was
-// guessed; exit 1 with the file's line when something is wrong.
-int cmd_network_check(const std::string& file) {
+// guessed; exit 1 with the file's line when something is wrong. An ENI (XML) is read as vecat run --eni.
+int cmd_network_check(const std::string& file, const std::string& esi_dir) {
     try {
-        const auto f = vecat::network::read_network_file(file);
-        const auto built = vecat::network::build_network(f, file);
+        std::vector<std::string> eni_notes;
+        const auto f = read_network(file, esi_dir, &eni_notes);
+        auto built = vecat::network::build_network(f, file);
+        built.notes.insert(built.notes.begin(), eni_notes.begin(), eni_notes.end());
         fmt::print("{}: {} devices\n", file, f.devices.size());
         for (std::size_t i = 0; i < f.devices.size(); ++i) {
             const auto& d = f.devices[i];
@@ -424,6 +483,15 @@ int main(int argc, char** argv) {
              "line of drives")
             ->excludes(c->get_option("--slaves"))
             ->excludes(c->get_option("--twinsync"));
+        c->add_option("--eni", ro.eni_path,
+                      "Serve the network of this ENI file (EtherCATConfig XML as configurators export it; "
+                      "docs/eni.md) instead of a line of drives")
+            ->excludes(c->get_option("--slaves"))
+            ->excludes(c->get_option("--twinsync"))
+            ->excludes(c->get_option("--network"));
+        c->add_option("--esi-dir", ro.esi_dir,
+                      "With --eni: a folder of vendor ESI files; a slave whose identity one describes is "
+                      "made from it (dictionary included)");
         c->add_option("--pcap", ro.pcap_path, "Write every frame in and out to this pcapng file");
         c->add_option("--report", ro.report_path,
                       "Check what the master does against the rules of the EtherCAT specifications and write "
@@ -518,7 +586,20 @@ int main(int argc, char** argv) {
     auto* network_chk = network->add_subcommand(
         "check", "Read a network file, make its devices and list them, or say what is wrong");
     std::string network_file;
-    network_chk->add_option("file", network_file, "Network file (YAML)")->required();
+    network_chk->add_option("file", network_file, "Network file (YAML), or an ENI file (XML)")->required();
+    std::string network_esi_dir, eni_out = "network.yaml";
+    network_chk->add_option("--esi-dir", network_esi_dir, "For an ENI: a folder of vendor ESI files");
+    auto* network_eni = network->add_subcommand(
+        "from-eni", "Write the network file equivalent to an ENI file (and the SII images it names)");
+    network_eni->add_option("file", network_file, "ENI file (EtherCATConfig XML)")->required();
+    network_eni
+        ->add_option("-o,--output", eni_out,
+                     "Network file to write; the SII images of devices made from the ENI alone go "
+                     "beside it as NAME.sii")
+        ->capture_default_str();
+    network_eni->add_option("--esi-dir", network_esi_dir,
+                            "A folder of vendor ESI files; a slave whose identity one describes is named "
+                            "by its ESI file");
     auto* scope = vecat::cli::add_scope_command(app);
     auto* replay = vecat::cli::add_replay_command(app);
 
@@ -529,6 +610,15 @@ int main(int argc, char** argv) {
     sel.revision = revision;
     ro.esi_path = esi_path;
     ro.sel = sel;
+    if (!ro.esi_dir.empty() && ro.eni_path.empty()) {
+        fmt::print(stderr, "vecat: --esi-dir goes with --eni\n");
+        return 2;
+    }
+    if (!ro.eni_path.empty() && !esi_path.empty()) {
+        fmt::print(stderr,
+                   "vecat: --eni and --esi exclude each other (use --esi-dir for an ENI's devices)\n");
+        return 2;
+    }
     if (!ro.network_path.empty() && !esi_path.empty()) {
         fmt::print(stderr,
                    "vecat: --network and --esi exclude each other (a network file names its ESI files)\n");
@@ -546,7 +636,8 @@ int main(int argc, char** argv) {
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
     if (*replay) return vecat::cli::run_replay();
-    if (*network_chk) return cmd_network_check(network_file);
+    if (*network_chk) return cmd_network_check(network_file, network_esi_dir);
+    if (*network_eni) return cmd_network_from_eni(network_file, eni_out, network_esi_dir);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return vecat::cli::run_demo(demo_opt);
