@@ -410,5 +410,33 @@ TEST(EniNetwork, DevicesMadeFromTheEniAloneReachOpWithTheirProcessData) {
         ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
 }
 
+// vecat network from-eni: the network file it writes (with the SII images of the devices made from the ENI
+// alone beside it), read back, builds the same network as the ENI.
+TEST(EniNetwork, TheNetworkFileWrittenFromAnEniBuildsTheSameNetwork) {
+    TempDir dir("roundtrip");
+    fs::create_directories(dir.path / "esi");
+    fs::create_directories(dir.path / "out");
+    write_drive_esi(dir.path / "esi");
+    const Eni eni = read_eni_file(kData + "line.eni.xml");
+    const EniNetwork n = network_from_eni(eni, {(dir.path / "esi").string()});
+    const EniNetworkFile text = network_file_from_eni(eni, n, (dir.path / "out").string());
+    EXPECT_NE(text.yaml.find("esi: ../esi/vecat-drive.xml"), std::string::npos) << text.yaml;
+    EXPECT_NE(text.yaml.find("upstream: Term-1-EK1100:3"), std::string::npos) << text.yaml;
+    ASSERT_EQ(text.files.size(), 4u);  // all but the drive
+    for (const auto& [name, bytes] : text.files)
+        std::ofstream(dir.path / "out" / name, std::ios::binary)
+            .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    std::ofstream(dir.path / "out" / "net.yaml") << text.yaml;
+    const NetworkFile back = read_network_file((dir.path / "out" / "net.yaml").string());
+    EXPECT_EQ(names(back), names(n.file));
+    EXPECT_EQ(back.parent, n.file.parent);
+    EXPECT_EQ(back.children, n.file.children);
+    BuiltNetwork a = build_network(n.file, "line.eni.xml");
+    BuiltNetwork b = build_network(back, "net.yaml");
+    expect_same_network(*a.segment, *b.segment);
+    const auto log = start_up(*a.segment);
+    expect_same_replies(log, *b.segment);
+}
+
 }  // namespace
 }  // namespace vecat::network
