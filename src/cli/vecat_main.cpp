@@ -34,6 +34,7 @@
 #include "network/build.hpp"
 #include "network/eni.hpp"
 #include "network/eni_network.hpp"
+#include "report/init_cmd_check.hpp"
 #include "report/master_checks.hpp"
 #include "serve/server.hpp"
 
@@ -136,6 +137,19 @@ struct RunOptions {
     vecat::foe::FoeOptions foe;  // --foe-dir, --foe-max-size, --foe-password
 };
 
+// Several observers of the frames (the report's checks), each called in turn.
+struct FanOut final : vecat::net::FrameObserver {
+    std::vector<vecat::net::FrameObserver*> to;
+    void on_request(vecat::ConstBytes f, std::uint64_t now_ns) override {
+        for (auto* o : to)
+            o->on_request(f, now_ns);
+    }
+    void on_reply(vecat::ConstBytes f, std::uint64_t now_ns) override {
+        for (auto* o : to)
+            o->on_reply(f, now_ns);
+    }
+};
+
 // The network of a network file, or of an ENI (a file whose first character is '<': XML); an ENI's notes go
 // to notes, or to stderr.
 vecat::network::NetworkFile read_network(const std::string& file, const std::string& esi_dir,
@@ -212,10 +226,23 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     }
     std::unique_ptr<vecat::esc::Segment> seg;
     std::string served;  // what the start line names
+    // With --eni and --report: the ENI's register writes, which the master's are compared with.
+    std::vector<vecat::report::ExpectedWrite> eni_writes;
     if (!network_path.empty() || !eni_path.empty()) {
         const std::string& file = eni_path.empty() ? network_path : eni_path;
         try {
-            auto built = vecat::network::build_network(read_network(file, esi_dir), file);
+            vecat::network::NetworkFile f;
+            if (eni_path.empty()) {
+                f = vecat::network::read_network_file(file);
+            } else {
+                const auto eni = vecat::network::read_eni_file(file);
+                auto n = vecat::network::network_from_eni(eni, {esi_dir});
+                for (const auto& x : n.notes)
+                    fmt::print(stderr, "vecat: {}\n", x);
+                eni_writes = vecat::report::expected_writes(eni, n);
+                f = std::move(n.file);
+            }
+            auto built = vecat::network::build_network(f, file);
             for (const auto& n : built.notes)
                 fmt::print(stderr, "vecat: {}\n", n);
             seg = std::move(built.segment);
@@ -272,9 +299,16 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         fmt::print(log, "vecat: port 1 of the last slave cabled to {} ({})\n", downstream,
                    down->carrier() ? "link up: the line goes on" : "no link yet: the line closes here");
     std::unique_ptr<vecat::report::MasterChecks> checks;
+    std::unique_ptr<vecat::report::InitCmdCheck> init_cmds;
+    FanOut observers;
     if (!report_path.empty()) {
         checks = std::make_unique<vecat::report::MasterChecks>(*seg);
         opt.observer = checks.get();
+        if (!eni_path.empty()) {
+            init_cmds = std::make_unique<vecat::report::InitCmdCheck>(*seg, eni_writes);
+            observers.to = {checks.get(), init_cmds.get()};
+            opt.observer = &observers;
+        }
     }
     auto tel = vecat::cli::RunTelemetry::start(*seg, telemetry, opt);
     if (!tel) return 2;
@@ -313,6 +347,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
                    "between the first and the last\n",
                    i, dc.counters().sync_pulses[0], dc.counters().pulses_not_delivered, span, sync.cycle0_ns);
     }
+    if (init_cmds) fmt::print(log, "vecat: the master against the ENI's InitCmds:\n{}", init_cmds->summary());
     if (checks) {
         fmt::print(log, "{}", vecat::report::summary(*checks));
         if (write_output(report_path, vecat::report::junit_xml(*checks)) != 0) {
@@ -495,7 +530,8 @@ int main(int argc, char** argv) {
         c->add_option("--pcap", ro.pcap_path, "Write every frame in and out to this pcapng file");
         c->add_option("--report", ro.report_path,
                       "Check what the master does against the rules of the EtherCAT specifications and write "
-                      "the result as JUnit XML to this file (a summary is printed at exit)");
+                      "the result as JUnit XML to this file (a summary is printed at exit); with --eni, also "
+                      "the master's register writes per AL transition against the ENI's InitCmds");
         c->add_flag("--report-fail", ro.report_fail,
                     "With --report: exit with 3 when the master broke a rule (vecat exec: when COMMAND "
                     "itself succeeded)");
