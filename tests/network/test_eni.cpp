@@ -362,6 +362,24 @@ TEST(EniNetwork, AnEniBuildsTheSameNetworkAsTheEquivalentNetworkFile) {
     expect_same_replies(log, *b.segment);
 }
 
+// The same with vendor drives from the ESI files of ../shared/data/esi: the ENI against its network file.
+TEST(EniNetwork, AnEniOfVendorDrivesBuildsTheSameNetworkAsTheEquivalentNetworkFile) {
+    VECAT_REQUIRE_SHARED_DATA("esi/elmo-gold.xml");
+    const NetworkFile yaml = read_network_file(kData + "vendor-drives.yaml");
+    const EniNetwork eni =
+        network_from_eni(read_eni_file(kData + "vendor-drives.eni.xml"), {test::shared_data("esi")});
+    ASSERT_EQ(names(eni.file), names(yaml));
+    EXPECT_EQ(eni.file.parent, yaml.parent);
+    for (const auto& d : eni.file.devices)
+        EXPECT_EQ(d.source, Source::Esi) << d.name;
+    EXPECT_EQ(eni.file.devices[1].esi_revision, 0x00010420u);  // of the two Elmo revisions, the ENI's
+    BuiltNetwork a = build_network(eni.file, "vendor-drives.eni.xml");
+    BuiltNetwork b = build_network(yaml, "vendor-drives.yaml");
+    expect_same_network(*a.segment, *b.segment);
+    const auto log = start_up(*a.segment);
+    expect_same_replies(log, *b.segment);
+}
+
 // Devices made from the ENI alone: the SII the master reads has the ENI's identity, SyncManagers and PDOs,
 // the process data has the ENI's sizes, and the objects the PDOs map are in the dictionary.
 TEST(EniNetwork, DevicesMadeFromTheEniAloneReachOpWithTheirProcessData) {
