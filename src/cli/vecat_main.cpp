@@ -16,6 +16,7 @@
 #include "cli/demo.hpp"
 #include "cli/exec.hpp"
 #include "cli/fault_cli.hpp"
+#include "cli/network_commands.hpp"
 #include "cli/replay_command.hpp"
 #include "cli/telemetry_commands.hpp"
 #include "coe/coe_application.hpp"
@@ -149,59 +150,6 @@ struct FanOut final : vecat::net::FrameObserver {
             o->on_reply(f, now_ns);
     }
 };
-
-// The network of a network file, or of an ENI (a file whose first character is '<': XML); an ENI's notes go
-// to notes, or to stderr.
-vecat::network::NetworkFile read_network(const std::string& file, const std::string& esi_dir,
-                                         std::vector<std::string>* notes = nullptr) {
-    std::ifstream in(file);
-    char first = 0;
-    while (in.get(first) && std::isspace(static_cast<unsigned char>(first))) {
-    }
-    if (first != '<') return vecat::network::read_network_file(file);
-    auto n = vecat::network::network_from_eni(vecat::network::read_eni_file(file), {esi_dir});
-    for (const auto& x : n.notes)
-        if (notes)
-            notes->push_back(x);
-        else
-            fmt::print(stderr, "vecat: {}\n", x);
-    return std::move(n.file);
-}
-
-// vecat network from-eni: the network file of an ENI, and the SII images of the devices made from the ENI
-// alone beside it.
-int cmd_network_from_eni(const std::string& eni_file, const std::string& out, const std::string& esi_dir) {
-    namespace fs = std::filesystem;
-    try {
-        const auto eni = vecat::network::read_eni_file(eni_file);
-        const auto n = vecat::network::network_from_eni(eni, {esi_dir});
-        const fs::path folder =
-            fs::path(out).parent_path().empty() ? fs::path(".") : fs::path(out).parent_path();
-        const auto text = vecat::network::network_file_from_eni(eni, n, folder.string());
-        for (const auto& [name, bytes] : text.files) {
-            std::ofstream f(folder / name, std::ios::binary);
-            f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-            if (!f) {
-                fmt::print(stderr, "vecat: cannot write {}\n", (folder / name).string());
-                return 1;
-            }
-        }
-        std::ofstream y(out);
-        y << text.yaml;
-        if (!y) {
-            fmt::print(stderr, "vecat: cannot write {}\n", out);
-            return 1;
-        }
-        for (const auto& x : n.notes)
-            fmt::print("note: {}\n", x);
-        fmt::print("{}: {} devices ({} SII images beside it)\n", out, n.file.devices.size(),
-                   text.files.size());
-        return 0;
-    } catch (const vecat::network::NetworkFileError& e) {
-        fmt::print(stderr, "{}\n", e.what());
-        return 1;
-    }
-}
 
 // Serves until stop. ready (when given) is set once the serve loop runs; messages go to log. vecat run
 // gives g_stop and stdout; vecat exec its own flag and stderr (COMMAND's output stays its own).
@@ -358,38 +306,6 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         if (report_fail && !checks->findings().empty()) return kReportFailed;
     }
     return 0;
-}
-
-// vecat network check: the devices in the order the frame reaches them, where each is cabled, what was
-// guessed; exit 1 with the file's line when something is wrong. An ENI (XML) is read as vecat run --eni.
-int cmd_network_check(const std::string& file, const std::string& esi_dir) {
-    try {
-        std::vector<std::string> eni_notes;
-        const auto f = read_network(file, esi_dir, &eni_notes);
-        auto built = vecat::network::build_network(f, file);
-        built.notes.insert(built.notes.begin(), eni_notes.begin(), eni_notes.end());
-        fmt::print("{}: {} devices\n", file, f.devices.size());
-        for (std::size_t i = 0; i < f.devices.size(); ++i) {
-            const auto& d = f.devices[i];
-            const auto& desc = built.segment->slave(i).description();
-            const std::string up =
-                f.parent[i] < 0
-                    ? "the master"
-                    : fmt::format("{} port {}", f.devices[static_cast<std::size_t>(f.parent[i])].name,
-                                  d.upstream_port);
-            fmt::print(
-                "  {:>3}  {:<16} {:<11} vendor 0x{:08X} product 0x{:08X} rev 0x{:08X}  \"{}\"  port 0 to "
-                "{}\n",
-                i, d.name, vecat::network::to_string(d.source), desc.identity.vendor_id,
-                desc.identity.product_code, desc.identity.revision, desc.name, up);
-        }
-        for (const auto& n : built.notes)
-            fmt::print("note: {}\n", n);
-        return 0;
-    } catch (const vecat::network::NetworkFileError& e) {
-        fmt::print(stderr, "{}\n", e.what());
-        return 1;
-    }
 }
 
 int cmd_esi_generate(const std::string& out, const std::string& esi_path,
@@ -672,8 +588,8 @@ int main(int argc, char** argv) {
     if (*fault_cmd.cmd) return vecat::cli::run_fault_command(fault_cmd);
     if (*scope) return vecat::cli::run_scope();
     if (*replay) return vecat::cli::run_replay();
-    if (*network_chk) return cmd_network_check(network_file, network_esi_dir);
-    if (*network_eni) return cmd_network_from_eni(network_file, eni_out, network_esi_dir);
+    if (*network_chk) return vecat::cli::cmd_network_check(network_file, network_esi_dir);
+    if (*network_eni) return vecat::cli::cmd_network_from_eni(network_file, eni_out, network_esi_dir);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return vecat::cli::run_demo(demo_opt);
