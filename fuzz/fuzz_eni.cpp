@@ -4,8 +4,10 @@
 // Invariants: the text is accepted or refused with an EniError / NetworkFileError that names the file
 // ("fuzz.xml:..."); nothing else is thrown. An accepted network is a tree (one device on the master, every
 // other one with a parent before it, cabled to the parent's port and to nothing else); the SII image of a
-// device made from the ENI alone is one a master reads back with a right checksum and the ENI's identity.
+// device made from the ENI alone is one a master reads back with a right checksum and the ENI's identity;
+// the network file `vecat network from-eni` writes for it reads back as the same tree.
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 #include "fuzz_support.hpp"
@@ -47,6 +49,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         VECAT_FUZZ_CHECK(sii.identity.vendor_id == s.vendor_id &&
                          sii.identity.product_code == s.product_code && sii.identity.revision == s.revision);
     }
+    // The network file vecat network from-eni writes reads back as the same tree.
+    const auto written = network::network_file_from_eni(eni, n, "/nonexistent");
+    network::NetworkFile back;
+    try {
+        back = network::parse_network(written.yaml, "back.yaml", "/nonexistent");
+    } catch (const network::NetworkFileError& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        VECAT_FUZZ_CHECK(!"the written network file is refused");
+    }
+    VECAT_FUZZ_CHECK(back.parent == f.parent && back.children == f.children && back.devices.size() == count);
+    for (std::size_t i = 0; i < count; ++i)
+        VECAT_FUZZ_CHECK(back.devices[i].name == f.devices[i].name &&
+                         back.devices[i].upstream_port == f.devices[i].upstream_port);
     // Small networks are built: a refusal names the file, anything else is a finding.
     if (count <= 8) {
         try {

@@ -453,8 +453,11 @@ EniNetworkFile network_file_from_eni(const Eni& eni, const EniNetwork& n, const 
     for (std::size_t k = 0; k < n.file.devices.size(); ++k) {
         const DeviceEntry& d = n.file.devices[k];
         const EniSlave& s = eni.slaves[n.slave[k]];
-        y << "  - name: " << d.name << "  # " << s.where.path << " \"" << s.name << "\", line "
-          << s.where.line << "\n";
+        std::string label = s.name;  // in a comment: one line
+        std::replace_if(
+            label.begin(), label.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
+        y << "  - name: " << d.name << "  # " << s.where.path << " \"" << label << "\", line " << s.where.line
+          << "\n";
         if (d.source == Source::Esi) {
             std::error_code ec;
             fs::path rel = fs::relative(fs::absolute(d.path), fs::absolute(folder), ec);

@@ -456,5 +456,21 @@ TEST(EniNetwork, TheNetworkFileWrittenFromAnEniBuildsTheSameNetwork) {
     expect_same_replies(log, *b.segment);
 }
 
+// Names a network file cannot hold: made into names it can, unique, and the written file reads back.
+TEST(EniNetwork, SlaveNamesBecomeUniqueNetworkFileNames) {
+    const std::string id = "<VendorId>2</VendorId><ProductCode>3</ProductCode><RevisionNo>4</RevisionNo>";
+    const Eni eni = parse_eni(
+        "<EtherCATConfig><Config><Slave><Info><Name><![CDATA[Box 1\n(x: y)]]></Name>" + id +
+            "</Info></Slave><Slave><Info><Name>Box 1 # (x: y)</Name>" + id +
+            "</Info></Slave><Slave><Info><Name>*</Name>" + id + "</Info></Slave></Config></EtherCATConfig>",
+        "m.xml");
+    const EniNetwork n = network_from_eni(eni);
+    EXPECT_EQ(names(n.file), "Box-1-x-y Box-1-x-y-2 slave");
+    const auto text = network_file_from_eni(eni, n, ".");
+    const NetworkFile back = parse_network(text.yaml, "back.yaml");
+    EXPECT_EQ(names(back), names(n.file));
+    EXPECT_EQ(back.parent, n.file.parent);
+}
+
 }  // namespace
 }  // namespace vecat::network
