@@ -27,7 +27,8 @@ set(LAYER_net common)              # transport: raw socket, link, pcapng, netns,
 set(LAYER_serve net esc)           # serve loop, in-process link: a segment behind a link
 set(LAYER_master protocol net)     # the master: wire formats and a link, never the slave emulation
 set(LAYER_faults esc coe net)
-set(LAYER_report esc net)          # the report on the master: checks on the frames beside the slaves
+set(LAYER_report esc net network)  # the report on the master: checks on the frames beside the slaves, the
+                                   # master against an ENI's InitCmds
 set(LAYER_telemetry cia402 telemetry_idl)
 set(LAYER_telemetry_idl "")    # the telemetry IDL types compiled by idlc (with VECAT_TELEMETRY)
 set(LAYER_telemetry_types "")  # ... and idlc's generated sources

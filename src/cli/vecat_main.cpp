@@ -17,6 +17,7 @@
 #include "cli/demo.hpp"
 #include "cli/exec.hpp"
 #include "cli/fault_cli.hpp"
+#include "cli/network_commands.hpp"
 #include "cli/replay_command.hpp"
 #include "cli/telemetry_commands.hpp"
 #include "coe/coe_application.hpp"
@@ -33,6 +34,9 @@
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
 #include "network/build.hpp"
+#include "network/eni.hpp"
+#include "network/eni_network.hpp"
+#include "report/init_cmd_check.hpp"
 #include "report/master_checks.hpp"
 #include "serve/server.hpp"
 
@@ -128,9 +132,24 @@ struct RunOptions {
     std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
     std::string downstream;
     std::string network_path;    // --network: the devices and their cabling from a file
+    std::string eni_path;        // --eni: the network of an ENI (EtherCATConfig) file
+    std::string esi_dir;         // --esi-dir: vendor ESI files for the devices an ENI names
     std::string report_path;     // --report: JUnit XML of the checks on the master
     bool report_fail = false;    // --report-fail: exit 3 when a check failed
     vecat::foe::FoeOptions foe;  // --foe-dir, --foe-max-size, --foe-password
+};
+
+// Several observers of the frames (the report's checks), each called in turn.
+struct FanOut final : vecat::net::FrameObserver {
+    std::vector<vecat::net::FrameObserver*> to;
+    void on_request(vecat::ConstBytes f, std::uint64_t now_ns) override {
+        for (auto* o : to)
+            o->on_request(f, now_ns);
+    }
+    void on_reply(vecat::ConstBytes f, std::uint64_t now_ns) override {
+        for (auto* o : to)
+            o->on_reply(f, now_ns);
+    }
 };
 
 // Serves until stop. ready (when given) is set once the serve loop runs; messages go to log. vecat run
@@ -139,7 +158,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
                  sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, network_path,
-                 report_path, report_fail, foe_opts] = o;
+                 eni_path, esi_dir, report_path, report_fail, foe_opts] = o;
     std::string why;
     for (const std::string& i : {iface, downstream}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -156,10 +175,23 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     }
     std::unique_ptr<vecat::esc::Segment> seg;
     std::string served;  // what the start line names
-    if (!network_path.empty()) {
+    // With --eni and --report: the ENI's register writes, which the master's are compared with.
+    std::vector<vecat::report::ExpectedWrite> eni_writes;
+    if (!network_path.empty() || !eni_path.empty()) {
+        const std::string& file = eni_path.empty() ? network_path : eni_path;
         try {
-            auto built =
-                vecat::network::build_network(vecat::network::read_network_file(network_path), network_path);
+            vecat::network::NetworkFile f;
+            if (eni_path.empty()) {
+                f = vecat::network::read_network_file(file);
+            } else {
+                const auto eni = vecat::network::read_eni_file(file);
+                auto n = vecat::network::network_from_eni(eni, {esi_dir});
+                for (const auto& x : n.notes)
+                    fmt::print(stderr, "vecat: {}\n", x);
+                eni_writes = vecat::report::expected_writes(eni, n);
+                f = std::move(n.file);
+            }
+            auto built = vecat::network::build_network(f, file);
             for (const auto& n : built.notes)
                 fmt::print(stderr, "vecat: {}\n", n);
             seg = std::move(built.segment);
@@ -167,7 +199,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             fmt::print(stderr, "vecat: {}\n", e.what());
             return 1;
         }
-        served = fmt::format("network {} ({} devices)", network_path, seg->size());
+        served = fmt::format("network {} ({} devices)", file, seg->size());
     } else {
         auto loaded = load_device(esi_path, sel, true);
         if (!loaded) return 1;
@@ -216,9 +248,16 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         fmt::print(log, "vecat: port 1 of the last slave cabled to {} ({})\n", downstream,
                    down->carrier() ? "link up: the line goes on" : "no link yet: the line closes here");
     std::unique_ptr<vecat::report::MasterChecks> checks;
+    std::unique_ptr<vecat::report::InitCmdCheck> init_cmds;
+    FanOut observers;
     if (!report_path.empty()) {
         checks = std::make_unique<vecat::report::MasterChecks>(*seg);
         opt.observer = checks.get();
+        if (!eni_path.empty()) {
+            init_cmds = std::make_unique<vecat::report::InitCmdCheck>(*seg, eni_writes);
+            observers.to = {checks.get(), init_cmds.get()};
+            opt.observer = &observers;
+        }
     }
     auto tel = vecat::cli::RunTelemetry::start(*seg, telemetry, opt);
     if (!tel) return 2;
@@ -257,6 +296,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
                    "between the first and the last\n",
                    i, dc.counters().sync_pulses[0], dc.counters().pulses_not_delivered, span, sync.cycle0_ns);
     }
+    if (init_cmds) fmt::print(log, "vecat: the master against the ENI's InitCmds:\n{}", init_cmds->summary());
     if (checks) {
         fmt::print(log, "{}", vecat::report::summary(*checks));
         if (write_output(report_path, vecat::report::junit_xml(*checks)) != 0) {
@@ -267,36 +307,6 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         if (report_fail && !checks->findings().empty()) return kReportFailed;
     }
     return 0;
-}
-
-// vecat network check: the devices in the order the frame reaches them, where each is cabled, what was
-// guessed; exit 1 with the file's line when something is wrong.
-int cmd_network_check(const std::string& file) {
-    try {
-        const auto f = vecat::network::read_network_file(file);
-        const auto built = vecat::network::build_network(f, file);
-        fmt::print("{}: {} devices\n", file, f.devices.size());
-        for (std::size_t i = 0; i < f.devices.size(); ++i) {
-            const auto& d = f.devices[i];
-            const auto& desc = built.segment->slave(i).description();
-            const std::string up =
-                f.parent[i] < 0
-                    ? "the master"
-                    : fmt::format("{} port {}", f.devices[static_cast<std::size_t>(f.parent[i])].name,
-                                  d.upstream_port);
-            fmt::print(
-                "  {:>3}  {:<16} {:<11} vendor 0x{:08X} product 0x{:08X} rev 0x{:08X}  \"{}\"  port 0 to "
-                "{}\n",
-                i, d.name, vecat::network::to_string(d.source), desc.identity.vendor_id,
-                desc.identity.product_code, desc.identity.revision, desc.name, up);
-        }
-        for (const auto& n : built.notes)
-            fmt::print("note: {}\n", n);
-        return 0;
-    } catch (const vecat::network::NetworkFileError& e) {
-        fmt::print(stderr, "{}\n", e.what());
-        return 1;
-    }
 }
 
 int cmd_esi_generate(const std::string& out, const std::string& esi_path,
@@ -425,10 +435,20 @@ int main(int argc, char** argv) {
              "line of drives")
             ->excludes(c->get_option("--slaves"))
             ->excludes(c->get_option("--twinsync"));
+        c->add_option("--eni", ro.eni_path,
+                      "Serve the network of this ENI file (EtherCATConfig XML as configurators export it; "
+                      "docs/eni.md) instead of a line of drives")
+            ->excludes(c->get_option("--slaves"))
+            ->excludes(c->get_option("--twinsync"))
+            ->excludes(c->get_option("--network"));
+        c->add_option("--esi-dir", ro.esi_dir,
+                      "With --eni: a folder of vendor ESI files; a slave whose identity one describes is "
+                      "made from it (dictionary included)");
         c->add_option("--pcap", ro.pcap_path, "Write every frame in and out to this pcapng file");
         c->add_option("--report", ro.report_path,
                       "Check what the master does against the rules of the EtherCAT specifications and write "
-                      "the result as JUnit XML to this file (a summary is printed at exit)");
+                      "the result as JUnit XML to this file (a summary is printed at exit); with --eni, also "
+                      "the master's register writes per AL transition against the ENI's InitCmds");
         c->add_flag("--report-fail", ro.report_fail,
                     "With --report: exit with 3 when the master broke a rule (vecat exec: when COMMAND "
                     "itself succeeded)");
@@ -519,7 +539,20 @@ int main(int argc, char** argv) {
     auto* network_chk = network->add_subcommand(
         "check", "Read a network file, make its devices and list them, or say what is wrong");
     std::string network_file;
-    network_chk->add_option("file", network_file, "Network file (YAML)")->required();
+    network_chk->add_option("file", network_file, "Network file (YAML), or an ENI file (XML)")->required();
+    std::string network_esi_dir, eni_out = "network.yaml";
+    network_chk->add_option("--esi-dir", network_esi_dir, "For an ENI: a folder of vendor ESI files");
+    auto* network_eni = network->add_subcommand(
+        "from-eni", "Write the network file equivalent to an ENI file (and the SII images it names)");
+    network_eni->add_option("file", network_file, "ENI file (EtherCATConfig XML)")->required();
+    network_eni
+        ->add_option("-o,--output", eni_out,
+                     "Network file to write; the SII images of devices made from the ENI alone go "
+                     "beside it as NAME.sii")
+        ->capture_default_str();
+    network_eni->add_option("--esi-dir", network_esi_dir,
+                            "A folder of vendor ESI files; a slave whose identity one describes is named "
+                            "by its ESI file");
     auto* scope = vecat::cli::add_scope_command(app);
     auto* replay = vecat::cli::add_replay_command(app);
     auto* clone = vecat::cli::add_clone_command(app);
@@ -531,6 +564,15 @@ int main(int argc, char** argv) {
     sel.revision = revision;
     ro.esi_path = esi_path;
     ro.sel = sel;
+    if (!ro.esi_dir.empty() && ro.eni_path.empty()) {
+        fmt::print(stderr, "vecat: --esi-dir goes with --eni\n");
+        return 2;
+    }
+    if (!ro.eni_path.empty() && !esi_path.empty()) {
+        fmt::print(stderr,
+                   "vecat: --eni and --esi exclude each other (use --esi-dir for an ENI's devices)\n");
+        return 2;
+    }
     if (!ro.network_path.empty() && !esi_path.empty()) {
         fmt::print(stderr,
                    "vecat: --network and --esi exclude each other (a network file names its ESI files)\n");
@@ -549,7 +591,8 @@ int main(int argc, char** argv) {
     if (*scope) return vecat::cli::run_scope();
     if (*replay) return vecat::cli::run_replay();
     if (*clone) return vecat::cli::run_clone();
-    if (*network_chk) return cmd_network_check(network_file);
+    if (*network_chk) return vecat::cli::cmd_network_check(network_file, network_esi_dir);
+    if (*network_eni) return vecat::cli::cmd_network_from_eni(network_file, eni_out, network_esi_dir);
     if (*esi_gen) return cmd_esi_generate(esi_out, esi_path, sel);
     if (*esi_chk) return cmd_esi_check(check_file, check_sii, check_xsd, sel);
     if (*demo) return vecat::cli::run_demo(demo_opt);

@@ -99,10 +99,14 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
             break;
         }
         case Source::Sii: {
-            std::ifstream in(e.path, std::ios::binary);
-            if (!in) throw NetworkFileError(at + e.path + ": cannot be read");
-            std::vector<std::uint8_t> img((std::istreambuf_iterator<char>(in)),
-                                          std::istreambuf_iterator<char>());
+            std::vector<std::uint8_t> img;
+            if (e.sii_image) {
+                img = *e.sii_image;
+            } else {
+                std::ifstream in(e.path, std::ios::binary);
+                if (!in) throw NetworkFileError(at + e.path + ": cannot be read");
+                img.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+            }
             patch(img, e);
             std::shared_ptr<const DeviceDictionary> dict;
             if (!e.dictionary.empty()) {

@@ -261,8 +261,6 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
         throw NetworkFileError(name + ": " + x.what());
     }
     if (!root.IsMap()) throw NetworkFileError(name + ": a network file is a map with devices:");
-    NetworkFile f;
-    f.folder = folder;
     YAML::Node list;
     for (const auto& item : root) {
         const std::string key = r.scalar(item.first, "key");
@@ -272,11 +270,20 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
     if (!list || !list.IsSequence() || list.size() == 0)
         throw NetworkFileError(name + ": devices: a list of at least one device");
     std::vector<bool> explicit_upstream;
+    std::vector<DeviceEntry> devices;
     for (const auto& n : list) {
-        f.devices.push_back(parse_device(r, n, folder));
+        devices.push_back(parse_device(r, n, folder));
         explicit_upstream.push_back(n["upstream"].IsDefined());
     }
+    return arrange_network(std::move(devices), explicit_upstream, name, folder);
+}
 
+NetworkFile arrange_network(std::vector<DeviceEntry> devices, const std::vector<bool>& explicit_upstream,
+                            const std::string& name, const std::string& folder) {
+    const Reader r(name);
+    NetworkFile f;
+    f.folder = folder;
+    f.devices = std::move(devices);
     // Names, then each device's upstream: the device before it in the list (port 1) unless given.
     std::map<std::string, std::size_t> by_name;
     for (std::size_t i = 0; i < f.devices.size(); ++i) {

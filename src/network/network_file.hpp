@@ -22,6 +22,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -85,6 +86,9 @@ struct DeviceEntry {
     std::string dictionary;
     unsigned dictionary_line = 0;
     EscOverride esc;
+    // An sii: device whose image is given here instead of a file (a device made from an ENI alone,
+    // network/eni_network.hpp); path is then only its name in messages.
+    std::shared_ptr<const std::vector<std::uint8_t>> sii_image;
 };
 
 // The checked file. devices are in the order the frame reaches them (the first is cabled to the master,
@@ -106,6 +110,12 @@ class NetworkFileError : public std::runtime_error {
 NetworkFile read_network_file(const std::string& path);
 NetworkFile parse_network(const std::string& yaml_text, const std::string& name = "<network>",
                           const std::string& folder = ".");
+
+// The cabling and the order of devices already read (by the YAML reader, or from an ENI): each device's
+// upstream (name) and upstream_port where explicit_upstream[i], the device before it, port 1, otherwise.
+// Checks names, ports, double cabling and loops; refusals are "NAME:LINE: ..." with the device's line.
+NetworkFile arrange_network(std::vector<DeviceEntry> devices, const std::vector<bool>& explicit_upstream,
+                            const std::string& name, const std::string& folder = ".");
 
 // The ports a device of this source has (bit p: port p), before its SII or ESI is read: a drive and the
 // I/O terminals 0 and 1, the coupler 0, 1 and 3 (E-bus), the junction all four. ESI and SII devices: all
