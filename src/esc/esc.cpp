@@ -509,8 +509,7 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
         set_al_event(al_event::AlControl);
         // Device emulation: the ESC itself sets AL status to the value written to AL control (ESC
         // datasheet section II 0x0130, 0x0141 bit 0); an acknowledge (bit 4) shows as the error indication.
-        if (device_emulation())
-            std::memcpy(&mem_[addr(Reg::AlStatus)], &mem_[addr(Reg::AlControl)], 2);
+        if (device_emulation()) std::memcpy(&mem_[addr(Reg::AlStatus)], &mem_[addr(Reg::AlControl)], 2);
     }
     if (reg_lo <= reg_hi) {
         if (sii_cmd_written) sii_command(written_sii_cmd_);

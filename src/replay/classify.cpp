@@ -15,6 +15,8 @@ std::string_view to_string(Verdict v) noexcept {
             return "time-dependent";
         case Verdict::Counter:
             return "counter";
+        case Verdict::MailboxPadding:
+            return "mailbox padding";
         case Verdict::Timing:
             return "timing";
         case Verdict::ProcessData:

@@ -12,12 +12,15 @@ namespace vecat::replay {
 
 enum class Verdict : std::uint8_t {
     Same,
-    TimeDependent,  // DC times, receive times, latches, SYNC start times (ESC datasheet section II 0x09xx)
-    Counter,        // error and lost-link counters (0x0300-0x0313), watchdog counters (0x0442-0x0443)
-    Timing,         // vecat's reply is one the real device gave to the same read a little earlier or later:
-                    // the device got there at another time (a state change, a mailbox reply, an EEPROM read)
-    ProcessData,    // logical reads: the inputs of the recorded machine
-    Differs,        // behaviour
+    TimeDependent,   // DC times, receive times, latches, SYNC start times (ESC datasheet section II 0x09xx)
+    Counter,         // error and lost-link counters (0x0300-0x0313), watchdog counters (0x0442-0x0443)
+    MailboxPadding,  // a mailbox read's bytes past the message its header announces (ETG.1000.4 5.6: the
+                     // length gives the data; the rest of the SyncManager's area holds whatever the device's
+                     // memory held before)
+    Timing,          // vecat's reply is one the real device gave to the same read a little earlier or later:
+                     // the device got there at another time (a state change, a mailbox reply, an EEPROM read)
+    ProcessData,     // logical reads: the inputs of the recorded machine
+    Differs,         // behaviour
 };
 std::string_view to_string(Verdict v) noexcept;
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
 
 #include "protocol/fmmu.hpp"
 #include "protocol/frame.hpp"
@@ -65,6 +66,14 @@ struct Window {
     std::uint32_t u32(std::uint16_t a) const { return ld_le32(data + (a - ado)); }
 };
 
+// The AL state machine as the master sees it: the last state read, the last request written.
+struct AlTracker {
+    std::uint8_t state = 0x01;  // INIT at power-up
+    std::optional<std::uint8_t> requested;
+    std::optional<RefusedTransition> pending;  // refused, waiting for a read of its AL status code
+};
+constexpr std::uint8_t kAlStateBits = 0x0F, kAlErrorBit = 0x10;
+
 struct SiiTracker {
     std::uint32_t address = 0;
     bool reading = false;  // the last command written was a read
@@ -80,8 +89,14 @@ class Recoverer {
         line_.slave_count = count_slaves();
         line_.slaves.resize(line_.slave_count);
         sii_.resize(line_.slave_count);
+        mailbox_.resize(line_.slave_count);
+        al_.resize(line_.slave_count);
         for (const Exchange& e : p_.exchanges)
             exchange(e);
+        for (std::size_t s = 0; s < line_.slave_count; ++s) {
+            line_.slaves[s].coe = mailbox_[s].result();
+            if (al_[s].pending) refuse(s, *al_[s].pending);
+        }
         blocks_from_writes(fmmu_wkc_, kFmmuBlocks, true);
         blocks_from_writes(sm_wkc_, kSmBlocks, false);
         // Configuration words the master did not read, from the registers the ESC loaded them into.
@@ -145,18 +160,60 @@ class Recoverer {
                         wrote(s, written);
                 } else if (auto s = position(cmd, adp)) {
                     wrote(*s, written);
+                    mailbox_[*s].wrote(written.ado, written.data, written.len);
+                    al_control_written(*s, written);
                 }
             }
+            if (cmd == Command::BRD && r.wkc() == 1 && line_.slave_count == 1) al_status_read(0, read);
             if ((cmd == Command::APRD || cmd == Command::FPRD || cmd == Command::APRW ||
                  cmd == Command::FPRW) &&
                 r.wkc() >= 1)
-                if (auto s = position(cmd, adp)) was_read(*s, read);
+                if (auto s = position(cmd, adp)) {
+                    was_read(*s, read);
+                    mailbox_[*s].read(read.ado, read.data, read.len);
+                    al_status_read(*s, read);
+                }
             if (e.request_recorded && !broadcast(cmd) && in_dc_system_time_unit(r))
                 if (auto s = position(cmd, adp)) {
                     auto& unit = line_.slaves[*s].dc_system_time_unit;
                     unit = unit.value_or(false) || r.wkc() > 0;
                 }
         }
+    }
+
+    void al_control_written(std::size_t s, const Window& w) {
+        if (!w.covers(addr(Reg::AlControl))) return;
+        AlTracker& t = al_[s];
+        if (t.pending) refuse(s, *t.pending);
+        t.pending.reset();
+        t.requested = static_cast<std::uint8_t>(w.at(addr(Reg::AlControl)) & kAlStateBits);
+    }
+    void al_status_read(std::size_t s, const Window& w) {
+        AlTracker& t = al_[s];
+        if (t.pending && w.covers(addr(Reg::AlStatusCode), 2)) {
+            t.pending->code = w.u16(addr(Reg::AlStatusCode));
+            refuse(s, *t.pending);
+            t.pending.reset();
+        }
+        if (!w.covers(addr(Reg::AlStatus))) return;
+        const std::uint8_t status = w.at(addr(Reg::AlStatus));
+        const std::uint8_t state = status & kAlStateBits;
+        if (t.requested && (status & kAlErrorBit) && state != *t.requested && state == t.state) {
+            t.pending = RefusedTransition{t.state, *t.requested, 0x0001};
+            if (w.covers(addr(Reg::AlStatusCode), 2)) {
+                t.pending->code = w.u16(addr(Reg::AlStatusCode));
+                refuse(s, *t.pending);
+                t.pending.reset();
+            }
+        }
+        if (t.requested && state == *t.requested) t.requested.reset();
+        if (!(status & kAlErrorBit) || !t.requested) t.state = state;
+    }
+    void refuse(std::size_t s, const RefusedTransition& r) {
+        auto& v = line_.slaves[s].refused;
+        for (const auto& x : v)
+            if (x.from == r.from && x.to == r.to) return;
+        v.push_back(r);
     }
 
     static bool in_dc_system_time_unit(const protocol::DatagramView& r) {
@@ -247,6 +304,8 @@ class Recoverer {
     const Pairing& p_;
     RecoveredLine line_;
     std::vector<SiiTracker> sii_;
+    std::vector<MailboxRecoverer> mailbox_;
+    std::vector<AlTracker> al_;
     static constexpr std::size_t kFmmuBlocks = 16, kSmBlocks = 16;  // the register space's blocks
     std::array<std::optional<std::uint16_t>, kFmmuBlocks> fmmu_wkc_{};
     std::array<std::optional<std::uint16_t>, kSmBlocks> sm_wkc_{};

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "replay/capture.hpp"
+#include "replay/recover_mailbox.hpp"
 
 namespace vecat::replay {
 
@@ -19,12 +20,22 @@ inline constexpr std::size_t kEscInfoBytes = 10;  // 0x0000-0x0009: type .. feat
 // At most this many slaves are rebuilt (a broadcast working counter can claim up to 65,535).
 inline constexpr std::size_t kMaxRecoveredSlaves = 1024;
 
+// A state change the device refused in the capture: the master wrote AL control for `to` while the device
+// was in `from`, and the device answered with the error indication (ETG.1000.6 6.4.1.4). The reason is the
+// device's own (its application's checks); the code is the AL status code the master read, or 0x0001
+// (unspecified) when it read none.
+struct RefusedTransition {
+    std::uint8_t from = 0, to = 0;
+    std::uint16_t code = 0x0001;
+    auto operator<=>(const RefusedTransition&) const = default;
+};
+
 struct RecoveredSlave {
     std::optional<std::uint16_t> station;  // configured station address
     std::array<std::optional<std::uint8_t>, kEscInfoBytes> esc_info{};
     std::optional<std::uint16_t> dl_status;
-    std::optional<bool> sii_read_8_bytes;       // 0x0502 bit 6, as the ESC reported it
-    std::optional<bool> sii_two_address_bytes;  // 0x0502 bit 7: an EEPROM larger than 16 Kbit
+    std::optional<bool> sii_read_8_bytes;         // 0x0502 bit 6, as the ESC reported it
+    std::optional<bool> sii_two_address_bytes;    // 0x0502 bit 7: an EEPROM larger than 16 Kbit
     std::optional<std::uint8_t> sii_status_bits;  // 0x0502 bits 1-5 as read (esc::EscConfig::sii_status_bits)
     // Whether the ESC has the DC system time unit (esc::EscConfig::dc_system_time_unit): a datagram to this
     // slave alone within 0x0910-0x09FF counted (true) or not counted (false; only when none counted).
@@ -36,6 +47,9 @@ struct RecoveredSlave {
     // ESC loads from it (0x0140, 0x0150, 0x0152, 0x0982, 0x0012), 0 unknown.
     std::vector<std::uint16_t> sii;
     std::vector<std::uint8_t> known;
+    // The CoE dictionary as far as the mailbox traffic shows it (recover_mailbox.hpp).
+    RecoveredDictionary coe;
+    std::vector<RefusedTransition> refused;
     std::size_t sii_words_known() const;
 };
 

@@ -6,9 +6,12 @@
 
 #include "device/simple_devices.hpp"
 #include "network/build.hpp"
+#include "network/dictionary_file.hpp"
 #include "protocol/frame.hpp"
+#include "protocol/mailbox.hpp"
 #include "protocol/registers.hpp"
 #include "protocol/sii.hpp"
+#include "protocol/sync_manager.hpp"
 #include "protocol/topology.hpp"
 
 namespace vecat::replay {
@@ -20,7 +23,9 @@ double ReplayReport::wkc_percent() const {
 }
 
 double ReplayReport::data_percent() const {
-    return reads ? 100.0 * static_cast<double>(reads_same + reads_time + reads_counter + reads_timing) /
+    return reads ? 100.0 *
+                       static_cast<double>(reads_same + reads_time + reads_counter + reads_padding +
+                                           reads_timing) /
                        static_cast<double>(reads)
                  : 100.0;
 }
@@ -138,6 +143,34 @@ class Replayer {
         return false;
     }
 
+    // Where the message of a read of a slave's mailbox-in SyncManager area ends (mailbox header and the
+    // length it announces, ETG.1000.4 5.6); the whole read for any other datagram.
+    std::size_t mailbox_message_end(const protocol::DatagramView& d) const {
+        const std::size_t all = d.length();
+        const Command cmd = d.command();
+        if (d.ado() < protocol::kRegisterSpaceSize || d.length() < protocol::kMailboxHeaderSize ||
+            (cmd != Command::FPRD && cmd != Command::APRD))
+            return all;
+        for (std::size_t k = 0; k < line_.size(); ++k) {
+            const esc::Esc& e = line_.slave(k).esc();
+            const bool addressed = cmd == Command::FPRD
+                                       ? e.peek16(protocol::addr(protocol::Reg::StationAddress)) == d.adp()
+                                       : static_cast<std::uint16_t>(0u - d.adp()) == k;
+            if (!addressed) continue;
+            for (unsigned i = 0; i < e.config().sm_count; ++i) {
+                const auto c = e.sm_config(i);
+                if (c.start != d.ado() ||
+                    (c.control & protocol::sm::CtrlModeMask) != protocol::sm::CtrlModeMailbox ||
+                    (c.control & protocol::sm::CtrlDirMask) != protocol::sm::CtrlDirRead)
+                    continue;
+                const std::size_t end = protocol::kMailboxHeaderSize + ld_le16(d.data());
+                return std::min(end, all);
+            }
+            return all;
+        }
+        return all;
+    }
+
     void advance(std::uint64_t t) {
         if (!started_) {
             started_ = true;
@@ -197,10 +230,12 @@ class Replayer {
             ++r_.wkc_same;
             if (!counted) continue;
             const std::size_t n = std::min<std::size_t>(want.length(), mine.length());
+            const std::size_t message_end = mailbox_message_end(want);
             Verdict v = Verdict::Same;
             for (std::size_t k = 0; k < n; ++k) {
                 if (want.data()[k] == mine.data()[k]) continue;
-                const Verdict b = logical(cmd) ? Verdict::ProcessData
+                const Verdict b = logical(cmd)       ? Verdict::ProcessData
+                                  : k >= message_end ? Verdict::MailboxPadding
                                   : want.ado() + k < protocol::kRegisterSpaceSize
                                       ? register_class(static_cast<std::uint16_t>(want.ado() + k))
                                       : Verdict::Differs;
@@ -220,6 +255,7 @@ class Replayer {
                 r_.reads_same += v == Verdict::Same;
                 r_.reads_time += v == Verdict::TimeDependent;
                 r_.reads_counter += v == Verdict::Counter;
+                r_.reads_padding += v == Verdict::MailboxPadding;
                 r_.reads_timing += v == Verdict::Timing;
             }
             if (v == Verdict::Same) continue;
@@ -299,6 +335,45 @@ std::vector<std::uint8_t> recovered_sii_image(const RecoveredSlave& s) {
 
 namespace {
 
+// The application of a device rebuilt from a capture, which refuses the state changes the real device
+// refused there (RefusedTransition); everything else is the wrapped application's.
+class RefusingApplication final : public esc::Application {
+  public:
+    RefusingApplication(std::unique_ptr<esc::Application> inner, std::vector<RefusedTransition> refused)
+        : inner_(std::move(inner)), refused_(std::move(refused)) {}
+    unsigned output_bytes() const override { return inner_->output_bytes(); }
+    unsigned input_bytes() const override { return inner_->input_bytes(); }
+    protocol::AlStatusCode check_transition(protocol::AlState from, protocol::AlState to) override {
+        for (const auto& r : refused_)
+            if (r.from == static_cast<std::uint8_t>(from) && r.to == static_cast<std::uint8_t>(to))
+                return static_cast<protocol::AlStatusCode>(r.code);
+        return inner_->check_transition(from, to);
+    }
+    void on_state_change(protocol::AlState from, protocol::AlState to) override {
+        inner_->on_state_change(from, to);
+    }
+    void on_al_error(protocol::AlStatusCode code) override { inner_->on_al_error(code); }
+    void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) override {
+        inner_->exchange(now_ns, outputs, apply, inputs);
+    }
+    void outputs_safe_state() override { inner_->outputs_safe_state(); }
+    esc::MailboxProtocol* mailbox_protocol(protocol::MailboxType t) override {
+        return inner_->mailbox_protocol(t);
+    }
+    void tick(std::uint64_t now_ns) override { inner_->tick(now_ns); }
+    void sync_event(unsigned signal, std::uint64_t now_ns) override { inner_->sync_event(signal, now_ns); }
+    bool refresh_inputs(Bytes inputs) override { return inner_->refresh_inputs(inputs); }
+    void attach(esc::Slave& slave) override { inner_->attach(slave); }
+    esc::OpReadiness op_readiness(std::uint64_t now_ns, std::uint64_t since_ns) override {
+        return inner_->op_readiness(now_ns, since_ns);
+    }
+    void on_revision_change(std::uint32_t revision) override { inner_->on_revision_change(revision); }
+
+  private:
+    std::unique_ptr<esc::Application> inner_;
+    std::vector<RefusedTransition> refused_;
+};
+
 esc::EscConfig recovered_config(const RecoveredSlave& s, esc::EscConfig cfg) {
     const auto byte = [&](std::size_t a) { return s.esc_info[a]; };
     if (byte(0)) cfg.type = *byte(0);
@@ -336,6 +411,15 @@ std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
             std::vector<std::string> n;
             try {
                 parts = network::device_from_sii(recovered_sii_image(s), n);
+                if (!s.coe.empty() && parts.model.dictionary) {
+                    // The mailbox answers the capture shows, over the dictionary generated from the SII.
+                    auto dict = std::make_shared<network::DeviceDictionary>();
+                    dict->objects = merge_dictionary(*parts.model.dictionary, s.coe, dict->values);
+                    n.clear();
+                    parts = network::device_from_sii(recovered_sii_image(s), n, {}, dict);
+                    notes.push_back(at + fmt::format("CoE: {} objects, {} values from the capture's mailbox",
+                                                     s.coe.objects.size(), s.coe.values.size()));
+                }
                 made = true;
                 notes.push_back(at + "from " + std::to_string(s.sii_words_known()) +
                                 " SII words of the capture");
@@ -356,6 +440,19 @@ std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
             };
         }
         parts.esc = recovered_config(s, parts.esc);
+        if (!s.refused.empty()) {
+            parts.factory = [inner = parts.factory,
+                             refused = s.refused](const device::DeviceDescription& dd) {
+                return std::unique_ptr<esc::Application>(
+                    std::make_unique<RefusingApplication>(inner(dd), refused));
+            };
+            for (const auto& r : s.refused)
+                notes.push_back(
+                    at + fmt::format("refuses {} -> {} with AL status code 0x{:04X}, as the capture "
+                                     "shows (the reason is the device's)",
+                                     protocol::to_string(static_cast<protocol::AlState>(r.from)),
+                                     protocol::to_string(static_cast<protocol::AlState>(r.to)), r.code));
+        }
         const std::size_t info = static_cast<std::size_t>(
             std::count_if(s.esc_info.begin(), s.esc_info.end(), [](const auto& b) { return b.has_value(); }));
         notes.push_back(
@@ -401,9 +498,9 @@ std::string format_report(const ReplayReport& r) {
         r.wkc_same, r.datagrams, r.wkc_percent(), r.wkc_timing);
     s += fmt::format(
         "register and memory reads: {} of {} as recorded ({:.2f} %): {} same, {} differ in time-dependent "
-        "values, {} in counters, {} by timing\n",
-        r.reads_same + r.reads_time + r.reads_counter + r.reads_timing, r.reads, r.data_percent(),
-        r.reads_same, r.reads_time, r.reads_counter, r.reads_timing);
+        "values, {} in counters, {} in mailbox padding, {} by timing\n",
+        r.reads_same + r.reads_time + r.reads_counter + r.reads_padding + r.reads_timing, r.reads,
+        r.data_percent(), r.reads_same, r.reads_time, r.reads_counter, r.reads_padding, r.reads_timing);
     s += fmt::format("process data reads: {} of {} with the recorded inputs\n", r.process_same,
                      r.process_reads);
     bool header = false;

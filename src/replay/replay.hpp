@@ -57,6 +57,7 @@ struct ReplayReport {
     std::size_t reads_same = 0;
     std::size_t reads_time = 0;     // differ only in time-dependent bytes
     std::size_t reads_counter = 0;  // ... in counters (and time-dependent bytes)
+    std::size_t reads_padding = 0;  // ... in a mailbox read's bytes past its message (and the above)
     std::size_t reads_timing =
         0;                       // the real device gave vecat's data to the same read shortly before or after
     std::size_t wkc_timing = 0;  // working counters that differ the same way

@@ -28,10 +28,12 @@ std::uint16_t datagram(Esc& esc, Command cmd, std::uint16_t ado, std::vector<std
     std::copy(buf.begin() + 10, buf.begin() + 10 + static_cast<long>(data.size()), data.begin());
     return d.wkc();
 }
-std::uint16_t write(Esc& esc, std::uint16_t ado, std::vector<std::uint8_t> data, Command cmd = Command::APWR) {
+std::uint16_t write(Esc& esc, std::uint16_t ado, std::vector<std::uint8_t> data,
+                    Command cmd = Command::APWR) {
     return datagram(esc, cmd, ado, data);
 }
-std::uint16_t read(Esc& esc, std::uint16_t ado, std::vector<std::uint8_t>& data, Command cmd = Command::APRD) {
+std::uint16_t read(Esc& esc, std::uint16_t ado, std::vector<std::uint8_t>& data,
+                   Command cmd = Command::APRD) {
     return datagram(esc, cmd, ado, data);
 }
 
