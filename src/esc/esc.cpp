@@ -178,6 +178,9 @@ void Esc::update_dl_status() {
     // Without a PDI (0x0140 = 0, e.g. an EK1100) nothing reloads the PDI watchdog: it shows expired
     // (ESC datasheet section II 0x0110 bit 1; the EK1100 of ../shared/data/pcap reads 0x..31).
     if (mem_[addr(Reg::PdiControl)] != 0) v |= dl_status::PdiWatchdogOk;
+    // Enhanced link detection activated for at least one port (0x0141 bits 1, 4-7; section II 0x0110 bit 2).
+    if (mem_[addr(Reg::EscConfiguration)] & protocol::esc_config::EnhancedLinkDetection)
+        v |= dl_status::EnhancedLinkDetection;
     for (unsigned p = 0; p < 4; ++p) {
         const bool implemented = ((cfg_.port_descriptor >> (2 * p)) & 0x3) != 0;
         if (implemented && port_link(p))

@@ -151,6 +151,8 @@ namespace esc_config {
 // The ESC itself copies AL control to AL status (simple devices without a µController); off, AL control
 // behaves as a mailbox towards the PDI (ESC datasheet section II 0x0120).
 inline constexpr std::uint8_t DeviceEmulation = 0x01;
+// Enhanced link detection: bit 1 for all ports, bits 4-7 for port 0-3 (DL status 0x0110 bit 2 shows it).
+inline constexpr std::uint8_t EnhancedLinkDetection = 0xF2;
 }  // namespace esc_config
 
 // SII control/status bits (0x0502).

@@ -23,6 +23,11 @@ namespace sdo_info = protocol::sdo_info;
 
 constexpr std::size_t kMaxValueBytes = 65536;  // a larger upload is not kept
 constexpr std::uint32_t kObjectDoesNotExist = 0x06020000;
+// Communication objects of fixed layout (ETG.1000.6 5.6.7.4): SyncManager communication types (U8 entries),
+// PDO assignments (U16), PDO mappings (U32).
+constexpr std::uint16_t kSyncManagerTypes = 0x1C00;
+constexpr std::uint16_t kPdoAssignFirst = 0x1C10, kPdoAssignLast = 0x1C2F;
+constexpr std::uint16_t kRxMappingFirst = 0x1600, kTxMappingFirst = 0x1A00, kMappingCount = 0x200;
 constexpr std::uint32_t kSubindexDoesNotExist = 0x06090011;
 
 std::uint8_t command_specifier(std::uint8_t cmd) {
@@ -61,7 +66,6 @@ device::EntryDescription entry_for(std::uint8_t sub, std::size_t bytes) {
 void add_mapped_objects(
     std::map<std::uint16_t, device::ObjectDescription>& objs,
     const std::map<std::pair<std::uint16_t, std::uint8_t>, std::vector<std::uint8_t>>& values) {
-    constexpr std::uint16_t kRxMappingFirst = 0x1600, kTxMappingFirst = 0x1A00, kMappingCount = 0x200;
     constexpr std::uint16_t kFirstApplicationObject = 0x2000;  // below: data types used as padding
     for (const auto& [at, bytes] : values) {
         const auto [index, sub] = at;
@@ -149,19 +153,20 @@ void MailboxRecoverer::sdo_response(const std::uint8_t* p, std::size_t n) {
         const std::uint16_t index = ld_le16(p + 1);
         const std::uint8_t sub = p[3];
         segmented_ = false;
-        if (complete_access || index != request_index_ || sub != request_sub_) return;
+        if (index != request_index_ || sub != request_sub_) return;
         if (cmd & sdo::Expedited) {
             const std::size_t size = cmd & sdo::SizeIndicated
                                          ? sdo::kExpeditedMax - ((cmd >> sdo::ExpeditedUnusedShift) & 3)
                                          : sdo::kExpeditedMax;
-            dict_.values[{index, sub}].assign(p + 4, p + 4 + size);
+            store(index, sub, complete_access, std::vector<std::uint8_t>(p + 4, p + 4 + size));
             return;
         }
         const std::uint32_t size = ld_le32(p + 4);
         if (size > kMaxValueBytes) return;
         const std::size_t here = std::min<std::size_t>(n - kSdoHeaderSize, size);
         if (here == size) {
-            dict_.values[{index, sub}].assign(p + kSdoHeaderSize, p + kSdoHeaderSize + size);
+            store(index, sub, complete_access,
+                  std::vector<std::uint8_t>(p + kSdoHeaderSize, p + kSdoHeaderSize + size));
             return;
         }
         segmented_ = true;
@@ -179,10 +184,48 @@ void MailboxRecoverer::sdo_response(const std::uint8_t* p, std::size_t n) {
         if (cmd & sdo::LastSegment) {
             segmented_ = false;
             if (segmented_data_.size() == segmented_size_)
-                dict_.values[{request_index_, request_sub_}] = std::move(segmented_data_);
+                store(request_index_, request_sub_, (request_cmd_ & sdo::CompleteAccess) != 0,
+                      std::move(segmented_data_));
             segmented_data_.clear();
         }
     }
+}
+
+// A value uploaded: one entry's, or with complete access (ETG.1000.6 5.6.2.1.2) the object's entries from
+// `sub` on, subindex 0 taking 16 bits (its U8 and a padding byte); such a value is split into its entries
+// where their size is known (described, or a communication object of fixed layout).
+void MailboxRecoverer::store(std::uint16_t index, std::uint8_t sub, bool complete_access,
+                             std::vector<std::uint8_t> bytes) {
+    if (!complete_access) {
+        dict_.values[{index, sub}] = std::move(bytes);
+        return;
+    }
+    std::size_t width = 0;  // bytes per entry past subindex 0
+    if (index == kSyncManagerTypes)
+        width = 1;
+    else if (index >= kPdoAssignFirst && index <= kPdoAssignLast)
+        width = 2;
+    else if ((index >= kRxMappingFirst && index < kRxMappingFirst + kMappingCount) ||
+             (index >= kTxMappingFirst && index < kTxMappingFirst + kMappingCount))
+        width = 4;
+    else if (auto it = dict_.objects.find(index); it != dict_.objects.end() &&
+                                                  it->second.entries.size() > 1 &&
+                                                  it->second.entries[1].bit_length % 8 == 0)
+        width = it->second.entries[1].bit_length / 8u;  // the first entry's size for all: arrays
+    if (width == 0 || sub > 1) return;
+    std::size_t at = 0;
+    std::size_t count = 0;
+    if (sub == 0) {
+        if (bytes.size() < 2) return;
+        count = bytes[0];
+        dict_.values[{index, 0}] = {bytes[0]};
+        at = 2;
+    } else {
+        count = (bytes.size() - at) / width;
+    }
+    for (std::size_t k = 1; k <= count && at + width <= bytes.size(); ++k, at += width)
+        dict_.values[{index, static_cast<std::uint8_t>(k)}].assign(
+            bytes.begin() + static_cast<long>(at), bytes.begin() + static_cast<long>(at + width));
 }
 
 void MailboxRecoverer::info_response(const std::uint8_t* p, std::size_t n) {
@@ -289,9 +332,12 @@ std::vector<device::ObjectDescription> merge_dictionary(
         auto [it, made] = objs.try_emplace(index);
         device::ObjectDescription& o = it->second;
         if (made) {
+            // A record when any subindex above 0 was uploaded; subindex 0 then holds the count.
+            const auto next = r.values.upper_bound({index, 0});
+            const bool record = sub != 0 || (next != r.values.end() && next->first.first == index);
             o.index = index;
-            o.code = sub == 0 ? device::ObjectCode::Var : device::ObjectCode::Record;
-            if (sub != 0) o.entries.push_back(entry_for(0, 1));
+            o.code = record ? device::ObjectCode::Record : device::ObjectCode::Var;
+            if (record && sub != 0) o.entries.push_back(entry_for(0, 1));
         }
         if (!o.entry(sub)) {
             auto pos = std::find_if(o.entries.begin(), o.entries.end(),

@@ -39,6 +39,7 @@ class MailboxRecoverer {
     void reply(const std::uint8_t* msg, std::size_t len);
     void sdo_response(const std::uint8_t* p, std::size_t n);
     void info_response(const std::uint8_t* p, std::size_t n);
+    void store(std::uint16_t index, std::uint8_t sub, bool complete_access, std::vector<std::uint8_t> bytes);
 
     std::optional<std::uint16_t> out_start_, in_start_;
     // The last SDO request the master sent (command byte, index, subindex).
