@@ -23,6 +23,7 @@ namespace sdo_info = protocol::sdo_info;
 
 constexpr std::size_t kMaxValueBytes = 65536;  // a larger upload is not kept
 constexpr std::uint32_t kObjectDoesNotExist = 0x06020000;
+constexpr std::uint8_t kWholeObject = 0xFF;  // in RecoveredDictionary::written: every entry
 // Communication objects of fixed layout (ETG.1000.6 5.6.7.4): SyncManager communication types (U8 entries),
 // PDO assignments (U16), PDO mappings (U32).
 constexpr std::uint16_t kSyncManagerTypes = 0x1C00;
@@ -114,6 +115,14 @@ void MailboxRecoverer::wrote(std::uint16_t ado, const std::uint8_t* data, std::s
     request_cmd_ = p[kCoeHeaderSize];
     request_index_ = ld_le16(p + kCoeHeaderSize + 1);
     request_sub_ = p[kCoeHeaderSize + 3];
+    request_value_.clear();
+    const std::uint8_t cmd = request_cmd_;
+    if (command_specifier(cmd) == sdo::CcsInitiateDownload && (cmd & sdo::Expedited)) {
+        const std::size_t size = cmd & sdo::SizeIndicated
+                                     ? sdo::kExpeditedMax - ((cmd >> sdo::ExpeditedUnusedShift) & 3)
+                                     : sdo::kExpeditedMax;
+        request_value_.assign(p + kCoeHeaderSize + 4, p + kCoeHeaderSize + 4 + size);
+    }
     if (command_specifier(request_cmd_) == sdo::CcsInitiateUpload) segmented_ = false;
 }
 
@@ -172,6 +181,15 @@ void MailboxRecoverer::sdo_response(const std::uint8_t* p, std::size_t n) {
         segmented_ = true;
         segmented_size_ = size;
         segmented_data_.assign(p + kSdoHeaderSize, p + kSdoHeaderSize + here);
+        return;
+    }
+    if (command_specifier(cmd) == sdo::ScsInitiateDownload && n >= kSdoHeaderSize) {
+        // A download the device confirmed: the entry (with complete access, the object) is writable.
+        const std::uint16_t index = ld_le16(p + 1);
+        const std::uint8_t sub = p[3];
+        if (index == request_index_ && sub == request_sub_ &&
+            command_specifier(request_cmd_) == sdo::CcsInitiateDownload)
+            dict_.written[{index, complete_access ? kWholeObject : sub}] = request_value_;
         return;
     }
     if (command_specifier(cmd) == sdo::ScsUploadSegment && segmented_) {
@@ -347,10 +365,44 @@ std::vector<device::ObjectDescription> merge_dictionary(
         values[at] = bytes;
     }
     add_mapped_objects(objs, values);
+    // A PDO assignment the device accepted names PDOs it has (ETG.1000.6 5.6.7.4.9); its entries exist.
+    for (const auto& [at, v] : r.written) {
+        const auto [index, sub] = at;
+        if (index < kPdoAssignFirst || index > kPdoAssignLast || sub == 0 || sub == kWholeObject) continue;
+        auto it = objs.find(index);
+        if (it == objs.end()) continue;
+        if (!it->second.entry(sub)) {
+            auto& entries = it->second.entries;
+            auto pos =
+                std::find_if(entries.begin(), entries.end(), [&](const auto& x) { return x.subindex > sub; });
+            entries.insert(pos, entry_for(sub, 2));
+        }
+        if (v.size() != 2) continue;
+        const std::uint16_t pdo = ld_le16(v.data());
+        if (objs.contains(pdo)) continue;
+        device::ObjectDescription& m = objs[pdo];
+        m.index = pdo;
+        m.code = device::ObjectCode::Record;
+        m.entries.push_back(entry_for(0, 1));
+    }
+    // Written by the master and confirmed: writable (in which states the capture does not tell: in all).
+    for (const auto& [at, v] : r.written) {
+        const auto [index, sub] = at;
+        auto it = objs.find(index);
+        if (it == objs.end()) continue;
+        for (auto& e : it->second.entries)
+            if (sub == kWholeObject || e.subindex == sub) e.access |= device::access::WriteAll;
+    }
     for (const auto& [index, sub] : r.absent_entries) {
         auto it = objs.find(index);
         if (it == objs.end() || sub == 0) continue;
         std::erase_if(it->second.entries, [&](const auto& e) { return e.subindex == sub; });
+    }
+    // Subindex 0 of an object that gained entries may count up to the last one.
+    for (auto& [index, o] : objs) {
+        auto& entries = o.entries;
+        if (entries.size() > 1 && entries.front().subindex == 0 && !entries.front().maximum.empty())
+            entries.front().maximum = {std::max(entries.front().maximum[0], entries.back().subindex)};
     }
     std::vector<device::ObjectDescription> out;
     out.reserve(objs.size());

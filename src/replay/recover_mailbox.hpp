@@ -21,8 +21,10 @@ struct RecoveredDictionary {
     std::map<std::uint16_t, device::ObjectDescription> objects;  // described (entries as described)
     std::set<std::uint16_t> absent_objects;
     std::set<std::pair<std::uint16_t, std::uint8_t>> absent_entries;
+    // Downloads the device confirmed, with the value when it was expedited (else empty).
+    std::map<std::pair<std::uint16_t, std::uint8_t>, std::vector<std::uint8_t>> written;
     std::optional<std::vector<std::uint16_t>> all_objects;  // a complete "all objects" list
-    bool empty() const { return values.empty() && objects.empty() && !all_objects; }
+    bool empty() const { return values.empty() && objects.empty() && !all_objects && written.empty(); }
 };
 
 // Follows one slave's mailbox: the master's writes of its mailbox-out SyncManager (SM0) area and its reads of
@@ -46,6 +48,7 @@ class MailboxRecoverer {
     std::uint8_t request_cmd_ = 0;
     std::uint16_t request_index_ = 0;
     std::uint8_t request_sub_ = 0;
+    std::vector<std::uint8_t> request_value_;  // of an expedited download
     // A segmented upload in progress.
     bool segmented_ = false;
     std::uint32_t segmented_size_ = 0;
