@@ -111,7 +111,47 @@ class Recoverer {
                 rs.known[l.word] = 2;  // from a register
             }
         }
+        share_sii_of_same_identity();
         return std::move(line_);
+    }
+
+    // Masters read the whole SII of the first device of an identity and little of the next ones (SOEM takes
+    // the configuration of an identical device found before). Devices of one vendor, product and revision
+    // carry one SII content, but for their alias, checksum and serial number: the words a slave's capture
+    // lacks come from an earlier slave of its identity (known = 3).
+    void share_sii_of_same_identity() {
+        namespace sii = protocol::sii;
+        constexpr unsigned kIdentityFirst = sii::VendorId, kIdentityEnd = sii::SerialNo;
+        const auto identity_known = [](const RecoveredSlave& rs) {
+            for (unsigned w = kIdentityFirst; w < kIdentityEnd; ++w)
+                if (w >= rs.known.size() || !rs.known[w]) return false;
+            return true;
+        };
+        const auto own = [](std::size_t w) {
+            return w == sii::StationAlias || w == sii::Checksum || w == sii::SerialNo ||
+                   w == sii::SerialNo + 1;
+        };
+        for (std::size_t b = 1; b < line_.slaves.size(); ++b) {
+            RecoveredSlave& rs = line_.slaves[b];
+            if (!identity_known(rs)) continue;
+            for (std::size_t a = 0; a < b; ++a) {
+                const RecoveredSlave& from = line_.slaves[a];
+                if (!identity_known(from) ||
+                    !std::equal(rs.sii.begin() + kIdentityFirst, rs.sii.begin() + kIdentityEnd,
+                                from.sii.begin() + kIdentityFirst))
+                    continue;
+                if (rs.sii.size() < from.sii.size()) {
+                    rs.sii.resize(from.sii.size(), 0xFFFF);
+                    rs.known.resize(from.sii.size(), 0);
+                }
+                for (std::size_t w = 0; w < from.sii.size(); ++w)
+                    if (!rs.known[w] && from.known[w] && !own(w)) {
+                        rs.sii[w] = from.sii[w];
+                        rs.known[w] = 3;
+                    }
+                break;
+            }
+        }
     }
 
   private:

@@ -44,7 +44,8 @@ struct RecoveredSlave {
     // working counters of its broadcast writes to the 16 FMMU and SyncManager blocks (see recover_line).
     std::optional<std::uint8_t> fmmus_from_writes, sms_from_writes;
     // SII words (index: word address); known[i]: 1 word i was read, 2 it was recovered from a register the
-    // ESC loads from it (0x0140, 0x0150, 0x0152, 0x0982, 0x0012), 0 unknown.
+    // ESC loads from it (0x0140, 0x0150, 0x0152, 0x0982, 0x0012), 3 taken from an earlier slave of the same
+    // identity, 0 unknown.
     std::vector<std::uint16_t> sii;
     std::vector<std::uint8_t> known;
     // The CoE dictionary as far as the mailbox traffic shows it (recover_mailbox.hpp).
