@@ -67,7 +67,7 @@ device::EntryDescription entry_for(std::uint8_t sub, std::size_t bytes) {
 void add_mapped_objects(
     std::map<std::uint16_t, device::ObjectDescription>& objs,
     const std::map<std::pair<std::uint16_t, std::uint8_t>, std::vector<std::uint8_t>>& values) {
-    constexpr std::uint16_t kFirstApplicationObject = 0x2000;  // below: data types used as padding
+    constexpr std::uint16_t kFirstMappableObject = 0x1000;  // below: data types, a gap in the PDO
     for (const auto& [at, bytes] : values) {
         const auto [index, sub] = at;
         const bool rx = index >= kRxMappingFirst && index < kRxMappingFirst + kMappingCount;
@@ -77,7 +77,7 @@ void add_mapped_objects(
         const auto target = static_cast<std::uint16_t>(m >> 16);
         const auto target_sub = static_cast<std::uint8_t>(m >> 8);
         const auto bits = static_cast<std::uint8_t>(m);
-        if (target < kFirstApplicationObject || bits == 0) continue;
+        if (target < kFirstMappableObject || bits == 0) continue;
         auto [it, made] = objs.try_emplace(target);
         device::ObjectDescription& o = it->second;
         if (made) {
@@ -85,7 +85,10 @@ void add_mapped_objects(
             o.code = target_sub == 0 ? device::ObjectCode::Var : device::ObjectCode::Record;
             if (target_sub != 0) o.entries.push_back(entry_for(0, 1));
         }
-        if (o.entry(target_sub)) continue;
+        if (auto* have = const_cast<device::EntryDescription*>(o.entry(target_sub))) {
+            have->access |= rx ? device::access::RxPdoMappable : device::access::TxPdoMappable;
+            continue;
+        }
         device::EntryDescription e = entry_for(target_sub, (bits + 7u) / 8u);
         if (bits == 1) e.type = device::DataType::Boolean;
         e.bit_length = bits;
