@@ -115,6 +115,9 @@ void MailboxRecoverer::wrote(std::uint16_t ado, const std::uint8_t* data, std::s
     if (!h || h->type != static_cast<std::uint8_t>(protocol::MailboxType::CoE)) return;
     const std::uint8_t* p = data + kMailboxHeaderSize;
     if (protocol::coe_service(ld_le16(p)) != CoeService::SdoRequest) return;
+    const std::uint8_t ccs = command_specifier(p[kCoeHeaderSize]);
+    // A segment request carries no index: the initiating request's stays (and its complete access bit).
+    if (ccs == sdo::CcsUploadSegment || ccs == sdo::CcsDownloadSegment) return;
     request_cmd_ = p[kCoeHeaderSize];
     request_index_ = ld_le16(p + kCoeHeaderSize + 1);
     request_sub_ = p[kCoeHeaderSize + 3];

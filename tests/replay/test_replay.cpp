@@ -195,20 +195,20 @@ TEST_P(RealCaptureReplay, ReachesItsFigures) {
 }
 
 INSTANTIATE_TEST_SUITE_P(SharedCaptures, RealCaptureReplay,
-                         testing::Values(RealCapture{"soem-slaveinfo-sdo-kollmorgen-akd.pcapng", 99.9, 97.0},
-                                         RealCapture{"soem-lan9252.pcapng", 99.5, 96.0},
-                                         RealCapture{"soem-dual-lan9252.pcapng", 98.5, 71.0},
-                                         RealCapture{"soem-sdinfo-ek1100-only.pcapng", 100.0, 95.0},
-                                         RealCapture{"soem-sdinfo-ek1100-el1004.pcapng", 97.5, 67.0},
+                         testing::Values(RealCapture{"soem-slaveinfo-sdo-kollmorgen-akd.pcapng", 99.95, 99.95},
+                                         RealCapture{"soem-lan9252.pcapng", 99.55, 99.75},
+                                         RealCapture{"soem-dual-lan9252.pcapng", 99.85, 99.85},
+                                         RealCapture{"soem-sdinfo-ek1100-only.pcapng", 99.99, 100.0},
+                                         RealCapture{"soem-sdinfo-ek1100-el1004.pcapng", 99.99, 96.9},
                                          RealCapture{"twincat-scan-boxes.pcapng", 96.5, 94.0},
-                                         RealCapture{"ek1100-el2828-el2889.pcapng", 81.5, 52.5},
-                                         RealCapture{"ek1100-alias-address.pcapng", 82.5, 58.5},
-                                         RealCapture{"dc-setup-ek1914.pcapng", 77.5, 46.0},
-                                         RealCapture{"issue-255.pcapng", 95.0, 64.5},
-                                         RealCapture{"ek1914-el3004-configure.pcapng", 79.0, 48.0},
-                                         RealCapture{"ek1914-el3004-mailbox.pcapng", 76.5, 46.5},
-                                         RealCapture{"ek1914-no-complete-access.pcapng", 89.5, 64.0},
-                                         RealCapture{"segmented-upload-ek1914.pcapng", 76.0, 45.5}),
+                                         RealCapture{"ek1100-el2828-el2889.pcapng", 99.99, 99.9},
+                                         RealCapture{"ek1100-alias-address.pcapng", 99.99, 99.75},
+                                         RealCapture{"dc-setup-ek1914.pcapng", 99.99, 99.9},
+                                         RealCapture{"issue-255.pcapng", 99.99, 99.9},
+                                         RealCapture{"ek1914-el3004-configure.pcapng", 99.99, 95.9},
+                                         RealCapture{"ek1914-el3004-mailbox.pcapng", 99.99, 98.9},
+                                         RealCapture{"ek1914-no-complete-access.pcapng", 99.99, 87.6},
+                                         RealCapture{"segmented-upload-ek1914.pcapng", 99.99, 99.7}),
                          [](const testing::TestParamInfo<RealCapture>& i) {
                              std::string n = i.param.file;
                              n = n.substr(0, n.find('.'));
