@@ -509,6 +509,7 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
     }
     if (al_control_written) {
         al_control_unread_ = true;
+        al_control_written_ns_ = t.port0_ns;
         set_al_event(al_event::AlControl);
         // Device emulation: the ESC itself sets AL status to the value written to AL control (ESC
         // datasheet section II 0x0130, 0x0141 bit 0); an acknowledge (bit 4) shows as the error indication.

@@ -87,6 +87,8 @@ class Esc {
     // Device emulation (0x0141 bit 0, from SII word 0): the ESC sets AL status from AL control itself;
     // devices without a µController (couplers, simple I/O terminals) have it.
     bool device_emulation() const;
+    // When the master last wrote AL control (the frame's arrival at port 0, host clock).
+    std::uint64_t al_control_written_ns() const { return al_control_written_ns_; }
     std::uint8_t al_status() const { return mem_[protocol::addr(protocol::Reg::AlStatus)]; }
     std::uint16_t al_status_code() const {
         return ld_le16(&mem_[protocol::addr(protocol::Reg::AlStatusCode)]);
@@ -252,6 +254,7 @@ class Esc {
     // AL control written by the master and not yet read by the PDI: without device emulation the
     // register then refuses further writes (ESC datasheet section II 0x0120, "behaves like a mailbox").
     bool al_control_unread_ = false;
+    std::uint64_t al_control_written_ns_ = 0;
     bool sm_activation_event_ = false;
     bool wd_armed_ = false;
     std::uint64_t wd_last_trigger_ns_ = 0;

@@ -514,7 +514,9 @@ void Slave::exchange_process_data(std::uint64_t now_ns) {
 void Slave::run(std::uint64_t now_ns) {
     esc_.tick(now_ns);
     const std::uint32_t ev = esc_.al_events();
-    if (ev & al_event::AlControl) handle_al_control(now_ns);
+    if ((ev & al_event::AlControl) &&
+        (al_control_latency_ns_ == 0 || now_ns >= esc_.al_control_written_ns() + al_control_latency_ns_))
+        handle_al_control(now_ns);
     if (ev & al_event::WatchdogProcessData) {
         esc_.pdi_clear_al_event(al_event::WatchdogProcessData);
         ++counters_.watchdog_expiries;

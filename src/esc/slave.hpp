@@ -160,6 +160,11 @@ class Slave {
     // The revision the SII holds now.
     std::uint32_t sii_revision() const;
 
+    // How long the firmware takes to read AL control after the master wrote it (default 0: at its next
+    // run). Without device emulation a second write before that read is not accepted (ESC datasheet section
+    // II 0x0120), as real devices show to masters that write AL control twice (docs/replay.md).
+    void set_al_control_latency(std::uint64_t ns) { al_control_latency_ns_ = ns; }
+
     static constexpr std::uint64_t kOutputsValidTimeoutNs = 1'000'000'000;  // SAFEOP -> OP wait
 
   private:
@@ -191,7 +196,9 @@ class Slave {
     std::unique_ptr<Application> app_;
     protocol::AlState state_ = protocol::AlState::Init;
     bool error_ = false;
-    bool constructed_ = false;  // AL status written once at power-up, also under device emulation
+    bool constructed_ = false;
+    std::uint64_t al_control_latency_ns_ =
+        0;  // AL status written once at power-up, also under device emulation
     protocol::AlStatusCode code_ = protocol::AlStatusCode::NoError;
     bool ident_ = false;
     bool op_pending_ = false;

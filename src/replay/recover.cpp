@@ -71,6 +71,21 @@ struct AlTracker {
     std::uint8_t state = 0x01;  // INIT at power-up
     std::optional<std::uint8_t> requested;
     std::optional<RefusedTransition> pending;  // refused, waiting for a read of its AL status code
+    // The AL control mailbox (ESC datasheet section II 0x0120): when the last accepted write happened, the
+    // longest gap after it that saw a write refused, the shortest that saw one accepted.
+    std::optional<std::uint64_t> accepted_ns;
+    std::uint64_t longest_refused_ns = 0;
+    std::optional<std::uint64_t> shortest_accepted_ns;
+    void write(std::uint64_t t, bool accepted) {
+        if (accepted_ns && t >= *accepted_ns) {
+            const std::uint64_t gap = t - *accepted_ns;
+            if (!accepted)
+                longest_refused_ns = std::max(longest_refused_ns, gap);
+            else
+                shortest_accepted_ns = std::min(shortest_accepted_ns.value_or(gap), gap);
+        }
+        if (accepted) accepted_ns = t;
+    }
 };
 constexpr std::uint8_t kAlStateBits = 0x0F, kAlErrorBit = 0x10;
 
@@ -95,7 +110,16 @@ class Recoverer {
             exchange(e);
         for (std::size_t s = 0; s < line_.slave_count; ++s) {
             line_.slaves[s].coe = mailbox_[s].result();
-            if (al_[s].pending) refuse(s, *al_[s].pending);
+            const AlTracker& t = al_[s];
+            if (t.pending) refuse(s, *t.pending);
+            if (t.longest_refused_ns > 0) {
+                // Just past the longest gap that saw a write refused (an eighth more), below the shortest
+                // that saw one accepted: the device reacts to a state request as soon as the capture allows.
+                std::uint64_t latency = t.longest_refused_ns + t.longest_refused_ns / 8;
+                if (t.shortest_accepted_ns && *t.shortest_accepted_ns > t.longest_refused_ns)
+                    latency = std::min(latency, *t.shortest_accepted_ns - 1);
+                line_.slaves[s].al_control_latency_ns = latency;
+            }
         }
         blocks_from_writes(fmmu_wkc_, kFmmuBlocks, true);
         blocks_from_writes(sm_wkc_, kSmBlocks, false);
@@ -204,6 +228,17 @@ class Recoverer {
                     al_control_written(*s, written);
                 }
             }
+            if (protocol::physical_write(cmd) && written.covers(addr(Reg::AlControl))) {
+                const std::uint64_t t = c_.frames[e.request_recorded ? e.request : e.reply].time_ns;
+                if (broadcast(cmd)) {
+                    // All refused or all accepted; a count in between does not say which slave refused.
+                    if (r.wkc() == 0 || r.wkc() == line_.slave_count)
+                        for (std::size_t s = 0; s < line_.slave_count; ++s)
+                            al_[s].write(t, r.wkc() != 0);
+                } else if (auto s = position(cmd, adp)) {
+                    al_[*s].write(t, r.wkc() != 0);
+                }
+            }
             if (cmd == Command::BRD && r.wkc() == 1 && line_.slave_count == 1) al_status_read(0, read);
             if ((cmd == Command::APRD || cmd == Command::FPRD || cmd == Command::APRW ||
                  cmd == Command::FPRW) &&
@@ -213,7 +248,7 @@ class Recoverer {
                     mailbox_[*s].read(read.ado, read.data, read.len);
                     al_status_read(*s, read);
                 }
-            if (e.request_recorded && !broadcast(cmd) && in_dc_system_time_unit(r))
+            if (!broadcast(cmd) && in_dc_system_time_unit(r))
                 if (auto s = position(cmd, adp)) {
                     auto& unit = line_.slaves[*s].dc_system_time_unit;
                     unit = unit.value_or(false) || r.wkc() > 0;

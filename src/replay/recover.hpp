@@ -51,6 +51,10 @@ struct RecoveredSlave {
     // The CoE dictionary as far as the mailbox traffic shows it (recover_mailbox.hpp).
     RecoveredDictionary coe;
     std::vector<RefusedTransition> refused;
+    // How long the device's firmware took to read AL control (esc::Slave::set_al_control_latency): just more
+    // than the longest gap after which a second write was refused, less than the shortest after which one
+    // was accepted; nullopt when no write was refused.
+    std::optional<std::uint64_t> al_control_latency_ns;
     std::size_t sii_words_known() const;
 };
 

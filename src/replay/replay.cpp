@@ -461,9 +461,16 @@ std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
                              parts.esc.type, parts.esc.revision, parts.esc.build, parts.esc.fmmu_count,
                              parts.esc.sm_count, parts.esc.ram_bytes / 1024, parts.esc.port_descriptor,
                              parts.esc.features, info, kEscInfoBytes));
-        seg->add(
-            std::make_unique<esc::Slave>(parts.model, parts.esc, parts.factory(*parts.model.description)),
-            parts.factory);
+        auto slave =
+            std::make_unique<esc::Slave>(parts.model, parts.esc, parts.factory(*parts.model.description));
+        if (s.al_control_latency_ns) {
+            slave->set_al_control_latency(*s.al_control_latency_ns);
+            notes.push_back(at +
+                            fmt::format("reads AL control {} us after the master wrote it (a second write "
+                                        "in between was refused in the capture)",
+                                        *s.al_control_latency_ns / 1000));
+        }
+        seg->add(std::move(slave), parts.factory);
     }
     // The tree, when the DL status of every slave was read; else a line.
     const bool all = !line.slaves.empty() && std::all_of(line.slaves.begin(), line.slaves.end(),

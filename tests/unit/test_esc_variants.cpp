@@ -119,3 +119,23 @@ TEST(SiiStatusBits, ShownAndKeptAcrossCommands) {
     EXPECT_EQ(write(esc, addr(Reg::SiiControl), {0x00, 0x01}), 1);  // read word 0
     EXPECT_EQ(esc.peek(addr(Reg::SiiControl)) & 0x3E, 0x10);
 }
+
+// Section II 0x0120 without device emulation: AL control is a mailbox the firmware empties by reading it.
+// A firmware that takes its time (Slave::set_al_control_latency, recovered by the replay from real devices
+// that refused a second write 0.56 ms after the first) refuses a second write until it has read the first.
+TEST(AlControlLatency, ASecondWriteIsRefusedUntilTheFirmwareReadTheFirst) {
+    auto dev = device::coupler();
+    dev.pdi_control = 0x0005;  // a µController on SPI: no device emulation
+    Slave slave(dev, EscConfig{}, std::make_unique<ProcessImageApplication>(0, 0));
+    slave.set_al_control_latency(1'000'000);
+    Esc& esc = slave.esc();
+    EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x11, 0x00}), 1);  // at 1000 ns (the helper's frame time)
+    slave.run(500'000);
+    EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x11, 0x00}), 0);  // not read yet
+    slave.run(1'001'000);
+    EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x02, 0x00}), 1);  // PREOP, again at 1000 ns
+    slave.run(500'000);
+    EXPECT_EQ(esc.al_status(), 0x01);  // not read yet
+    slave.run(1'002'000);
+    EXPECT_EQ(esc.al_status(), 0x02);  // read and answered
+}
