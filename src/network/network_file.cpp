@@ -261,11 +261,16 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
         throw NetworkFileError(name + ": " + x.what());
     }
     if (!root.IsMap()) throw NetworkFileError(name + ": a network file is a map with devices:");
-    YAML::Node list;
+    YAML::Node list, redundancy;
+    bool has_redundancy = false;
     for (const auto& item : root) {
         const std::string key = r.scalar(item.first, "key");
-        if (key != "devices") r.fail(item.first, "unknown key " + key + " (devices)");
-        list = item.second;
+        if (key == "devices")
+            list = item.second;
+        else if (key == "redundancy")
+            redundancy = item.second, has_redundancy = true;
+        else
+            r.fail(item.first, "unknown key " + key + " (devices, redundancy)");
     }
     if (!list || !list.IsSequence() || list.size() == 0)
         throw NetworkFileError(name + ": devices: a list of at least one device");
@@ -275,7 +280,27 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
         devices.push_back(parse_device(r, n, folder));
         explicit_upstream.push_back(n["upstream"].IsDefined());
     }
-    return arrange_network(std::move(devices), explicit_upstream, name, folder);
+    NetworkFile f = arrange_network(std::move(devices), explicit_upstream, name, folder);
+    if (has_redundancy) {
+        // The same NAME:PORT as upstream:, for the port the redundancy cable leaves the line at.
+        DeviceEntry at;
+        parse_upstream(r, redundancy, at);
+        const std::string key = "redundancy: ";
+        const auto it = std::find_if(f.devices.begin(), f.devices.end(),
+                                     [&](const DeviceEntry& d) { return d.name == at.upstream; });
+        if (it == f.devices.end()) r.fail(redundancy, key + "no device named " + at.upstream);
+        const auto i = static_cast<std::size_t>(it - f.devices.begin());
+        if (!((default_ports(it->source) >> at.upstream_port) & 1u))
+            r.fail(redundancy, key + it->name + " (" + std::string(to_string(it->source)) + ") has no port " +
+                                   std::to_string(at.upstream_port));
+        if (const int c = f.children[i][at.upstream_port]; c >= 0)
+            r.fail(redundancy, key + "port " + std::to_string(at.upstream_port) + " of " + it->name +
+                                   " is already cabled to " + f.devices[static_cast<std::size_t>(c)].name);
+        f.redundancy_device = static_cast<int>(i);
+        f.redundancy_port = at.upstream_port;
+        f.redundancy_line = Reader::line(redundancy);
+    }
+    return f;
 }
 
 NetworkFile arrange_network(std::vector<DeviceEntry> devices, const std::vector<bool>& explicit_upstream,

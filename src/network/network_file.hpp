@@ -16,6 +16,7 @@
 //       sii: copy.sii.bin
 //       dictionary: copy.dictionary.yaml
 //       esc: {type: 0x11, port_descriptor: 0x0f}
+//   redundancy: axis:1               # optional: this port cabled back to the master's second port
 //
 // Every problem is reported with the line of the file it is on; nothing half-checked is returned.
 #pragma once
@@ -98,6 +99,11 @@ struct NetworkFile {
     std::vector<DeviceEntry> devices;
     std::vector<int> parent;  // per device: index of its upstream device, -1: the master
     std::vector<std::array<int, kPorts>> children;  // per device and port: the device cabled there, -1: none
+    // Cable redundancy (top-level `redundancy: NAME:PORT`): this free port of this device is cabled back
+    // to the master's second port (vecat run --redundant-iface). -1: no redundancy cable.
+    int redundancy_device = -1;
+    unsigned redundancy_port = 1;
+    unsigned redundancy_line = 0;
 };
 
 class NetworkFileError : public std::runtime_error {
