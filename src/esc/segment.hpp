@@ -8,6 +8,8 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "common/bytes.hpp"
@@ -138,6 +140,15 @@ class Segment {
     static constexpr std::size_t kNoCable = ~std::size_t{0};
     std::size_t cable_at(std::size_t slave, unsigned port) const;
 
+    // ---- Hot connect groups (as TwinCAT's): a device and everything downstream of it, which can be
+    // unplugged from the line and plugged back at run time (src/faults: unplug). In the slaves' order the
+    // group is the range [head, group_end(head)).
+    void add_hot_connect_group(std::string name, std::size_t head);
+    // The head of the group of that name, or size() when there is none.
+    std::size_t hot_connect_head(std::string_view name) const;
+    const std::vector<std::pair<std::string, std::size_t>>& hot_connect_groups() const { return groups_; }
+    std::size_t group_end(std::size_t head) const;
+
     // ---- Chained segments (one line over several processes or machines)
     // Port 1 of the last slave has a link to the next segment. process_frame() then lets the frame go on
     // (its true result means "send it downstream" while downstream_link() holds) instead of closing the
@@ -180,6 +191,7 @@ class Segment {
     WalkEnd walk(MasterPort from, const FrameDamage& damage) const;
     bool process_ring(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage,
                       MasterPort from, const protocol::ParsedFrame& pf);
+    std::vector<std::pair<std::string, std::size_t>> groups_;
     std::size_t red_slave_ = ~std::size_t{0};
     unsigned red_port_ = 0;
     bool red_cable_up_ = true;

@@ -108,6 +108,19 @@ std::string FaultInjector::start(FaultSpec f, std::uint64_t now_ns) {
     if (f.kind == FaultKind::LinkDown && seg_.cable_at(f.slave, f.port) == esc::Segment::kNoCable)
         throw std::invalid_argument("link_down: port " + std::to_string(f.port) + " of slave " +
                                     std::to_string(f.slave) + " has no link to lose");
+    if (f.kind == FaultKind::Unplug) {
+        // Hot connect: the group by its name, or the one headed by the slave.
+        if (!f.group.empty()) {
+            f.slave = seg_.hot_connect_head(f.group);
+            if (f.slave >= n) throw std::invalid_argument("unplug: no hot connect group named " + f.group);
+        }
+        const std::size_t end = seg_.group_end(f.slave);
+        for (const auto& a : active_)
+            if (!a->done && a->spec.kind == FaultKind::Unplug && a->spec.slave < end &&
+                f.slave < seg_.group_end(a->spec.slave))
+                throw std::invalid_argument("unplug: slave " + std::to_string(f.slave) +
+                                            " is unplugged already (" + a->spec.id + ")");
+    }
     if (f.id.empty()) f.id = f.name + "#" + std::to_string(next_id_++);
     for (const auto& a : active_)
         if (a->spec.id == f.id) throw std::invalid_argument("a fault with id " + f.id + " is already active");
@@ -184,6 +197,12 @@ void FaultInjector::end(Active& a, std::uint64_t now_ns, const char* why) {
             // Power is back: the device boots again (INIT, station address 0, fresh dictionary).
             if (seg_.restart_slave(a.spec.slave)) seg_.slave(a.spec.slave).set_mailbox_interceptor(this);
             break;
+        case FaultKind::Unplug:
+            // Plugged back: every device of the group starts as after power-up (INIT, station address 0,
+            // its alias loaded from the SII again).
+            for (std::size_t k = a.spec.slave; k < seg_.group_end(a.spec.slave); ++k)
+                if (seg_.restart_slave(k)) seg_.slave(k).set_mailbox_interceptor(this);
+            break;
         default:
             break;
     }
@@ -207,6 +226,19 @@ void FaultInjector::apply_line_state() {
                 if (const std::size_t c = seg_.cable_at(f.slave, p); c < cable_down.size())
                     cable_down[c] = true;
             halted[f.slave] = true;
+        } else if (f.kind == FaultKind::Unplug) {
+            // Every cable between the group and the rest (into its head; in a ring, also the one out of its
+            // far end) is out; the group has no power.
+            const std::size_t end = seg_.group_end(f.slave);
+            for (std::size_t k = f.slave; k < end; ++k) {
+                halted[k] = true;
+                for (unsigned p = 0; p < 4; ++p) {
+                    const std::size_t c = seg_.cable_at(k, p);
+                    if (c >= cable_down.size()) continue;
+                    const bool inside = p != 0 ? c >= f.slave && c < end : k != f.slave;
+                    if (!inside) cable_down[c] = true;
+                }
+            }
         } else if (f.kind == FaultKind::FirmwareHang) {
             halted[f.slave] = true;
         }

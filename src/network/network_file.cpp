@@ -194,10 +194,14 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
                 d.dictionary = (std::filesystem::path(folder) / d.dictionary).string();
         } else if (key == "esc") {
             parse_esc(r, v, d.esc);
+        } else if (key == "hot_connect") {
+            d.hot_connect = r.scalar(v, key);
+            d.hot_connect_line = Reader::line(v);
+            if (d.hot_connect.empty()) r.fail(v, "hot_connect: the name of the group");
         } else {
             r.fail(item.first, "unknown key " + key +
                                    " (name, device, esi, sii, type, product, revision, channels, upstream, "
-                                   "cable_delay_ns, alias, identity, dictionary, esc)");
+                                   "cable_delay_ns, alias, identity, dictionary, esc, hot_connect)");
         }
     }
     if (d.name.empty()) r.fail(d.line, "a device without name:");
@@ -281,6 +285,17 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
         explicit_upstream.push_back(n["upstream"].IsDefined());
     }
     NetworkFile f = arrange_network(std::move(devices), explicit_upstream, name, folder);
+    // Hot connect groups: each name heads one group (the device and everything downstream of it).
+    std::map<std::string, const DeviceEntry*> groups;
+    for (const DeviceEntry& d : f.devices) {
+        if (d.hot_connect.empty()) continue;
+        const auto [it, fresh] = groups.emplace(d.hot_connect, &d);
+        if (!fresh)
+            r.fail(d.hot_connect_line, d.name + ": hot_connect: " + d.hot_connect + " heads the group of " +
+                                           it->second->name + " (line " +
+                                           std::to_string(it->second->hot_connect_line) +
+                                           "); a group is a device and everything downstream of it");
+    }
     if (has_redundancy) {
         // The same NAME:PORT as upstream:, for the port the redundancy cable leaves the line at.
         DeviceEntry at;

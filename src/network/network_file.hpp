@@ -87,6 +87,10 @@ struct DeviceEntry {
     std::string dictionary;
     unsigned dictionary_line = 0;
     EscOverride esc;
+    // Hot connect: this device and everything downstream of it form the group of this name, which can be
+    // unplugged and plugged back at run time (fault unplug group=NAME). Empty: none.
+    std::string hot_connect;
+    unsigned hot_connect_line = 0;
     // An sii: device whose image is given here instead of a file (a device made from an ENI alone,
     // network/eni_network.hpp); path is then only its name in messages.
     std::shared_ptr<const std::vector<std::uint8_t>> sii_image;
