@@ -147,6 +147,14 @@ events:
     EXPECT_EQ(b.al_status(m, 0x1001) & 0x1F, static_cast<std::uint16_t>(AlState::Op));
 }
 
+TEST(HotConnect, LinkDownNeedsACableAtThePort) {
+    HotConnectBench b;
+    EXPECT_EQ(b.execute("inject link_down slave=0 port=3").rfind("error", 0), 0u);  // nothing cabled there
+    EXPECT_EQ(b.execute("inject link_down slave=3 port=1").rfind("error", 0), 0u);  // the end of the line
+    EXPECT_EQ(b.execute("inject link_down slave=2 port=0").rfind("ok", 0), 0u);
+    EXPECT_FALSE(b.seg->cable(2));
+}
+
 TEST(HotConnect, TheNetworkFileRefusesAGroupNameTwice) {
     try {
         network::parse_network(
