@@ -5,6 +5,7 @@
 // socket, link_down) and the master's second cable pulled out (the veth end goes down) cost no cycle; the
 // ring closes again. An interface in use is refused.
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -85,7 +86,11 @@ class RedundantRawLink final : public net::Link {
         long at_a = 0, at_b = 0;
         bool a_is_dummy = false, b_is_dummy = false;
         const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(timeout_us);
+        // Waiting in poll(), not spinning: on a veth pair the frames a process sends are delivered by the
+        // kernel's softirq on its CPU, which a process spinning on recv() can hold off until it gives up
+        // (seen with SOEM's redundant resend loop, see the report of this change).
         while ((at_a <= 0 || at_b <= 0) && std::chrono::steady_clock::now() < until) {
+            wait_for(at_a <= 0, at_b <= 0, until);
             if (at_a <= 0)
                 if ((at_a = prim_.try_receive(Bytes(rx_a_.data(), rx_a_.size()))) > 0)
                     a_is_dummy = dummy(rx_a_);
@@ -105,9 +110,11 @@ class RedundantRawLink final : public net::Link {
             std::memcpy(out_.data(), f, n);
             if (!sec_.send(ConstBytes(out_.data(), n))) return 0;
             const auto t2 = std::chrono::steady_clock::now() + std::chrono::microseconds(timeout_us);
-            while (std::chrono::steady_clock::now() < t2)
+            while (std::chrono::steady_clock::now() < t2) {
+                wait_for(false, true, t2);
                 if (const long r = sec_.try_receive(Bytes(rx_b_.data(), rx_b_.size())); r > 0)
                     return give(rx_b_.data(), r, out);
+            }
             return 0;
         }
         if (at_a > 0 && !a_is_dummy) {
@@ -119,6 +126,15 @@ class RedundantRawLink final : public net::Link {
     unsigned whole_ = 0, broken_ = 0, primary_only_ = 0;
 
   private:
+    void wait_for(bool a, bool b, std::chrono::steady_clock::time_point until) {
+        pollfd p[2];
+        nfds_t n = 0;
+        if (a) p[n++] = {prim_.fd(), POLLIN, 0};
+        if (b) p[n++] = {sec_.fd(), POLLIN, 0};
+        const auto left =
+            std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
+        ::poll(p, n, static_cast<int>(std::max<std::int64_t>(left.count(), 0) + 1));
+    }
     static bool dummy(const std::array<std::uint8_t, 1600>& f) {
         return std::memcmp(f.data() + 7, kDummySource.data(), kDummySource.size()) == 0;
     }
