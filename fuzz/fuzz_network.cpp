@@ -2,7 +2,8 @@
 // checks, the order of the tree). Input: the text of a file.
 // Invariants: the text is accepted or refused with a NetworkFileError that names a line ("NAME:LINE: ...")
 // or the file; nothing else is thrown. An accepted file is a tree: one device on the master, every other one
-// with a parent before it in the order, its port cabled to it and to nothing else.
+// with a parent before it in the order, its port cabled to it and to nothing else. A redundancy port is a
+// free port of a device; hot connect group names are unique.
 #include <cstdint>
 #include <string>
 
@@ -30,5 +31,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         VECAT_FUZZ_CHECK(port >= 1 && port < network::kPorts);
         VECAT_FUZZ_CHECK(f.children[static_cast<std::size_t>(p)][port] == static_cast<int>(i));
     }
+    if (f.redundancy_device >= 0) {
+        VECAT_FUZZ_CHECK(static_cast<std::size_t>(f.redundancy_device) < n);
+        VECAT_FUZZ_CHECK(f.redundancy_port >= 1 && f.redundancy_port < network::kPorts);
+        VECAT_FUZZ_CHECK(f.children[static_cast<std::size_t>(f.redundancy_device)][f.redundancy_port] < 0);
+    }
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = i + 1; j < n; ++j)
+            VECAT_FUZZ_CHECK(f.devices[i].hot_connect.empty() ||
+                             f.devices[i].hot_connect != f.devices[j].hot_connect);
     return 0;
 }

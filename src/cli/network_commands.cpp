@@ -93,6 +93,12 @@ int cmd_network_check(const std::string& file, const std::string& esi_dir) {
                 i, d.name, network::to_string(d.source), desc.identity.vendor_id, desc.identity.product_code,
                 desc.identity.revision, desc.name, up);
         }
+        if (f.redundancy_device >= 0)
+            fmt::print("  redundancy: port {} of {} cabled back to the master's second port\n",
+                       f.redundancy_port, f.devices[static_cast<std::size_t>(f.redundancy_device)].name);
+        for (const auto& [group, head] : built.segment->hot_connect_groups())
+            fmt::print("  hot connect group {}: {} to {}\n", group, f.devices[head].name,
+                       f.devices[built.segment->group_end(head) - 1].name);
         for (const auto& n : built.notes)
             fmt::print("note: {}\n", n);
         return 0;

@@ -131,12 +131,13 @@ struct RunOptions {
     vecat::net::RealtimeOptions rt;
     std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
     std::string downstream;
-    std::string network_path;    // --network: the devices and their cabling from a file
-    std::string eni_path;        // --eni: the network of an ENI (EtherCATConfig) file
-    std::string esi_dir;         // --esi-dir: vendor ESI files for the devices an ENI names
-    std::string report_path;     // --report: JUnit XML of the checks on the master
-    bool report_fail = false;    // --report-fail: exit 3 when a check failed
-    vecat::foe::FoeOptions foe;  // --foe-dir, --foe-max-size, --foe-password
+    std::string network_path;     // --network: the devices and their cabling from a file
+    std::string eni_path;         // --eni: the network of an ENI (EtherCATConfig) file
+    std::string esi_dir;          // --esi-dir: vendor ESI files for the devices an ENI names
+    std::string report_path;      // --report: JUnit XML of the checks on the master
+    bool report_fail = false;     // --report-fail: exit 3 when a check failed
+    vecat::foe::FoeOptions foe;   // --foe-dir, --foe-max-size, --foe-password
+    std::string redundant_iface;  // --redundant-iface: the master's second port (cable redundancy)
 };
 
 // Several observers of the frames (the report's checks), each called in turn.
@@ -158,9 +159,9 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
                  sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, network_path,
-                 eni_path, esi_dir, report_path, report_fail, foe_opts] = o;
+                 eni_path, esi_dir, report_path, report_fail, foe_opts, redundant_iface] = o;
     std::string why;
-    for (const std::string& i : {iface, downstream}) {
+    for (const std::string& i : {iface, downstream, redundant_iface}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
         fmt::print(stderr,
                    "vecat: refusing to serve on {}: {}.\n"
@@ -171,6 +172,16 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     }
     if (!downstream.empty() && downstream == iface) {
         fmt::print(stderr, "vecat: --downstream must be another interface than --iface\n");
+        return 2;
+    }
+    if (!redundant_iface.empty() && (redundant_iface == iface || redundant_iface == downstream)) {
+        fmt::print(stderr, "vecat: --redundant-iface {} is in use already (--iface or --downstream)\n",
+                   redundant_iface);
+        return 2;
+    }
+    if (!redundant_iface.empty() && !downstream.empty()) {
+        fmt::print(stderr,
+                   "vecat: --redundant-iface and --downstream: a chained line has no redundancy cable\n");
         return 2;
     }
     std::unique_ptr<vecat::esc::Segment> seg;
@@ -208,6 +219,15 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         served = fmt::format("{} x \"{}\" (vendor 0x{:08X}, product 0x{:08X})", slaves, dev.name,
                              dev.identity.vendor_id, dev.identity.product_code);
     }
+    if (!redundant_iface.empty() && !seg->redundant()) {
+        // No redundancy: port in the network file: the cable leaves port 1 of the last slave.
+        if (!seg->set_redundancy(seg->size() - 1, 1, &why)) {
+            fmt::print(stderr,
+                       "vecat: --redundant-iface: {} (give redundancy: NAME:PORT in the network file)\n",
+                       why);
+            return 1;
+        }
+    }
     if (!param_dir.empty() && !attach_parameter_stores(*seg, param_dir, log)) return 1;
     // FoE and the BOOT state's firmware update for every device that declares FoE (src/foe/README.md).
     if (const auto n = vecat::foe::attach_foe(*seg, foe_opts); n > 0 && !foe_opts.dir.empty())
@@ -215,16 +235,17 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
         seg->slave(i).esc().dc().set_drift_ppm(i % 2 ? -drift_ppm : drift_ppm, vecat::net::monotonic_ns());
-    std::unique_ptr<vecat::net::RawSocket> sock, down;
+    std::unique_ptr<vecat::net::RawSocket> sock, down, second;
     try {
         sock = std::make_unique<vecat::net::RawSocket>(iface);
         if (!downstream.empty()) down = std::make_unique<vecat::net::RawSocket>(downstream);
+        if (!redundant_iface.empty()) second = std::make_unique<vecat::net::RawSocket>(redundant_iface);
     } catch (const std::exception& e) {
         fmt::print(stderr, "vecat: {}\n", e.what());
         return 1;
     }
     if (rx_ring) {
-        for (auto* s : {sock.get(), down.get()})
+        for (auto* s : {sock.get(), down.get(), second.get()})
             if (s && !s->enable_rx_ring(&why))
                 fmt::print(stderr, "vecat: {}: no receive ring ({}); using recvmsg\n", s->ifname(), why);
     }
@@ -244,6 +265,11 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     if (faults) opt.filter = faults->injector.get();
     opt.tick_us = tick_us;
     opt.downstream = down.get();
+    opt.secondary = second.get();
+    if (second)
+        fmt::print(log, "vecat: port {} of slave {} cabled back to {} (cable redundancy; {})\n",
+                   seg->redundancy_port(), seg->redundancy_slave(), redundant_iface,
+                   second->carrier() ? "link up" : "no link yet");
     if (down)
         fmt::print(log, "vecat: port 1 of the last slave cabled to {} ({})\n", downstream,
                    down->carrier() ? "link up: the line goes on" : "no link yet: the line closes here");
@@ -280,6 +306,9 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     if (down)
         fmt::print(log, "vecat: {} frames passed on to {}, {} came back\n", st.sent_downstream, downstream,
                    st.returned);
+    if (second)
+        fmt::print(log, "vecat: {} frames received on {}, {} replies sent out of it\n", st.received_secondary,
+                   redundant_iface, st.sent_secondary);
     if (pcap)
         fmt::print(
             log, "vecat: capture written to {} ({} frames{})\n", pcap_path, pcap->frames(),
@@ -386,6 +415,9 @@ int main(int argc, char** argv) {
     run->add_option("--downstream", ro.downstream,
                     "Chained segments: cable port 1 of the last slave to this interface (a veth pair to the "
                     "next vecat run); frames go on along the line while it has a link");
+    run->add_option("--redundant-iface", ro.redundant_iface,
+                    "Cable redundancy: the master's second port. The far end of the line (redundancy: in "
+                    "the network file, else port 1 of the last slave) is cabled back to this interface");
     run->add_flag(
         "--allow-used-interface", ro.allow_busy_if,
         "Serve even on an interface that has an IP address, the default route or a bridge/bond master");

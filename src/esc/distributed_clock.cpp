@@ -241,7 +241,7 @@ void DistributedClock::after_write(std::uint16_t lo, std::uint16_t hi, const Fra
         constexpr Reg regs[4] = {Reg::DcRecvTimePort0, Reg::DcRecvTimePort1, Reg::DcRecvTimePort2,
                                  Reg::DcRecvTimePort3};
         for (unsigned p = 1; p < 4; ++p)
-            if ((open_ports >> p) & 1u)
+            if ((open_ports >> p) & 1u && (t.returned_ports >> p) & 1u)
                 st_le32(&regs_[addr(regs[p])], static_cast<std::uint32_t>(local_time(back[p])));
         st_le64(&regs_[addr(Reg::DcRecvTimeEcatPu)], t0);
     }

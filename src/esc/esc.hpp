@@ -45,6 +45,9 @@ struct FrameTiming {
     std::uint64_t port1_ns = 0;  // arrival back at port 1 (return direction), if port 1 is open
     std::uint64_t port2_ns = 0;  // ... at port 2
     std::uint64_t port3_ns = 0;  // ... at port 3
+    // Ports 1..3 (bits) the frame arrived back at: a frame that leaves the ring (cable redundancy) through a
+    // port never comes back through it, and that port keeps its last receive time.
+    std::uint8_t returned_ports = 0x0E;
 };
 
 struct EscCounters {

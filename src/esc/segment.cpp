@@ -39,6 +39,9 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     reached_.push_back(0);
     timing_.push_back({});
     stack_.reserve(slaves_.size());
+    ring_order_.reserve(2 * slaves_.size());
+    ring_timing_.push_back({});
+    ring_seen_.push_back(0);
     slaves_.back()->esc().set_port_change_counter(&port_epoch_);
     ++port_epoch_;
     for (std::size_t k = 0; k < slaves_.size(); ++k)
@@ -75,6 +78,7 @@ bool Segment::set_topology(const std::vector<int>& parents, const std::vector<st
     }
     for (std::size_t k = 0; k < order.size(); ++k)
         if (order[k] != k) return fail("the slaves are not in the order the frame reaches them");
+    if (redundant() && child[red_slave_][red_port_] >= 0) return fail("the redundancy port is cabled twice");
     parent_ = parents;
     parent_port_.assign(ports.begin(), ports.end());
     if (n) parent_port_[0] = 0;  // the master's side
@@ -92,8 +96,10 @@ void Segment::update_links(std::size_t i) {
     for (unsigned p = 1; p < 4; ++p) {
         const int c = child_[i][p];
         // The last slave's free port 1 leads to the next segment (chained segments), if anywhere.
-        const bool up =
-            c >= 0 ? cable(static_cast<std::size_t>(c)) : (p == 1 && i + 1 == slaves_.size() && downstream_);
+        const bool up = c >= 0 ? cable(static_cast<std::size_t>(c))
+                        : (i == red_slave_ && p == red_port_)
+                            ? red_cable_up_ && secondary_link_
+                            : (p == 1 && i + 1 == slaves_.size() && downstream_);
         if (up || e.port_link(p)) e.set_port_link(p, up);
     }
 }
@@ -103,6 +109,17 @@ void Segment::refresh_route() const {
     routed_epoch_ = port_epoch_;
     routed_hop_ns_ = hop_delay_ns;
     reached_count_ = 0;
+    if (redundant()) {
+        // Reached from either master port.
+        std::fill(reached_.begin(), reached_.end(), std::uint8_t{0});
+        for (const MasterPort from : {MasterPort::Primary, MasterPort::Secondary}) {
+            walk(from, FrameDamage{});
+            for (const std::size_t k : ring_order_)
+                reached_[k] = 1;
+        }
+        reached_count_ = static_cast<std::size_t>(std::count(reached_.begin(), reached_.end(), 1));
+        return;
+    }
     for (std::size_t k = 0; k < slaves_.size(); ++k) {
         const int p = parent_[k];
         const bool r =
@@ -201,6 +218,12 @@ void Segment::return_receive_times(const ParsedFrame& pf, Bytes frame) {
 }
 
 void Segment::set_cable(std::size_t k, bool connected) {
+    if (redundant() && k == slaves_.size()) {
+        red_cable_up_ = connected;
+        ++port_epoch_;
+        update_links(red_slave_);
+        return;
+    }
     if (k >= cable_up_.size()) return;
     cable_up_[k] = connected ? 1 : 0;
     ++port_epoch_;
@@ -256,6 +279,11 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns)
 }
 
 bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage) {
+    return process_frame(frame, len, now_ns, damage, MasterPort::Primary);
+}
+
+bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage,
+                            MasterPort from) {
     run_deferred_firmware();  // the previous frame's, if the server has not run it yet
     onward_ = false;
     if (len > frame.size()) len = frame.size();
@@ -266,6 +294,12 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
         return false;
     }
     ++counters_.frames;
+    reply_port_ = MasterPort::Primary;
+    if (redundant()) return process_ring(frame, len, now_ns, damage, from, pf);
+    if (from != MasterPort::Primary) {
+        ++counters_.lost;  // no cable at the master's secondary port
+        return false;
+    }
     // Slaves the frame reaches, and whether it crosses the damaged cable on its way.
     const std::size_t m = reachable();
     const bool hit =

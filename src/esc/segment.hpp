@@ -8,6 +8,8 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "common/bytes.hpp"
@@ -36,6 +38,10 @@ struct FrameDamage {
     bool returning = false;
 };
 
+// The master's ports (cable redundancy): the primary one feeds port 0 of slave 0, the secondary one (if the
+// line is cabled back, Segment::set_redundancy) the port named there.
+enum class MasterPort : std::uint8_t { Primary = 0, Secondary = 1 };
+
 // Makes the application of one slave (the CoE stack and drive, or a bare process image).
 using ApplicationFactory = std::function<std::unique_ptr<Application>(const device::DeviceDescription&)>;
 
@@ -59,6 +65,11 @@ class Segment {
     // The same with damage on the line: the slaves before the damage process the frame, a corrupted frame
     // is counted in the error counters (0x0300-0x030C) of the ESCs that see it, and no reply comes back.
     bool process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage);
+    // The same for a frame the master sent out of one of its ports (cable redundancy). When it returns
+    // true, reply_port() tells which master port the frame arrives at.
+    bool process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage,
+                       MasterPort from);
+    MasterPort reply_port() const { return reply_port_; }
     // Runs the slaves' firmware and watchdogs without a frame.
     void tick(std::uint64_t now_ns);
 
@@ -91,10 +102,12 @@ class Segment {
     bool reached(std::size_t i) const { return i < reached_.size() && reached_[i] != 0; }
 
     // ---- Line faults (fault injection, see src/faults)
-    // Connects or disconnects cable k (see FrameDamage): both ports lose their link (DL status, lost link
-    // counter) and frames turn back at the last slave before the break.
+    // Connects or disconnects cable k (see FrameDamage; k == size(): the redundancy cable): both ports lose
+    // their link (DL status, lost link counter) and frames turn back at the last slave before the break.
     void set_cable(std::size_t k, bool connected);
-    bool cable(std::size_t k) const { return k < cable_up_.size() && cable_up_[k] != 0; }
+    bool cable(std::size_t k) const {
+        return k < cable_up_.size() ? cable_up_[k] != 0 : redundant() && k == slaves_.size() && red_cable_up_;
+    }
     // How many slaves a frame reaches from the master now (and reached(i) tells which).
     std::size_t reachable() const;
     // Firmware stopped (hang, or no power): the ESC still forwards and answers, while the AL state, the
@@ -105,6 +118,36 @@ class Segment {
     // made by make_segment). Its links follow the cables. False without a factory.
     bool restart_slave(std::size_t i);
     void set_application_factory(ApplicationFactory f) { factory_ = std::move(f); }
+
+    // ---- Cable redundancy (a ring). Port `port` (1..3) of slave `slave`, free of other cables, is cabled
+    // back to the master's secondary port: cable number size() (see cables()). Frames then take their way
+    // through the ring by the ESCs' own rules (ESC datasheet section I, frame processing: a frame received
+    // at port p leaves through the next open port in the order 0 -> 3 -> 1 -> 2 -> 0, and only the way
+    // from port 0 to port 3 passes the processing unit). With the ring whole, a frame from the primary
+    // port is processed by every slave and arrives at the secondary port, a frame from the secondary port
+    // passes every ESC unprocessed and arrives at the primary port; with a cable broken (auto loop control
+    // closes the ports at the break) each part of the line processes the frame from its own side.
+    // Refused (false, why) with chained segments, or for a port that does not exist or is cabled already.
+    bool set_redundancy(std::size_t slave, unsigned port, std::string* why = nullptr);
+    bool redundant() const { return red_slave_ < slaves_.size(); }
+    std::size_t redundancy_slave() const { return red_slave_; }
+    unsigned redundancy_port() const { return red_port_; }
+    // Whether the master's secondary port has a link (the serve loop follows the interface's carrier).
+    void set_secondary_link(bool up);
+    // All cables: one into each slave, and the redundancy cable.
+    std::size_t cables() const { return slaves_.size() + (redundant() ? 1 : 0); }
+    // The cable at port `port` of slave `slave` (its cable number), or kNoCable when nothing is cabled there.
+    static constexpr std::size_t kNoCable = ~std::size_t{0};
+    std::size_t cable_at(std::size_t slave, unsigned port) const;
+
+    // ---- Hot connect groups (as TwinCAT's): a device and everything downstream of it, which can be
+    // unplugged from the line and plugged back at run time (src/faults: unplug). In the slaves' order the
+    // group is the range [head, group_end(head)).
+    void add_hot_connect_group(std::string name, std::size_t head);
+    // The head of the group of that name, or size() when there is none.
+    std::size_t hot_connect_head(std::string_view name) const;
+    const std::vector<std::pair<std::string, std::size_t>>& hot_connect_groups() const { return groups_; }
+    std::size_t group_end(std::size_t head) const;
 
     // ---- Chained segments (one line over several processes or machines)
     // Port 1 of the last slave has a link to the next segment. process_frame() then lets the frame go on
@@ -138,7 +181,27 @@ class Segment {
     // device behind it and is lost there).
     void refresh_route() const;
     void route() const;
-    std::uint64_t cable_delay(std::size_t k) const { return delay_[k] ? delay_[k] : hop_delay_ns; }
+    std::uint64_t cable_delay(std::size_t k) const {
+        return k < delay_.size() && delay_[k] ? delay_[k] : hop_delay_ns;
+    }
+    // Ring walk (redundancy): the way of one frame from a master port through the ESCs' ports, in order
+    // (ring_order_: the slaves whose processing unit it passes; ring_timing_: when it arrived at their
+    // ports, relative to its arrival at the first ESC). Damage on a cable it crosses ends it there.
+    enum class WalkEnd : std::uint8_t { Primary, Secondary, Lost, Damaged };
+    WalkEnd walk(MasterPort from, const FrameDamage& damage) const;
+    bool process_ring(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage,
+                      MasterPort from, const protocol::ParsedFrame& pf);
+    std::vector<std::pair<std::string, std::size_t>> groups_;
+    std::size_t red_slave_ = ~std::size_t{0};
+    unsigned red_port_ = 0;
+    bool red_cable_up_ = true;
+    bool secondary_link_ = true;
+    MasterPort reply_port_ = MasterPort::Primary;
+    mutable std::vector<std::size_t> ring_order_;
+    mutable std::vector<FrameTiming> ring_timing_;
+    mutable std::vector<std::uint8_t> ring_seen_;
+    mutable std::size_t ring_damaged_receiver_ = ~std::size_t{0};  // the ESC that received a corrupted frame
+    mutable unsigned ring_damaged_port_ = 0;
 
     std::vector<int> parent_;                // per slave: the slave its port 0 is cabled to, -1: master
     std::vector<std::uint8_t> parent_port_;  // ... at this port of it

@@ -37,6 +37,9 @@ constexpr std::array kKinds{
                   "drive fault 0x8611 (following error) through 0x2101"},
     FaultKindInfo{"dc_drift", K::DcDrift, "slave, ppm | step_ppm",
                   "the slave's DC oscillator drift changes (restored when the fault ends)"},
+    FaultKindInfo{"unplug", K::Unplug, "group | slave",
+                  "hot connect: the group (a device and everything downstream of it) is unplugged; when the "
+                  "fault ends it is plugged back and starts in INIT, station address cleared"},
     FaultKindInfo{"twinsync_cable_break", K::External, "slave",
                   "TWINsync: the drive-to-drive cable is cut (needs the TWINsync port's handler)"},
     FaultKindInfo{"twinsync_crc_errors", K::External, "slave",
@@ -160,7 +163,10 @@ FaultSpec make_fault(std::string_view name, const KeyValues& kv) {
             f.returning = value == "back";
         } else if (key == "port") {
             f.port = parse_int<unsigned>(key, value);
-            if (f.port > 1) throw std::invalid_argument("port: 0 or 1 (the emulated ESCs have two ports)");
+            if (f.port > 3) throw std::invalid_argument("port: 0 to 3");
+        } else if (key == "group") {
+            if (value.empty()) throw std::invalid_argument("group: the name of a hot connect group");
+            f.group = value;
         } else if (key == "delay") {
             f.delay_ns = parse_duration_ns(value);
         } else if (key == "code") {

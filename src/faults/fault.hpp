@@ -27,6 +27,7 @@ enum class FaultKind : std::uint8_t {
     OverCurrent,       // drive: 0x2310
     FollowingError,    // drive: 0x8611
     DcDrift,           // a DC clock's oscillator drift changes
+    Unplug,            // hot connect: a group of devices unplugged; plugged back (INIT) when the fault ends
     External,          // handled outside the injector (TWINsync...): see FaultHandler
 };
 
@@ -64,6 +65,8 @@ struct FaultSpec {
     // dc_drift: absolute ppm, or a step added to the current drift.
     double ppm = 0.0;
     bool ppm_is_step = false;
+    // unplug: the hot connect group (network file hot_connect:), else the group headed by `slave`.
+    std::string group;
     // Every key as given, for external handlers.
     std::map<std::string, std::string> params;
 };

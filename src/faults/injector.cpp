@@ -102,11 +102,25 @@ std::string FaultInjector::start(FaultSpec f, std::uint64_t now_ns) {
     if (per_slave && f.slave >= n)
         throw std::invalid_argument(f.name + ": slave " + std::to_string(f.slave) + " is not on the line (" +
                                     std::to_string(n) + " slaves)");
-    if ((f.kind == FaultKind::Drop || f.kind == FaultKind::Corrupt) && f.cable >= n)
+    if ((f.kind == FaultKind::Drop || f.kind == FaultKind::Corrupt) && f.cable >= seg_.cables())
         throw std::invalid_argument(f.name + ": cable " + std::to_string(f.cable) + " does not exist (0-" +
-                                    std::to_string(n - 1) + ")");
-    if (f.kind == FaultKind::LinkDown && f.port == 1 && f.slave + 1 >= n)
-        throw std::invalid_argument("link_down: port 1 of the last slave has no link to lose");
+                                    std::to_string(seg_.cables() - 1) + ")");
+    if (f.kind == FaultKind::LinkDown && seg_.cable_at(f.slave, f.port) == esc::Segment::kNoCable)
+        throw std::invalid_argument("link_down: port " + std::to_string(f.port) + " of slave " +
+                                    std::to_string(f.slave) + " has no link to lose");
+    if (f.kind == FaultKind::Unplug) {
+        // Hot connect: the group by its name, or the one headed by the slave.
+        if (!f.group.empty()) {
+            f.slave = seg_.hot_connect_head(f.group);
+            if (f.slave >= n) throw std::invalid_argument("unplug: no hot connect group named " + f.group);
+        }
+        const std::size_t end = seg_.group_end(f.slave);
+        for (const auto& a : active_)
+            if (!a->done && a->spec.kind == FaultKind::Unplug && a->spec.slave < end &&
+                f.slave < seg_.group_end(a->spec.slave))
+                throw std::invalid_argument("unplug: slave " + std::to_string(f.slave) +
+                                            " is unplugged already (" + a->spec.id + ")");
+    }
     if (f.id.empty()) f.id = f.name + "#" + std::to_string(next_id_++);
     for (const auto& a : active_)
         if (a->spec.id == f.id) throw std::invalid_argument("a fault with id " + f.id + " is already active");
@@ -183,6 +197,12 @@ void FaultInjector::end(Active& a, std::uint64_t now_ns, const char* why) {
             // Power is back: the device boots again (INIT, station address 0, fresh dictionary).
             if (seg_.restart_slave(a.spec.slave)) seg_.slave(a.spec.slave).set_mailbox_interceptor(this);
             break;
+        case FaultKind::Unplug:
+            // Plugged back: every device of the group starts as after power-up (INIT, station address 0,
+            // its alias loaded from the SII again).
+            for (std::size_t k = a.spec.slave; k < seg_.group_end(a.spec.slave); ++k)
+                if (seg_.restart_slave(k)) seg_.slave(k).set_mailbox_interceptor(this);
+            break;
         default:
             break;
     }
@@ -193,26 +213,40 @@ void FaultInjector::end(Active& a, std::uint64_t now_ns, const char* why) {
 void FaultInjector::apply_line_state() {
     // Cables and firmware follow the active faults, so that overlapping faults end cleanly.
     const std::size_t n = seg_.size();
-    std::vector<bool> cable_down(n, false), halted(n, false);
+    std::vector<bool> cable_down(seg_.cables(), false), halted(n, false);
     for (const auto& a : active_) {
         if (a->done) continue;
         const auto& f = a->spec;
         if (f.kind == FaultKind::LinkDown) {
-            const std::size_t c = f.port == 0 ? f.slave : f.slave + 1;
-            if (c < n) cable_down[c] = true;
+            if (const std::size_t c = seg_.cable_at(f.slave, f.port); c < cable_down.size())
+                cable_down[c] = true;
         } else if (f.kind == FaultKind::PowerOff) {
-            // A slave without power has no link on either port.
-            cable_down[f.slave] = true;
-            if (f.slave + 1 < n) cable_down[f.slave + 1] = true;
+            // A slave without power has no link on any port.
+            for (unsigned p = 0; p < 4; ++p)
+                if (const std::size_t c = seg_.cable_at(f.slave, p); c < cable_down.size())
+                    cable_down[c] = true;
             halted[f.slave] = true;
+        } else if (f.kind == FaultKind::Unplug) {
+            // Every cable between the group and the rest (into its head; in a ring, also the one out of its
+            // far end) is out; the group has no power.
+            const std::size_t end = seg_.group_end(f.slave);
+            for (std::size_t k = f.slave; k < end; ++k) {
+                halted[k] = true;
+                for (unsigned p = 0; p < 4; ++p) {
+                    const std::size_t c = seg_.cable_at(k, p);
+                    if (c >= cable_down.size()) continue;
+                    const bool inside = p != 0 ? c >= f.slave && c < end : k != f.slave;
+                    if (!inside) cable_down[c] = true;
+                }
+            }
         } else if (f.kind == FaultKind::FirmwareHang) {
             halted[f.slave] = true;
         }
     }
-    for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t k = 0; k < cable_down.size(); ++k)
         if (seg_.cable(k) == cable_down[k]) seg_.set_cable(k, !cable_down[k]);
+    for (std::size_t k = 0; k < n; ++k)
         seg_.set_firmware_halted(k, halted[k]);
-    }
 }
 
 std::size_t FaultInjector::stop(std::string_view which, std::uint64_t now_ns) {
@@ -275,8 +309,14 @@ void FaultInjector::advance(std::uint64_t now_ns) {
 }
 
 bool FaultInjector::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns) {
+    unsigned to = 0;
+    return process_frame_at(frame, len, now_ns, 0, to);
+}
+
+bool FaultInjector::process_frame_at(Bytes frame, std::size_t& len, std::uint64_t now_ns, unsigned from_port,
+                                     unsigned& to_port) {
     advance(now_ns);
-    ++frames_seen_;
+    if (from_port == 0) ++frames_seen_;  // at_cycle counts the master's frames, not the redundant copies
     ++counters_.frames;
     esc::FrameDamage damage;
     std::uint64_t delay = 0;
@@ -293,7 +333,9 @@ bool FaultInjector::process_frame(Bytes frame, std::size_t& len, std::uint64_t n
         }
     }
     const std::uint64_t lost_before = seg_.counters().lost;
-    bool reply = seg_.process_frame(frame, len, now_ns, damage);
+    bool reply = seg_.process_frame(frame, len, now_ns, damage,
+                                    from_port ? esc::MasterPort::Secondary : esc::MasterPort::Primary);
+    to_port = seg_.reply_port() == esc::MasterPort::Secondary ? 1 : 0;
     if (seg_.counters().lost != lost_before && damage.kind != esc::FrameDamage::Kind::None) {
         if (damage.kind == esc::FrameDamage::Kind::Lost)
             ++counters_.frames_dropped;

@@ -78,6 +78,9 @@ class FaultInjector final : public net::FrameFilter, public esc::MailboxIntercep
 
     // net::FrameFilter
     bool process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns) override;
+    // Cable redundancy. A reply held back by a delay fault leaves through the primary port (take_due).
+    bool process_frame_at(Bytes frame, std::size_t& len, std::uint64_t now_ns, unsigned from_port,
+                          unsigned& to_port) override;
     void tick(std::uint64_t now_ns) override;
     std::size_t take_due(std::uint64_t now_ns, Bytes out) override;
     std::uint64_t next_due_ns() const override;

@@ -14,6 +14,13 @@ class FrameFilter {
     virtual ~FrameFilter() = default;
     // Replaces Segment::process_frame: true when the (processed) frame goes back now.
     virtual bool process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns) = 0;
+    // The same for a frame that came in at one of the master's two ports (cable redundancy; 0: primary,
+    // 1: secondary); to_port: the port its reply goes out of. By default only the primary port has slaves.
+    virtual bool process_frame_at(Bytes frame, std::size_t& len, std::uint64_t now_ns, unsigned from_port,
+                                  unsigned& to_port) {
+        to_port = 0;
+        return from_port == 0 && process_frame(frame, len, now_ns);
+    }
     // Called when the transport is idle (timelines advance without frames).
     virtual void tick(std::uint64_t now_ns) = 0;
     // A held-back reply due at now_ns, copied into out; its length, 0 when none is due.

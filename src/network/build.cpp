@@ -249,6 +249,14 @@ BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
     std::string why;
     if (!b.segment->set_topology(f.parent, up_ports, delays, &why))
         throw NetworkFileError(file + ": " + why);  // the reader's order is the segment's: not expected
+    for (std::size_t i = 0; i < f.devices.size(); ++i)
+        if (!f.devices[i].hot_connect.empty()) b.segment->add_hot_connect_group(f.devices[i].hot_connect, i);
+    if (f.redundancy_device >= 0) {
+        const auto i = static_cast<std::size_t>(f.redundancy_device);
+        if (!((ports[i] >> f.redundancy_port) & 1u) || !b.segment->set_redundancy(i, f.redundancy_port, &why))
+            throw NetworkFileError(file + ":" + std::to_string(f.redundancy_line) + ": redundancy: " +
+                                   f.devices[i].name + " has no port " + std::to_string(f.redundancy_port));
+    }
     // The cabling against the ports each device turned out to have.
     for (std::size_t i = 0; i < f.devices.size(); ++i)
         for (unsigned p = 1; p < kPorts; ++p)

@@ -194,10 +194,14 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
                 d.dictionary = (std::filesystem::path(folder) / d.dictionary).string();
         } else if (key == "esc") {
             parse_esc(r, v, d.esc);
+        } else if (key == "hot_connect") {
+            d.hot_connect = r.scalar(v, key);
+            d.hot_connect_line = Reader::line(v);
+            if (d.hot_connect.empty()) r.fail(v, "hot_connect: the name of the group");
         } else {
             r.fail(item.first, "unknown key " + key +
                                    " (name, device, esi, sii, type, product, revision, channels, upstream, "
-                                   "cable_delay_ns, alias, identity, dictionary, esc)");
+                                   "cable_delay_ns, alias, identity, dictionary, esc, hot_connect)");
         }
     }
     if (d.name.empty()) r.fail(d.line, "a device without name:");
@@ -261,11 +265,16 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
         throw NetworkFileError(name + ": " + x.what());
     }
     if (!root.IsMap()) throw NetworkFileError(name + ": a network file is a map with devices:");
-    YAML::Node list;
+    YAML::Node list, redundancy;
+    bool has_redundancy = false;
     for (const auto& item : root) {
         const std::string key = r.scalar(item.first, "key");
-        if (key != "devices") r.fail(item.first, "unknown key " + key + " (devices)");
-        list = item.second;
+        if (key == "devices")
+            list = item.second;
+        else if (key == "redundancy")
+            redundancy = item.second, has_redundancy = true;
+        else
+            r.fail(item.first, "unknown key " + key + " (devices, redundancy)");
     }
     if (!list || !list.IsSequence() || list.size() == 0)
         throw NetworkFileError(name + ": devices: a list of at least one device");
@@ -275,7 +284,38 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
         devices.push_back(parse_device(r, n, folder));
         explicit_upstream.push_back(n["upstream"].IsDefined());
     }
-    return arrange_network(std::move(devices), explicit_upstream, name, folder);
+    NetworkFile f = arrange_network(std::move(devices), explicit_upstream, name, folder);
+    // Hot connect groups: each name heads one group (the device and everything downstream of it).
+    std::map<std::string, const DeviceEntry*> groups;
+    for (const DeviceEntry& d : f.devices) {
+        if (d.hot_connect.empty()) continue;
+        const auto [it, fresh] = groups.emplace(d.hot_connect, &d);
+        if (!fresh)
+            r.fail(d.hot_connect_line, d.name + ": hot_connect: " + d.hot_connect + " heads the group of " +
+                                           it->second->name + " (line " +
+                                           std::to_string(it->second->hot_connect_line) +
+                                           "); a group is a device and everything downstream of it");
+    }
+    if (has_redundancy) {
+        // The same NAME:PORT as upstream:, for the port the redundancy cable leaves the line at.
+        DeviceEntry at;
+        parse_upstream(r, redundancy, at);
+        const std::string key = "redundancy: ";
+        const auto it = std::find_if(f.devices.begin(), f.devices.end(),
+                                     [&](const DeviceEntry& d) { return d.name == at.upstream; });
+        if (it == f.devices.end()) r.fail(redundancy, key + "no device named " + at.upstream);
+        const auto i = static_cast<std::size_t>(it - f.devices.begin());
+        if (!((default_ports(it->source) >> at.upstream_port) & 1u))
+            r.fail(redundancy, key + it->name + " (" + std::string(to_string(it->source)) + ") has no port " +
+                                   std::to_string(at.upstream_port));
+        if (const int c = f.children[i][at.upstream_port]; c >= 0)
+            r.fail(redundancy, key + "port " + std::to_string(at.upstream_port) + " of " + it->name +
+                                   " is already cabled to " + f.devices[static_cast<std::size_t>(c)].name);
+        f.redundancy_device = static_cast<int>(i);
+        f.redundancy_port = at.upstream_port;
+        f.redundancy_line = Reader::line(redundancy);
+    }
+    return f;
 }
 
 NetworkFile arrange_network(std::vector<DeviceEntry> devices, const std::vector<bool>& explicit_upstream,

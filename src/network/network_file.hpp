@@ -16,6 +16,7 @@
 //       sii: copy.sii.bin
 //       dictionary: copy.dictionary.yaml
 //       esc: {type: 0x11, port_descriptor: 0x0f}
+//   redundancy: axis:1               # optional: this port cabled back to the master's second port
 //
 // Every problem is reported with the line of the file it is on; nothing half-checked is returned.
 #pragma once
@@ -86,6 +87,10 @@ struct DeviceEntry {
     std::string dictionary;
     unsigned dictionary_line = 0;
     EscOverride esc;
+    // Hot connect: this device and everything downstream of it form the group of this name, which can be
+    // unplugged and plugged back at run time (fault unplug group=NAME). Empty: none.
+    std::string hot_connect;
+    unsigned hot_connect_line = 0;
     // An sii: device whose image is given here instead of a file (a device made from an ENI alone,
     // network/eni_network.hpp); path is then only its name in messages.
     std::shared_ptr<const std::vector<std::uint8_t>> sii_image;
@@ -98,6 +103,11 @@ struct NetworkFile {
     std::vector<DeviceEntry> devices;
     std::vector<int> parent;  // per device: index of its upstream device, -1: the master
     std::vector<std::array<int, kPorts>> children;  // per device and port: the device cabled there, -1: none
+    // Cable redundancy (top-level `redundancy: NAME:PORT`): this free port of this device is cabled back
+    // to the master's second port (vecat run --redundant-iface). -1: no redundancy cable.
+    int redundancy_device = -1;
+    unsigned redundancy_port = 1;
+    unsigned redundancy_line = 0;
 };
 
 class NetworkFileError : public std::runtime_error {

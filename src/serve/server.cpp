@@ -33,7 +33,7 @@ void send_due_replies(RawSocket& sock, const ServeOptions& opt, std::array<std::
 }
 
 // Chained segments: waits for a frame on the master side (sock) or back from the next segment (down).
-// from_down tells where it came from.
+// from_down tells where it came from. Cable redundancy: down is the master's second port.
 long receive_either(RawSocket& sock, RawSocket& down, Bytes buf, std::int64_t wait_us, bool spin,
                     bool& from_down) {
     for (int pass = 0; pass < 2; ++pass) {
@@ -55,6 +55,14 @@ long receive_either(RawSocket& sock, RawSocket& down, Bytes buf, std::int64_t wa
     return 0;
 }
 
+// A frame counts as of its kernel receive time (on the monotonic clock).
+std::uint64_t frame_time(const RawSocket& sock, std::uint64_t now) {
+    const std::uint64_t real = realtime_ns();
+    const std::uint64_t rx_real = sock.last_receive_realtime_ns();
+    if (rx_real != 0 && rx_real <= real && real - rx_real < 10'000'000) return now - (real - rx_real);
+    return now;
+}
+
 // How often the serve loop looks at the link of the downstream interface.
 constexpr std::uint64_t kLinkCheckNs = 10'000'000;
 
@@ -68,6 +76,8 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     const std::uint64_t tick_ns = static_cast<std::uint64_t>(opt.tick_us) * 1000;
     std::uint64_t last_link_check = monotonic_ns();
     if (opt.downstream) seg.set_downstream_link(opt.downstream->carrier());
+    if (opt.secondary) seg.set_secondary_link(opt.secondary->carrier());
+    RawSocket* const other = opt.downstream ? opt.downstream : opt.secondary;
     // The reply goes out before the firmware of the slaves runs (see Segment::set_deferred_firmware).
     const bool was_deferred = seg.deferred_firmware();
     seg.set_deferred_firmware(true);
@@ -89,9 +99,8 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
         const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
         bool from_down = false;
         long n = 0;
-        if (opt.downstream)
-            n = receive_either(sock, *opt.downstream, Bytes(buf.data(), buf.size()), wait_us, spin,
-                               from_down);
+        if (other)
+            n = receive_either(sock, *other, Bytes(buf.data(), buf.size()), wait_us, spin, from_down);
         else
             n = spin ? sock.try_receive(Bytes(buf.data(), buf.size()))
                      : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
@@ -101,7 +110,39 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             if (const bool up = opt.downstream->carrier(); up != seg.downstream_link())
                 seg.set_downstream_link(up);
         }
-        if (n > 0 && from_down) {
+        if (opt.secondary && now - last_link_check >= kLinkCheckNs) {
+            last_link_check = now;
+            seg.set_secondary_link(opt.secondary->carrier());
+        }
+        if (n > 0 && opt.secondary) {
+            // Cable redundancy: in at either master port, out of the one the ring leads the frame to.
+            const unsigned from = from_down ? 1 : 0;
+            RawSocket& in = from ? *opt.secondary : sock;
+            ++st.received;
+            if (from) ++st.received_secondary;
+            if (opt.counters) bump(opt.counters->frames);
+            std::size_t len = static_cast<std::size_t>(n);
+            const std::uint64_t at = std::max(frame_time(in, now), last_time);
+            last_time = at;
+            if (opt.pcap) opt.pcap->write(ConstBytes(buf.data(), len), realtime_ns(), PcapngWriter::kInbound);
+            if (opt.observer && from == 0) opt.observer->on_request(ConstBytes(buf.data(), len), at);
+            unsigned to = 0;
+            bool reply = false;
+            if (opt.filter) {
+                reply = opt.filter->process_frame_at(Bytes(buf.data(), buf.size()), len, at, from, to);
+            } else {
+                reply = seg.process_frame(Bytes(buf.data(), buf.size()), len, at, esc::FrameDamage{},
+                                          from ? esc::MasterPort::Secondary : esc::MasterPort::Primary);
+                to = seg.reply_port() == esc::MasterPort::Secondary ? 1 : 0;
+            }
+            if (reply) {
+                if (to) ++st.sent_secondary;
+                send_to_master(to ? *opt.secondary : sock, opt, ConstBytes(buf.data(), len), st, at);
+            }
+            seg.run_deferred_firmware();
+            if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);
+            last_tick = now;
+        } else if (n > 0 && from_down) {
             // Back from the next segment: through the ESCs' port 1 -> port 0 path to the master side.
             std::size_t len = static_cast<std::size_t>(n);
             if (seg.return_frame(Bytes(buf.data(), buf.size()), len, now)) {
@@ -117,8 +158,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             // socket is then handled after it, as on an ESC.
             const std::uint64_t real = realtime_ns();
             const std::uint64_t rx_real = sock.last_receive_realtime_ns();
-            std::uint64_t at = now;
-            if (rx_real != 0 && rx_real <= real && real - rx_real < 10'000'000) at = now - (real - rx_real);
+            std::uint64_t at = frame_time(sock, now);
             at = std::max(at, last_time);
             last_time = at;
             if (opt.pcap)

@@ -45,6 +45,11 @@ struct ServeOptions {
     // process). While it has a link, processed frames go out of it instead of back to the master, and the
     // frames coming back on it are forwarded to the master side; without a link the line closes here.
     RawSocket* downstream = nullptr;
+    // Cable redundancy: the interface of the master's second port, cabled to the segment's redundancy
+    // port (Segment::set_redundancy). Frames come in on either interface and their replies go out of the
+    // one the segment says (Segment::reply_port); its carrier is the link of that port. Not together with
+    // downstream.
+    RawSocket* secondary = nullptr;
     ServeCounters* counters = nullptr;  // live counters, if given
 };
 
@@ -52,8 +57,10 @@ struct ServeStats {
     std::uint64_t received = 0;
     std::uint64_t sent = 0;
     std::uint64_t send_errors = 0;
-    std::uint64_t sent_downstream = 0;  // chained segments: frames passed on to the next segment
-    std::uint64_t returned = 0;         // ... and frames back from it, forwarded to the master side
+    std::uint64_t sent_downstream = 0;     // chained segments: frames passed on to the next segment
+    std::uint64_t returned = 0;            // ... and frames back from it, forwarded to the master side
+    std::uint64_t received_secondary = 0;  // cable redundancy: frames from the master's second port
+    std::uint64_t sent_secondary = 0;      // ... and replies out of it
 };
 
 // Runs until stop becomes true.

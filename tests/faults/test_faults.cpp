@@ -103,7 +103,9 @@ TEST(FaultSpec, ParsesKeysAndRefusesUnknownOnes) {
     EXPECT_THROW(parse_fault("drop probability=2"), std::invalid_argument);  // out of range
     EXPECT_THROW(parse_fault("link_down slave=x"), std::invalid_argument);   // not a number
     EXPECT_THROW(parse_fault("delay"), std::invalid_argument);               // no delay given
-    EXPECT_THROW(parse_fault("link_down port=3"), std::invalid_argument);    // two ports only
+    EXPECT_THROW(parse_fault("link_down port=4"), std::invalid_argument);    // ports 0-3
+    EXPECT_EQ(parse_fault("unplug group=tail").group, "tail");
+    EXPECT_THROW(parse_fault("unplug group="), std::invalid_argument);
     EXPECT_EQ(parse_fault("twinsync_crc_errors slave=1 rate=0.1").params.at("rate"), "0.1");
 }
 

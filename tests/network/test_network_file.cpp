@@ -2,6 +2,8 @@
 // frame reaches the devices, and networks of mixed devices built and brought to OP by the project master.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -121,6 +123,14 @@ TEST(NetworkFile, EveryRefusalNamesTheLine) {
         {"- a\n- b\n", "a network file is a map with devices:"},
         {"devices:\n  - name: a\n    device: drive\n    identity: {vendor: 1, colour: 2}\n",
          "identity: unknown key colour"},
+        {"devices:\n  - name: a\n    device: drive\n  - name: b\n    device: drive\nredundancy: a:1\n",
+         "net.yaml:6: redundancy: port 1 of a is already cabled to b"},
+        {"devices:\n  - name: a\n    device: drive\nredundancy: x:1\n",
+         "net.yaml:4: redundancy: no device named x"},
+        {"devices:\n  - name: a\n    device: drive\nredundancy: a:3\n",
+         "net.yaml:4: redundancy: a (drive) has no port 3"},
+        {"devices:\n  - name: a\n    device: drive\nredundancy: a:0\n",
+         "net.yaml:4: upstream: the port after"},
     };
     for (const auto& [text, expected] : cases) {
         const std::string got = refusal(text);
@@ -368,6 +378,63 @@ TEST(Network, EveryExampleFileBuilds) {
         ++n;
     }
     EXPECT_GE(n, 2u);
+}
+
+TEST(NetworkFile, RedundancyCablesAFreePortBackToTheMaster) {
+    // A junction with a branch of two drives on port 3, a drive on port 1; the branch's far end is cabled
+    // back to the master's second port.
+    const auto f = parse_network(R"(
+devices:
+  - name: junction
+    device: junction
+  - name: b1
+    device: drive
+    upstream: junction:3
+  - name: b2
+    device: drive
+  - name: main
+    device: drive
+    upstream: junction:1
+redundancy: b2:1
+)");
+    ASSERT_EQ(f.devices.size(), 4u);
+    EXPECT_EQ(f.devices[static_cast<std::size_t>(f.redundancy_device)].name, "b2");
+    EXPECT_EQ(f.redundancy_port, 1u);
+    EXPECT_EQ(f.redundancy_line, 13u);
+    auto built = build_network(f, "net.yaml");
+    esc::Segment& seg = *built.segment;
+    ASSERT_TRUE(seg.redundant());
+    EXPECT_EQ(seg.redundancy_slave(), 2u);  // junction, b1, b2, main
+    // Whole: the frame from the primary port goes through the junction's port 3, b1, b2 and out to the
+    // secondary port: it leaves the ring before the junction's port 1 (main) in the order 0 -> 3 -> 1.
+    std::array<std::uint8_t, 64> buf{};
+    const auto brd = [&](esc::MasterPort from, std::uint16_t& wkc, esc::MasterPort& at) {
+        buf.fill(0);
+        std::memset(buf.data(), 0xFF, 6);
+        buf[12] = 0x88, buf[13] = 0xA4;
+        st_le16(buf.data() + 14, 0x1000 | 14);
+        buf[16] = static_cast<std::uint8_t>(protocol::Command::BRD);
+        st_le16(buf.data() + 22, 2);
+        std::size_t len = 14 + 2 + 14;
+        const bool back = seg.process_frame(Bytes(buf.data(), buf.size()), len, 1'000'000, {}, from);
+        wkc = ld_le16(buf.data() + 14 + 2 + 12);
+        at = seg.reply_port();
+        return back;
+    };
+    std::uint16_t wkc = 0;
+    esc::MasterPort at{};
+    ASSERT_TRUE(brd(esc::MasterPort::Primary, wkc, at));
+    EXPECT_EQ(at, esc::MasterPort::Secondary);
+    EXPECT_EQ(wkc, 3);  // the junction, b1, b2: the frame leaves the ring at b2 before it reaches main
+    // The branch cable into b2 breaks: the junction, b1 from the primary side (and main, behind port 1 of
+    // the junction), b2 from the secondary side.
+    seg.set_cable(2, false);
+    ASSERT_TRUE(brd(esc::MasterPort::Primary, wkc, at));
+    EXPECT_EQ(at, esc::MasterPort::Primary);
+    EXPECT_EQ(wkc, 3);
+    ASSERT_TRUE(brd(esc::MasterPort::Secondary, wkc, at));
+    EXPECT_EQ(at, esc::MasterPort::Secondary);
+    EXPECT_EQ(wkc, 1);
 }
 
 }  // namespace
