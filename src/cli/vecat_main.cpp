@@ -1,4 +1,5 @@
-// vecat: the command line program.
+// vecat: the command line program. Past 600 lines because it declares every subcommand and the options of
+// `run`/`exec` (about 50); the work of each subcommand lives in its own file beside it.
 #include <fmt/core.h>
 #include <signal.h>
 

@@ -1,4 +1,5 @@
 #include "network/dictionary_file.hpp"
+#include "network/yaml_reader.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -34,35 +35,9 @@ std::string_view code_name(ObjectCode c) {
 // The highest data type index type_name() knows (ETG.1000.6 Table 64 and the ETG.1020 structures).
 constexpr unsigned kLastNamedType = 0x0030;
 
-class Reader {
+class Reader : public YamlReader<DictionaryFileError> {
   public:
-    explicit Reader(std::string name) : name_(std::move(name)) {}
-
-    [[noreturn]] void fail(unsigned line, const std::string& what) const {
-        throw DictionaryFileError(name_ + ":" + std::to_string(line) + ": " + what);
-    }
-    [[noreturn]] void fail(const YAML::Node& n, const std::string& what) const { fail(line(n), what); }
-    static unsigned line(const YAML::Node& n) { return static_cast<unsigned>(n.Mark().line + 1); }
-
-    std::string scalar(const YAML::Node& n, const std::string& key) const {
-        if (!n.IsScalar()) fail(n, key + ": expected a single value");
-        return n.as<std::string>();
-    }
-    std::uint64_t number(const YAML::Node& n, const std::string& key, std::uint64_t max) const {
-        const std::string s = scalar(n, key);
-        std::uint64_t v = 0;
-        std::size_t used = 0;
-        try {
-            const bool hex = s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X');
-            if (s.empty() || s[0] == '-' || s[0] == '+' || s[0] == ' ') throw std::invalid_argument(s);
-            v = std::stoull(hex ? s.substr(2) : s, &used, hex ? 16 : 10);
-            if (used != (hex ? s.size() - 2 : s.size())) throw std::invalid_argument(s);
-        } catch (const std::exception&) {
-            fail(n, key + ": \"" + s + "\" is not a number");
-        }
-        if (v > max) fail(n, key + ": " + s + " is larger than " + std::to_string(max));
-        return v;
-    }
+    using YamlReader::YamlReader;
     bool boolean(const YAML::Node& n, const std::string& key) const {
         const std::string s = scalar(n, key);
         if (s == "true") return true;
@@ -81,9 +56,6 @@ class Reader {
             if (device::type_name(static_cast<DataType>(t)) == s) return static_cast<DataType>(t);
         return static_cast<DataType>(number(n, "type", 0xFFFF));
     }
-
-  private:
-    std::string name_;
 };
 
 device::EntryDescription parse_entry(const Reader& r, const YAML::Node& n, std::uint16_t index,
