@@ -169,7 +169,6 @@ Slave::Slave(const DeviceModel& model, EscConfig esc_cfg, std::unique_ptr<Applic
     set_sm_group(true, false);
     set_sm_group(false, false);
     publish_status();
-    constructed_ = true;
 }
 
 Slave::~Slave() = default;
@@ -183,7 +182,8 @@ void Slave::set_sm_group(bool mailbox, bool active) {
 }
 
 void Slave::publish_status() {
-    if (esc_.device_emulation() && !constructed_) return;  // the ESC keeps AL status itself
+    // Under device emulation the ESC keeps AL status itself (INIT at power-up, then what the master wrote).
+    if (esc_.device_emulation()) return;
     std::uint8_t st = static_cast<std::uint8_t>(state_);
     std::uint16_t code = static_cast<std::uint16_t>(code_);
     if (error_) {
@@ -265,6 +265,7 @@ void Slave::clear_error() {
 }
 
 void Slave::raise_error(AlStatusCode code, AlState fallback) {
+    if (esc_.device_emulation()) return;  // no firmware whose error AL status could show
     const AlState target = rank(fallback) < rank(state_) ? fallback : state_;
     set_error(code, target, 0);
     publish_status();

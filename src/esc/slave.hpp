@@ -196,7 +196,6 @@ class Slave {
     std::unique_ptr<Application> app_;
     protocol::AlState state_ = protocol::AlState::Init;
     bool error_ = false;
-    bool constructed_ = false;
     std::uint64_t al_control_latency_ns_ =
         0;  // AL status written once at power-up, also under device emulation
     protocol::AlStatusCode code_ = protocol::AlStatusCode::NoError;

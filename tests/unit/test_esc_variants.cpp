@@ -139,3 +139,16 @@ TEST(AlControlLatency, ASecondWriteIsRefusedUntilTheFirmwareReadTheFirst) {
     slave.run(1'002'000);
     EXPECT_EQ(esc.al_status(), 0x02);  // read and answered
 }
+
+// Under device emulation nothing but the master's writes changes AL status: an error the application
+// raises (fault injection) does not show.
+TEST(DeviceEmulation, TheFirmwareNeverWritesAlStatus) {
+    Slave slave(device::coupler(), EscConfig{}, std::make_unique<ProcessImageApplication>(0, 0));
+    Esc& esc = slave.esc();
+    EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x02, 0x00}), 1);
+    slave.run(1'000'000);
+    slave.raise_error(AlStatusCode::SyncManagerWatchdog, AlState::Init);
+    EXPECT_EQ(esc.peek16(addr(Reg::AlStatus)), 0x0002);
+    EXPECT_EQ(esc.al_status_code(), 0);
+    EXPECT_EQ(slave.state(), AlState::PreOp);
+}
