@@ -69,7 +69,8 @@ void add_mapped_objects(
     const std::map<std::pair<std::uint16_t, std::uint8_t>, std::vector<std::uint8_t>>& values) {
     constexpr std::uint16_t kFirstMappableObject = 0x1000;  // below: data types, a gap in the PDO
     for (const auto& [at, bytes] : values) {
-        const auto [index, sub] = at;
+        const std::uint16_t index = at.first;
+        const std::uint8_t sub = at.second;
         const bool rx = index >= kRxMappingFirst && index < kRxMappingFirst + kMappingCount;
         const bool tx = index >= kTxMappingFirst && index < kTxMappingFirst + kMappingCount;
         if ((!rx && !tx) || sub == 0 || bytes.size() != 4) continue;
@@ -351,7 +352,8 @@ std::vector<device::ObjectDescription> merge_dictionary(
             }
     }
     for (const auto& [at, bytes] : r.values) {
-        const auto [index, sub] = at;
+        const std::uint16_t index = at.first;
+        const std::uint8_t sub = at.second;
         if (r.absent_objects.contains(index)) continue;
         auto [it, made] = objs.try_emplace(index);
         device::ObjectDescription& o = it->second;
@@ -373,7 +375,8 @@ std::vector<device::ObjectDescription> merge_dictionary(
     add_mapped_objects(objs, values);
     // A PDO assignment the device accepted names PDOs it has (ETG.1000.6 5.6.7.4.9); its entries exist.
     for (const auto& [at, v] : r.written) {
-        const auto [index, sub] = at;
+        const std::uint16_t index = at.first;
+        const std::uint8_t sub = at.second;
         if (index < kPdoAssignFirst || index > kPdoAssignLast || sub == 0 || sub == kWholeObject) continue;
         auto it = objs.find(index);
         if (it == objs.end()) continue;
@@ -393,13 +396,16 @@ std::vector<device::ObjectDescription> merge_dictionary(
     }
     // Written by the master and confirmed: writable (in which states the capture does not tell: in all).
     for (const auto& [at, v] : r.written) {
-        const auto [index, sub] = at;
+        const std::uint16_t index = at.first;
+        const std::uint8_t sub = at.second;
         auto it = objs.find(index);
         if (it == objs.end()) continue;
         for (auto& e : it->second.entries)
             if (sub == kWholeObject || e.subindex == sub) e.access |= device::access::WriteAll;
     }
-    for (const auto& [index, sub] : r.absent_entries) {
+    for (const auto& at : r.absent_entries) {
+        const std::uint16_t index = at.first;
+        const std::uint8_t sub = at.second;
         auto it = objs.find(index);
         if (it == objs.end() || sub == 0) continue;
         std::erase_if(it->second.entries, [&](const auto& e) { return e.subindex == sub; });
