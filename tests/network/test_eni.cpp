@@ -459,11 +459,11 @@ TEST(EniNetwork, TheNetworkFileWrittenFromAnEniBuildsTheSameNetwork) {
 // Names a network file cannot hold: made into names it can, unique, and the written file reads back.
 TEST(EniNetwork, SlaveNamesBecomeUniqueNetworkFileNames) {
     const std::string id = "<VendorId>2</VendorId><ProductCode>3</ProductCode><RevisionNo>4</RevisionNo>";
-    const Eni eni = parse_eni(
-        "<EtherCATConfig><Config><Slave><Info><Name><![CDATA[Box 1\n(x: y)]]></Name>" + id +
-            "</Info></Slave><Slave><Info><Name>Box 1 # (x: y)</Name>" + id +
-            "</Info></Slave><Slave><Info><Name>*</Name>" + id + "</Info></Slave></Config></EtherCATConfig>",
-        "m.xml");
+    const Eni eni = parse_eni("<EtherCATConfig><Config><Slave><Info><Name><![CDATA[Box 1\n(x: y)]]></Name>" +
+                                  id + "</Info></Slave><Slave><Info><Name>Box 1 # (x: y)</Name>" + id +
+                                  "</Info></Slave><Slave><Info><Name>*</Name>" + id +
+                                  "</Info></Slave></Config></EtherCATConfig>",
+                              "m.xml");
     const EniNetwork n = network_from_eni(eni);
     EXPECT_EQ(names(n.file), "Box-1-x-y Box-1-x-y-2 slave");
     const auto text = network_file_from_eni(eni, n, ".");
