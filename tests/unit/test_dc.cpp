@@ -2,7 +2,6 @@
 // loop with drift, SYNC0/SYNC1 and latch units, the project master's DC configuration, and the sync modes
 // and sync faults of the CoE application (0x1C32/0x1C33, AL status codes 0x002C-0x0037).
 // Time is driven explicitly (now_ns of each frame), so every figure is deterministic.
-// Long (about 840 lines): the DC unit, its loop and the sync modes share the timed-frame fixture at the top.
 // Long (about 840 lines): one DC unit seen from every side; the tests share the line fixture at the top.
 #include <gtest/gtest.h>
 
