@@ -64,6 +64,21 @@ inline std::uint16_t reg(protocol::Reg r) {
     return protocol::addr(r);
 }
 
+// One datagram (auto-increment address 0) processed by one ESC, with the test playing the frame: its data
+// is read back into `data`; returns the working counter.
+inline std::uint16_t esc_datagram(esc::Esc& esc, protocol::Command cmd, std::uint16_t ado,
+                                  std::vector<std::uint8_t>& data) {
+    std::vector<std::uint8_t> buf(protocol::kDatagramHeaderSize + data.size() + 2, 0);
+    buf[0] = static_cast<std::uint8_t>(cmd);
+    st_le16(&buf[4], ado);
+    st_le16(&buf[6], static_cast<std::uint16_t>(data.size()));
+    std::copy(data.begin(), data.end(), buf.begin() + protocol::kDatagramHeaderSize);
+    protocol::DatagramView d(buf.data());
+    esc.process(d, esc::FrameTiming{1000, 2000});
+    std::copy_n(buf.begin() + protocol::kDatagramHeaderSize, data.size(), data.begin());
+    return d.wkc();
+}
+
 // One datagram sent through a segment as a raw frame; what came back.
 struct RawReply {
     bool replied = false;

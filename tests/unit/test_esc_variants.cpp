@@ -15,26 +15,13 @@ using namespace vecat::protocol;
 
 namespace {
 
-// One datagram to one ESC (auto-increment address 0); returns the working counter, data read back into
-// `data`.
-std::uint16_t datagram(Esc& esc, Command cmd, std::uint16_t ado, std::vector<std::uint8_t>& data) {
-    std::vector<std::uint8_t> buf(10 + data.size() + 2, 0);
-    buf[0] = static_cast<std::uint8_t>(cmd);
-    st_le16(&buf[4], ado);
-    st_le16(&buf[6], static_cast<std::uint16_t>(data.size()));
-    std::copy(data.begin(), data.end(), buf.begin() + 10);
-    DatagramView d(buf.data());
-    esc.process(d, FrameTiming{1000, 2000});
-    std::copy(buf.begin() + 10, buf.begin() + 10 + static_cast<long>(data.size()), data.begin());
-    return d.wkc();
-}
 std::uint16_t write(Esc& esc, std::uint16_t ado, std::vector<std::uint8_t> data,
                     Command cmd = Command::APWR) {
-    return datagram(esc, cmd, ado, data);
+    return test::esc_datagram(esc, cmd, ado, data);
 }
 std::uint16_t read(Esc& esc, std::uint16_t ado, std::vector<std::uint8_t>& data,
                    Command cmd = Command::APRD) {
-    return datagram(esc, cmd, ado, data);
+    return test::esc_datagram(esc, cmd, ado, data);
 }
 
 }  // namespace

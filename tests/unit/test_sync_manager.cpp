@@ -13,19 +13,9 @@ namespace {
 // An ESC without firmware: the test plays the PDI side.
 struct EscOnly : ::testing::Test {
     Esc esc{EscConfig{}, build_sii_image(device::default_drive())};
-    std::array<std::uint8_t, 512> buf{};
 
     std::uint16_t dg(Command cmd, std::uint16_t ado, std::vector<std::uint8_t>& data) {
-        buf.fill(0);
-        buf[0] = static_cast<std::uint8_t>(cmd);
-        st_le16(&buf[2], 0);
-        st_le16(&buf[4], ado);
-        st_le16(&buf[6], static_cast<std::uint16_t>(data.size()));
-        std::copy(data.begin(), data.end(), buf.begin() + 10);
-        DatagramView d(buf.data());
-        esc.process(d, FrameTiming{1000, 2000});
-        std::copy(buf.begin() + 10, buf.begin() + 10 + static_cast<long>(data.size()), data.begin());
-        return d.wkc();
+        return test::esc_datagram(esc, cmd, ado, data);
     }
     std::uint16_t write(std::uint16_t ado, std::vector<std::uint8_t> data) {
         return dg(Command::APWR, ado, data);
@@ -193,16 +183,9 @@ TEST(AlControl, AlwaysWritableWithDeviceEmulation) {
     dev.pdi_control = 0x0104;  // digital I/O PDI, device emulation (as an EL2004's SII word 0)
     Esc esc{EscConfig{}, build_sii_image(dev)};
     ASSERT_NE(esc.peek(addr(Reg::EscConfiguration)) & esc_config::DeviceEmulation, 0);
-    std::array<std::uint8_t, 16> buf{};
     for (const std::uint8_t state : {std::uint8_t{0x02}, std::uint8_t{0x04}}) {
-        buf.fill(0);
-        buf[0] = static_cast<std::uint8_t>(Command::APWR);
-        st_le16(&buf[4], addr(Reg::AlControl));
-        st_le16(&buf[6], 2);
-        buf[10] = state;
-        DatagramView d(buf.data());
-        esc.process(d, FrameTiming{1000, 2000});
-        EXPECT_EQ(d.wkc(), 1);
+        std::vector<std::uint8_t> data{state, 0};
+        EXPECT_EQ(test::esc_datagram(esc, Command::APWR, addr(Reg::AlControl), data), 1);
         EXPECT_EQ(esc.peek(addr(Reg::AlControl)), state);
     }
 }
@@ -216,14 +199,7 @@ TEST(SingleByteSyncManager, OnTheDigitalOutputRegisterOfADigitalIoEsc) {
         dev.pdi_control = pdi;
         Esc esc{EscConfig{}, build_sii_image(dev)};
         auto dg = [&](Command cmd, std::uint16_t ado, std::vector<std::uint8_t> data) {
-            std::array<std::uint8_t, 64> buf{};
-            buf[0] = static_cast<std::uint8_t>(cmd);
-            st_le16(&buf[4], ado);
-            st_le16(&buf[6], static_cast<std::uint16_t>(data.size()));
-            std::copy(data.begin(), data.end(), buf.begin() + 10);
-            DatagramView d(buf.data());
-            esc.process(d, FrameTiming{1000, 2000});
-            return d.wkc();
+            return test::esc_datagram(esc, cmd, ado, data);
         };
         const bool dio = pdi == 0x0104;
         EXPECT_EQ(dg(Command::APWR, sm_addr(2), {0x00, 0x0F, 1, 0, 0x44, 0, 1, 0}), 1);
