@@ -7,8 +7,6 @@
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
@@ -19,13 +17,12 @@
 #include <thread>
 #include <vector>
 
+#include "child_process.hpp"
 #include "faults/control.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
 #include "protocol/registers.hpp"
-
-extern char** environ;
 
 using namespace vecat;
 using protocol::AlState;
@@ -34,31 +31,12 @@ namespace {
 
 bool g_netns = false;
 
-struct Vecat {
-    pid_t pid = -1;
-    explicit Vecat(std::vector<std::string> args) {
-        args.insert(args.begin(), {VECAT_BINARY, "run"});
-        std::vector<char*> argv;
-        for (auto& a : args)
-            argv.push_back(a.data());
-        argv.push_back(nullptr);
-        if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) pid = -1;
-    }
-    int wait() {
-        int st = 0;
-        waitpid(pid, &st, 0);
-        pid = -1;
-        return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    }
-    int stop() {
-        if (pid <= 0) return -1;
-        kill(pid, SIGINT);
-        return wait();
-    }
-    ~Vecat() {
-        if (pid > 0) stop();
-    }
-};
+// `vecat run ARGS`, stopped with SIGINT at the end of its scope.
+std::vector<std::string> vecat_run(std::vector<std::string> args) {
+    args.insert(args.begin(), {VECAT_BINARY, "run"});
+    return args;
+}
+constexpr std::chrono::seconds kRefusalWait{10};
 
 // The dummy's source address: the frames are told apart by it, as a redundant master does.
 constexpr std::array<std::uint8_t, 5> kDummySource = {0x04, 0x04, 0x04, 0x04, 0x04};
@@ -163,7 +141,8 @@ TEST(RedundancyVeth, RingSurvivesABreakAndClosesAgain) {
     for (auto [x, y] : {std::pair{"rdm", "rds"}, std::pair{"rdm2", "rds2"}})
         ASSERT_TRUE(net::create_veth_pair(x, y, &why)) << why;
     const std::string sock = "/tmp/vecat-redundancy-" + std::to_string(getpid()) + ".sock";
-    Vecat v({"--iface", "rds", "--redundant-iface", "rds2", "--slaves", "4", "--control", sock});
+    test::ChildProcess v(
+        vecat_run({"--iface", "rds", "--redundant-iface", "rds2", "--slaves", "4", "--control", sock}));
     ASSERT_GT(v.pid, 0);
     std::this_thread::sleep_for(std::chrono::milliseconds(400));
 
@@ -228,9 +207,12 @@ TEST(RedundancyVeth, AnInterfaceInUseIsRefused) {
     std::string why;
     ASSERT_TRUE(net::create_veth_pair("rum", "rus", &why)) << why;
     ASSERT_TRUE(net::create_veth_pair("rum2", "rus2", &why)) << why;
-    EXPECT_EQ(Vecat({"--iface", "rus", "--redundant-iface", "rus", "--slaves", "2"}).wait(), 2);
-    EXPECT_EQ(Vecat({"--iface", "rus", "--redundant-iface", "rus2", "--downstream", "rum2", "--slaves", "2"})
-                  .wait(),
+    EXPECT_EQ(test::ChildProcess(vecat_run({"--iface", "rus", "--redundant-iface", "rus", "--slaves", "2"}))
+                  .wait_for(kRefusalWait),
+              2);
+    EXPECT_EQ(test::ChildProcess(vecat_run({"--iface", "rus", "--redundant-iface", "rus2", "--downstream",
+                                            "rum2", "--slaves", "2"}))
+                  .wait_for(kRefusalWait),
               2);
 }
 
