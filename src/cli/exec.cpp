@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <string_view>
 #include <thread>
 
 #include "net/netns.hpp"
@@ -107,10 +108,10 @@ std::string find_program(const std::string& name, int& error) {
     }
 }
 
-std::string substitute(std::string arg, const std::string& iface) {
-    static constexpr std::string_view key = "{iface}";
-    for (std::size_t at = arg.find(key); at != std::string::npos; at = arg.find(key, at + iface.size()))
-        arg.replace(at, key.size(), iface);
+// Replaces each key in arg by value.
+std::string substitute(std::string arg, std::string_view key, const std::string& value) {
+    for (std::size_t at = arg.find(key); at != std::string::npos; at = arg.find(key, at + value.size()))
+        arg.replace(at, key.size(), value);
     return arg;
 }
 
@@ -127,7 +128,9 @@ int run_exec(const ExecOptions& o, const ServeFunction& serve) {
         return kExecFailed;
     }
     if (!net::loopback_up(&why) ||
-        (o.serve && !net::create_veth_pair(o.master_interface, o.slave_interface, &why))) {
+        (o.serve && !net::create_veth_pair(o.master_interface, o.slave_interface, &why)) ||
+        (o.serve && o.redundant &&
+         !net::create_veth_pair(o.redundant_master_interface, o.redundant_slave_interface, &why))) {
         fmt::print(stderr, "vecat exec: {}\n", why);
         return kExecFailed;
     }
@@ -166,13 +169,17 @@ int run_exec(const ExecOptions& o, const ServeFunction& serve) {
 
     // Everything COMMAND's processes need, built before fork.
     std::vector<std::string> args, env;
-    for (const auto& a : o.command)
-        args.push_back(substitute(a, o.master_interface));
+    const bool redundant = o.serve && o.redundant;
+    for (const auto& a : o.command) {
+        std::string arg = redundant ? substitute(a, "{iface2}", o.redundant_master_interface) : a;
+        args.push_back(substitute(std::move(arg), "{iface}", o.master_interface));
+    }
     for (char** e = environ; *e; ++e)
-        if (std::strncmp(*e, "VECAT_IFACE=", 12) != 0 && std::strncmp(*e, "VECAT_EXEC=", 11) != 0 &&
-            std::strncmp(*e, "VECAT_BIN=", 10) != 0)
+        if (std::strncmp(*e, "VECAT_IFACE=", 12) != 0 && std::strncmp(*e, "VECAT_IFACE2=", 13) != 0 &&
+            std::strncmp(*e, "VECAT_EXEC=", 11) != 0 && std::strncmp(*e, "VECAT_BIN=", 10) != 0)
             env.emplace_back(*e);
     if (o.serve) env.push_back("VECAT_IFACE=" + o.master_interface);
+    if (redundant) env.push_back("VECAT_IFACE2=" + o.redundant_master_interface);
     // For test kits (python/vecat): they run inside a namespace of their own and may start more networks.
     env.emplace_back("VECAT_EXEC=1");
     char self[4096];

@@ -1,9 +1,10 @@
 // `vecat exec [run options] -- COMMAND...`: COMMAND runs in a private network namespace (and, for an
 // ordinary user, a private user namespace: no root, no setuid helper) in which vecat serves the slaves on
 // one end of a veth pair; COMMAND gets the other end (environment VECAT_IFACE, and "{iface}" in its
-// arguments). The exit status is COMMAND's (or, when COMMAND succeeded, what serving returned: 3 for a failed
-// report with --report-fail); the namespaces, the interfaces and every process COMMAND started disappear with
-// it, also when vecat itself is killed.
+// arguments). With cable redundancy a second pair is the master's second port (VECAT_IFACE2, "{iface2}"). The
+// exit status is COMMAND's (or, when COMMAND succeeded, what serving returned: 3 for a failed report with
+// --report-fail); the namespaces, the interfaces and every process COMMAND started disappear with it, also
+// when vecat itself is killed.
 #pragma once
 
 #include <atomic>
@@ -18,6 +19,11 @@ struct ExecOptions {
     std::vector<std::string> command;  // COMMAND and its arguments
     std::string master_interface = "vecat-m";
     std::string slave_interface = "vecat-s";
+    // Cable redundancy (--redundant): a second veth pair, the master's second port; the far end of the line
+    // is cabled back to redundant_slave_interface.
+    bool redundant = false;
+    std::string redundant_master_interface = "vecat-m2";
+    std::string redundant_slave_interface = "vecat-s2";
     bool serve = true;  // false (--no-network): only the namespaces, for a runner that starts networks
     std::vector<std::pair<std::string, std::string>> environment;  // set for COMMAND besides VECAT_IFACE
 };

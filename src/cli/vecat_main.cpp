@@ -426,12 +426,18 @@ int main(int argc, char** argv) {
     exec->add_flag("--no-network", no_network,
                    "Serve no slaves: only the private namespaces, for a test runner that starts its own "
                    "networks in them (vecat run on veth pairs it makes)");
+    exec->add_flag(
+        "--redundant", eo.redundant,
+        "Cable redundancy: a second veth pair is the master's second port ({iface2}, VECAT_IFACE2); "
+        "the far end of the line (redundancy: in the network file, else port 1 of the last slave) "
+        "is cabled back to it");
     exec->add_option("command", eo.command,
                      "The command and its arguments (after --); {iface} is replaced "
                      "by the master's interface, also given as VECAT_IFACE")
         ->required();
     exec->footer(
         "Example: vecat exec -n 2 -- slaveinfo {iface}\n"
+        "With --redundant: vecat exec -n 4 --redundant -- my_redundant_master {iface} {iface2}\n"
         "Exit code: the command's (128 + N after signal N); 125 when vecat could not set up the namespace or "
         "serve, 126 when the command cannot be executed, 127 when it is not found. The namespaces, the veth "
         "pair and every process the command started are gone when vecat exec returns, and when it is "
@@ -615,6 +621,7 @@ int main(int argc, char** argv) {
     if (*exec) {
         ro.iface = eo.slave_interface;
         eo.serve = !no_network;
+        if (eo.redundant) ro.redundant_iface = eo.redundant_slave_interface;
         if (!ro.fault_opts.control.empty())
             eo.environment.emplace_back("VECAT_CONTROL", ro.fault_opts.control);
         return vecat::cli::run_exec(eo, [&ro](std::atomic<bool>& stop, std::atomic<bool>& ready,

@@ -120,6 +120,27 @@ TEST(Exec, TheReportOnTheMasterIsWrittenAndFailsTheRunWhenTheMasterBrokeARule) {
     fs::remove(xml);
 }
 
+// Cable redundancy under vecat exec: a redundant master gets both ports ({iface} {iface2}, VECAT_IFACE2);
+// a cable inside the ring breaks through the control socket and comes back, and no cycle is lost.
+TEST(Exec, ARedundantMasterGetsBothPortsAndLosesNoCycleWhenTheRingBreaks) {
+    SKIP_WITHOUT_NAMESPACES();
+    const auto sock = temp_path("vecat-exec-ring.sock");
+    const auto r = run({kVecat, "exec", "-n", "4", "--redundant", "--control", sock, "--", kProbe, "{iface}",
+                        "4", "--redundant", "{iface2}"});
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("4 slaves, 300 of 300 cycles with the expected working counter"),
+              std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("through a broken one"), std::string::npos) << r.output;
+    const auto env = run({kVecat, "exec", "--redundant", "--", "/bin/sh", "-c",
+                          "test \"$VECAT_IFACE2\" = vecat-m2 && test \"$0\" = vecat-m2", "{iface2}"});
+    EXPECT_EQ(env.status, 0) << env.output;
+    // Without --redundant there is no second port: the placeholder stays as it is.
+    const auto plain = run({kVecat, "exec", "--", "/bin/sh", "-c",
+                            "test -z \"$VECAT_IFACE2\" && test \"$0\" = '{iface2}'", "{iface2}"});
+    EXPECT_EQ(plain.status, 0) << plain.output;
+}
+
 TEST(Exec, TheExitStatusIsTheCommandsOrSaysWhyItDidNotRun) {
     SKIP_WITHOUT_NAMESPACES();
     EXPECT_EQ(run({kVecat, "exec", "--", "/bin/sh", "-c", "exit 7"}).status, 7);
