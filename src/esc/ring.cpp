@@ -182,27 +182,4 @@ bool Segment::process_ring(Bytes frame, std::size_t& len, std::uint64_t now_ns, 
     return true;
 }
 
-void Segment::add_hot_connect_group(std::string name, std::size_t head) {
-    groups_.emplace_back(std::move(name), head);
-}
-
-std::size_t Segment::hot_connect_head(std::string_view name) const {
-    for (const auto& [n, head] : groups_)
-        if (n == name) return head;
-    return slaves_.size();
-}
-
-std::size_t Segment::group_end(std::size_t head) const {
-    // Depth first: the slaves downstream of head follow it; the first one that does not lead back to head
-    // ends the group.
-    std::size_t k = head + 1;
-    for (; k < slaves_.size(); ++k) {
-        int at = parent_[k];
-        while (at >= 0 && static_cast<std::size_t>(at) > head)
-            at = parent_[static_cast<std::size_t>(at)];
-        if (at < 0 || static_cast<std::size_t>(at) != head) break;
-    }
-    return k;
-}
-
 }  // namespace vecat::esc

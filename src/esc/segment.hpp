@@ -148,6 +148,16 @@ class Segment {
     std::size_t hot_connect_head(std::string_view name) const;
     const std::vector<std::pair<std::string, std::size_t>>& hot_connect_groups() const { return groups_; }
     std::size_t group_end(std::size_t head) const;
+    // Plugs the group headed by `head` into port `port` (1..3) of slave `parent` instead of where it was
+    // (call it while the group is unplugged: its cables are out). The parent must lie outside the group and
+    // the port exist and be free (no device, no redundancy cable). The slaves then take the order in which
+    // the frame reaches them (their positions change as on hardware): order[new position] = old position.
+    // The cable into the group's head keeps its delay. Returns false, changing nothing, with why otherwise.
+    bool move_group(std::size_t head, std::size_t parent, unsigned port, std::vector<std::size_t>& order,
+                    std::string* why = nullptr);
+    // Whether move_group() would take these (the port may be the group's own: plugged back where it was).
+    bool can_move_group(std::size_t head, std::size_t parent, unsigned port,
+                        std::string* why = nullptr) const;
 
     // ---- Chained segments (one line over several processes or machines)
     // Port 1 of the last slave has a link to the next segment. process_frame() then lets the frame go on

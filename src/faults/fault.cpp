@@ -37,9 +37,11 @@ constexpr std::array kKinds{
                   "drive fault 0x8611 (following error) through 0x2101"},
     FaultKindInfo{"dc_drift", K::DcDrift, "slave, ppm | step_ppm",
                   "the slave's DC oscillator drift changes (restored when the fault ends)"},
-    FaultKindInfo{"unplug", K::Unplug, "group | slave",
-                  "hot connect: the group (a device and everything downstream of it) is unplugged; when the "
-                  "fault ends it is plugged back and starts in INIT, station address cleared"},
+    FaultKindInfo{
+        "unplug", K::Unplug, "group | slave, to",
+        "hot connect: the group (a device and everything downstream of it) is unplugged; when the "
+        "fault ends it is plugged back (where it was, or with to=SLAVE:PORT into that free port) and "
+        "starts in INIT, station address cleared"},
     FaultKindInfo{"twinsync_cable_break", K::External, "slave",
                   "TWINsync: the drive-to-drive cable is cut (needs the TWINsync port's handler)"},
     FaultKindInfo{"twinsync_crc_errors", K::External, "slave",
@@ -167,6 +169,13 @@ FaultSpec make_fault(std::string_view name, const KeyValues& kv) {
         } else if (key == "group") {
             if (value.empty()) throw std::invalid_argument("group: the name of a hot connect group");
             f.group = value;
+        } else if (key == "to") {
+            const auto colon = value.find(':');
+            if (colon == std::string::npos) throw std::invalid_argument("to: SLAVE:PORT (e.g. to=2:3)");
+            f.elsewhere = true;
+            f.to_slave = parse_int<std::size_t>(key, value.substr(0, colon));
+            f.to_port = parse_int<unsigned>(key, value.substr(colon + 1));
+            if (f.to_port < 1 || f.to_port > 3) throw std::invalid_argument("to: the port is 1, 2 or 3");
         } else if (key == "delay") {
             f.delay_ns = parse_duration_ns(value);
         } else if (key == "code") {

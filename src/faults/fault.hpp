@@ -67,6 +67,11 @@ struct FaultSpec {
     bool ppm_is_step = false;
     // unplug: the hot connect group (network file hot_connect:), else the group headed by `slave`.
     std::string group;
+    // unplug with to=SLAVE:PORT: plugged back into that port of that slave (positions on the line as it is
+    // when the fault starts) instead of where it was.
+    bool elsewhere = false;
+    std::size_t to_slave = 0;
+    unsigned to_port = 0;
     // Every key as given, for external handlers.
     std::map<std::string, std::string> params;
 };

@@ -114,6 +114,9 @@ std::string FaultInjector::start(FaultSpec f, std::uint64_t now_ns) {
             f.slave = seg_.hot_connect_head(f.group);
             if (f.slave >= n) throw std::invalid_argument("unplug: no hot connect group named " + f.group);
         }
+        if (std::string why; f.elsewhere && !seg_.can_move_group(f.slave, f.to_slave, f.to_port, &why))
+            throw std::invalid_argument("unplug: to=" + std::to_string(f.to_slave) + ":" +
+                                        std::to_string(f.to_port) + ": " + why);
         const std::size_t end = seg_.group_end(f.slave);
         for (const auto& a : active_)
             if (!a->done && a->spec.kind == FaultKind::Unplug && a->spec.slave < end &&
@@ -198,8 +201,17 @@ void FaultInjector::end(Active& a, std::uint64_t now_ns, const char* why) {
             if (seg_.restart_slave(a.spec.slave)) seg_.slave(a.spec.slave).set_mailbox_interceptor(this);
             break;
         case FaultKind::Unplug:
-            // Plugged back: every device of the group starts as after power-up (INIT, station address 0,
-            // its alias loaded from the SII again).
+            // Plugged back (where it was, or into another free port: the slaves' positions then change, and
+            // the faults follow their slaves): every device of the group starts as after power-up (INIT,
+            // station address 0, its alias loaded from the SII again).
+            if (a.spec.elsewhere) {
+                std::vector<std::size_t> order;
+                std::string refused;
+                if (seg_.move_group(a.spec.slave, a.spec.to_slave, a.spec.to_port, order, &refused))
+                    follow_slaves(order);
+                else
+                    note("unplug: " + refused + "; plugged back where it was");
+            }
             for (std::size_t k = a.spec.slave; k < seg_.group_end(a.spec.slave); ++k)
                 if (seg_.restart_slave(k)) seg_.slave(k).set_mailbox_interceptor(this);
             break;
@@ -208,6 +220,18 @@ void FaultInjector::end(Active& a, std::uint64_t now_ns, const char* why) {
     }
     ++counters_.faults_ended;
     note(std::string("fault ended (") + why + "): " + a.spec.id);
+}
+
+void FaultInjector::follow_slaves(const std::vector<std::size_t>& order) {
+    std::vector<std::size_t> now(order.size());  // now[old position] = new position
+    for (std::size_t k = 0; k < order.size(); ++k)
+        now[order[k]] = k;
+    for (auto& a : active_) {
+        FaultSpec& f = a->spec;
+        if (f.slave < now.size()) f.slave = now[f.slave];
+        if (f.cable < now.size()) f.cable = now[f.cable];  // cable k leads into slave k (the ring's stays)
+        if (f.elsewhere && f.to_slave < now.size()) f.to_slave = now[f.to_slave];
+    }
 }
 
 void FaultInjector::apply_line_state() {

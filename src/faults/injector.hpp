@@ -117,6 +117,9 @@ class FaultInjector final : public net::FrameFilter, public esc::MailboxIntercep
     void drain_requests(std::uint64_t now_ns);
     void end(Active& a, std::uint64_t now_ns, const char* why);
     void apply_line_state();
+    // The slaves moved (a hot connect group plugged back elsewhere; order[new] = old): the faults follow
+    // them.
+    void follow_slaves(const std::vector<std::size_t>& order);
     void set_drive_fault(std::size_t slave, std::uint16_t code);
     bool roll(double p);
     bool hit(Active& a);

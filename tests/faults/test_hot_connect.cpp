@@ -147,6 +147,82 @@ events:
     EXPECT_EQ(b.al_status(m, 0x1001) & 0x1F, static_cast<std::uint16_t>(AlState::Op));
 }
 
+// A tree: a junction with a drive at port 3 (a hot connect group) and a line of two drives at port 1.
+constexpr const char* kTree = R"(
+devices:
+  - name: j
+    device: junction
+  - name: g1
+    device: drive
+    alias: 0x0071
+    upstream: j:3
+    hot_connect: moving
+  - name: l1
+    device: drive
+    upstream: j:1
+  - name: l2
+    device: drive
+)";
+
+// Plugged back into another port the group takes its place in the order the frame reaches the slaves
+// (0 -> 3 -> 1 -> 2), as on hardware: the master finds it there, with its identity, and computes the new
+// topology from the DL status; the faults that name slaves follow them.
+TEST(HotConnect, AGroupPluggedBackIntoAnotherPortTakesItsPlaceInTheLine) {
+    auto seg = network::build_network(network::parse_network(kTree, "tree.yaml"), "tree.yaml").segment;
+    net::InProcessLink link(*seg);
+    FaultInjector inj(*seg);
+    std::uint64_t now = 1'000'000'000;
+    link.set_time(now);
+    link.set_filter(&inj);
+    const auto execute = [&](const std::string& cmd) { return inj.execute(cmd, now); };
+    ASSERT_EQ(seg->hot_connect_head("moving"), 1u);
+    ASSERT_EQ(seg->parent(1), 0);
+    ASSERT_EQ(seg->parent_port(1), 3u);
+    master::Master m(link);
+    std::string why;
+    ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+    // Refused at once: a port with a device, a port of the group itself, a port the junction lacks.
+    EXPECT_EQ(execute("inject unplug group=moving to=0:1").rfind("error", 0), 0u) << execute("active");
+    EXPECT_EQ(execute("inject unplug group=moving to=1:1").rfind("error", 0), 0u);
+    EXPECT_EQ(execute("inject unplug group=moving to=4:3").rfind("error", 0), 0u);  // no slave 4
+    // A fault on l2 (position 3) before the move: it follows l2 to its new position.
+    ASSERT_EQ(execute("inject dc_drift slave=3 step_ppm=1 id=d").rfind("ok", 0), 0u);
+    ASSERT_EQ(execute("inject unplug group=moving to=3:1 id=u").rfind("ok", 0), 0u);
+    EXPECT_EQ(m.count_slaves(), 3);
+    esc::Slave* const moved = &seg->slave(1);
+    const esc::Slave* const l2 = &seg->slave(3);
+    ASSERT_EQ(execute("clear u").rfind("ok", 0), 0u);
+    // Now: junction, l1, l2, and the group behind port 1 of l2.
+    ASSERT_EQ(seg->size(), 4u);
+    EXPECT_EQ(&seg->slave(2), l2);
+    EXPECT_EQ(seg->parent(2), 1);
+    EXPECT_EQ(seg->parent(3), 2);
+    EXPECT_EQ(seg->parent_port(3), 1u);
+    EXPECT_EQ(seg->hot_connect_head("moving"), 3u);
+    EXPECT_EQ(seg->group_end(3), 4u);
+    EXPECT_NE(&seg->slave(3), moved);  // plugged back: a new start of the device
+    EXPECT_EQ(seg->reachable(), 4u);
+    EXPECT_EQ(m.count_slaves(), 4);
+    EXPECT_EQ(aprd16(m, 3, Reg::AlStatus).value_or(0xFF) & 0x1F, static_cast<std::uint16_t>(AlState::Init));
+    EXPECT_EQ(aprd16(m, 3, Reg::StationAlias), 0x0071);
+    EXPECT_EQ(aprd16(m, 3, Reg::StationAddress), 0);
+    // The rest kept their station addresses and OP: l1 and l2 moved up one position.
+    EXPECT_EQ(aprd16(m, 1, Reg::StationAddress), 0x1003);
+    EXPECT_EQ(aprd16(m, 2, Reg::StationAddress), 0x1004);
+    EXPECT_EQ(m.read16(0x1004, protocol::addr(Reg::AlStatus)).value_or(0) & 0x1F,
+              static_cast<std::uint16_t>(AlState::Op));
+    // The drift fault named l2 by its position then; it ends on l2 where it is now.
+    const double drift = seg->slave(2).esc().dc().drift_ppm();
+    ASSERT_EQ(execute("clear d").rfind("ok", 0), 0u);
+    EXPECT_NE(seg->slave(2).esc().dc().drift_ppm(), drift);
+    // A new scan finds the tree as it is now: the group's drive behind port 1 of l2.
+    master::Master again(link);
+    ASSERT_TRUE(again.startup(AlState::PreOp, &why)) << why;
+    ASSERT_EQ(again.slaves().size(), 4u);
+    EXPECT_EQ(again.slaves()[3].parent, 2);
+    EXPECT_EQ(again.slaves()[3].parent_port, 1u);
+}
+
 TEST(HotConnect, LinkDownNeedsACableAtThePort) {
     HotConnectBench b;
     EXPECT_EQ(b.execute("inject link_down slave=0 port=3").rfind("error", 0), 0u);  // nothing cabled there
