@@ -114,6 +114,7 @@ bool Segment::move_group(std::size_t head, std::size_t parent, unsigned port, st
         g.second = now[g.second];
     if (red_slave_ < n) red_slave_ = now[red_slave_];
     pending_latch_ = PendingLatch{};
+    ++slaves_epoch_;
     ++port_epoch_;
     for (std::size_t k = 0; k < n; ++k)
         update_links(k);

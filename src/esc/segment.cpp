@@ -25,6 +25,7 @@ void Segment::add(std::unique_ptr<Slave> s) {
 void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     const std::size_t i = slaves_.size();
     slaves_.push_back(std::move(s));
+    ++slaves_epoch_;
     own_factory_.push_back(std::move(own));
     cable_up_.push_back(1);
     halted_.push_back(0);
@@ -250,6 +251,7 @@ bool Segment::restart_slave(std::size_t i) {
     const DeviceModel model = old.model();
     auto fresh = std::make_unique<Slave>(model, cfg, factory(*model.description));
     slaves_[i] = std::move(fresh);
+    ++slaves_epoch_;
     slaves_[i]->esc().set_port_change_counter(&port_epoch_);
     ++port_epoch_;
     update_links(i);

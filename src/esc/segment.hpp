@@ -117,6 +117,10 @@ class Segment {
     // Power-on reset of slave i: a new slave of the same device from the application factory (segments
     // made by make_segment). Its links follow the cables. False without a factory.
     bool restart_slave(std::size_t i);
+    // Counts changes of the slaves themselves: a restart (a new Slave object at its position) or a move
+    // (hot connect: new positions). Observers that keep something per slave (the report, telemetry) look
+    // at it to follow them; the Slave objects stay where they are otherwise.
+    std::uint64_t slaves_epoch() const { return slaves_epoch_; }
     void set_application_factory(ApplicationFactory f) { factory_ = std::move(f); }
 
     // ---- Cable redundancy (a ring). Port `port` (1..3) of slave `slave`, free of other cables, is cabled
@@ -222,6 +226,7 @@ class Segment {
     mutable std::size_t reached_count_ = 0;
     mutable std::size_t passed_ = 0;
     std::uint64_t port_epoch_ = 1;             // counted up by the ESCs and by cabling changes
+    std::uint64_t slaves_epoch_ = 0;           // see slaves_epoch()
     mutable std::uint64_t routed_epoch_ = 0;   // ... when the route was worked out
     mutable std::uint64_t routed_hop_ns_ = 0;  // ... with this hop_delay_ns
     struct Visit {

@@ -40,13 +40,36 @@ std::uint32_t hash(const std::uint8_t* p, std::size_t n) {
 
 }  // namespace
 
-MasterChecks::MasterChecks(const esc::Segment& seg) : seg_(seg), track_(seg.size()) {
+MasterChecks::MasterChecks(const esc::Segment& seg) : seg_(seg), slaves_epoch_(seg.slaves_epoch()) {
     for (std::size_t i = 0; i < seg.size(); ++i) {
-        const esc::Esc& e = seg.slave(i).esc();
-        track_[i].sii = protocol::parse_sii(ConstBytes(e.eeprom().data(), e.eeprom().size()));
-        track_[i].write_mask =
-            protocol::make_write_mask_table(e.peek(addr(Reg::FmmuCount)), e.peek(addr(Reg::SmCount)));
+        track_.push_back(track_of(i));
+        slave_of_.push_back(&seg.slave(i));
     }
+}
+
+MasterChecks::Track MasterChecks::track_of(std::size_t i) const {
+    const esc::Esc& e = seg_.slave(i).esc();
+    Track t;
+    t.sii = protocol::parse_sii(ConstBytes(e.eeprom().data(), e.eeprom().size()));
+    t.write_mask = protocol::make_write_mask_table(e.peek(addr(Reg::FmmuCount)), e.peek(addr(Reg::SmCount)));
+    return t;
+}
+
+void MasterChecks::follow_slaves() {
+    if (seg_.slaves_epoch() == slaves_epoch_) return;
+    slaves_epoch_ = seg_.slaves_epoch();
+    std::vector<Track> tracks;
+    std::vector<const esc::Slave*> slaves;
+    for (std::size_t i = 0; i < seg_.size(); ++i) {
+        const esc::Slave* s = &seg_.slave(i);
+        const auto was = std::find(slave_of_.begin(), slave_of_.end(), s);
+        tracks.push_back(was != slave_of_.end()
+                             ? std::move(track_[static_cast<std::size_t>(was - slave_of_.begin())])
+                             : track_of(i));
+        slaves.push_back(s);
+    }
+    track_ = std::move(tracks);
+    slave_of_ = std::move(slaves);
 }
 
 template <class F>
@@ -97,6 +120,7 @@ int MasterChecks::output_sm(std::size_t i) const {
 }
 
 void MasterChecks::on_request(ConstBytes frame, std::uint64_t now_ns) {
+    follow_slaves();
     if (frames_++ == 0) first_ns_ = now_ns;
     now_ns_ = now_ns;
     const std::size_t len = std::min(frame.size(), buf_.size());
@@ -186,6 +210,7 @@ void MasterChecks::check_al_control(std::size_t i, std::uint8_t control) {
 }
 
 void MasterChecks::on_reply(ConstBytes frame, std::uint64_t now_ns) {
+    follow_slaves();
     const std::size_t len = std::min(frame.size(), buf_.size());
     std::memcpy(buf_.data(), frame.data(), len);
     const Bytes b(buf_.data(), len);

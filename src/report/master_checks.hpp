@@ -80,8 +80,16 @@ class MasterChecks final : public net::FrameObserver {
     void find(Rule r, std::size_t slave, std::string message);
     bool found(Rule r, std::size_t slave);  // counts it when already found; true then
 
+    // A fresh track for the slave at position i, from its EEPROM and register counts.
+    Track track_of(std::size_t i) const;
+    // The slaves changed (restarted, or moved by hot connect: Segment::slaves_epoch): each track follows its
+    // slave to its position; a slave that is new (restarted, plugged back) starts a fresh one.
+    void follow_slaves();
+
     const esc::Segment& seg_;
     std::vector<Track> track_;
+    std::vector<const esc::Slave*> slave_of_;  // per track: the slave it belongs to
+    std::uint64_t slaves_epoch_ = 0;
     std::vector<Finding> findings_;
     std::array<std::uint8_t, protocol::kMaxEthFrame> buf_{};
     std::uint64_t frames_ = 0;

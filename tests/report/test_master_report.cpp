@@ -10,6 +10,8 @@
 #include "coe/coe_application.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
+#include "network/build.hpp"
+#include "network/network_file.hpp"
 #include "protocol/mailbox.hpp"
 #include "protocol/registers.hpp"
 #include "report/master_checks.hpp"
@@ -78,6 +80,47 @@ TEST(MasterReport, SilentForTheProjectMastersStartUpMailboxAndCycles) {
     EXPECT_TRUE(l.checks.findings().empty()) << l.report();
     EXPECT_GT(l.checks.frames(), 200u);
     EXPECT_NE(l.report().find("11 of 11 checks passed"), std::string::npos) << l.report();
+}
+
+// The checks follow the slaves when they change places (hot connect: a group plugged back into another port)
+// or start again: a master that configures the devices at their new positions breaks no rule, although what
+// the checks knew of position 1 (a drive's SII) now belongs to position 2.
+TEST(MasterReport, SilentWhenAHotConnectGroupComesBackAtAnotherPort) {
+    const auto file = network::parse_network(R"(
+devices:
+  - name: j
+    device: junction
+  - name: drive
+    device: drive
+    upstream: j:3
+    hot_connect: g
+  - name: outputs
+    device: digital-out
+    upstream: j:1
+)",
+                                             "moves.yaml");
+    auto seg = network::build_network(file, "moves.yaml").segment;
+    net::InProcessLink link(*seg);
+    report::MasterChecks checks(*seg);
+    link.set_observer(&checks);
+    std::string why;
+    {
+        master::Master m(link);
+        ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+        for (int i = 0; i < 20; ++i)
+            ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+    }
+    // The drive's group goes from port 3 of the junction to port 1 of the output terminal, and starts again.
+    std::vector<std::size_t> order;
+    ASSERT_TRUE(seg->move_group(1, 2, 1, order, &why)) << why;
+    ASSERT_TRUE(seg->restart_slave(2));
+    ASSERT_EQ(seg->slave(1).esc().eeprom(),
+              network::build_network(file, "moves.yaml").segment->slave(2).esc().eeprom());
+    master::Master m(link);
+    ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+    for (int i = 0; i < 20; ++i)
+        ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+    EXPECT_TRUE(checks.findings().empty()) << report::summary(checks);
 }
 
 TEST(MasterReport, SyncManagerLengthOtherThanThePdoAssignmentThenAStateRequestWithoutAcknowledge) {
