@@ -27,6 +27,7 @@ set(LAYER_net common)              # transport: raw socket, link, pcapng, netns,
 set(LAYER_serve net esc)           # serve loop, in-process link: a segment behind a link
 set(LAYER_master protocol net)     # the master: wire formats and a link, never the slave emulation
 set(LAYER_faults esc coe net)
+set(LAYER_io esc faults)           # I/O terminals with behaviour: signals, wires, inputs forced by set_input
 set(LAYER_report esc net network)  # the report on the master: checks on the frames beside the slaves, the
                                    # master against an ENI's InitCmds
 set(LAYER_telemetry cia402 telemetry_idl)
@@ -34,10 +35,10 @@ set(LAYER_telemetry_idl "")    # the telemetry IDL types compiled by idlc (with 
 set(LAYER_telemetry_types "")  # ... and idlc's generated sources
 set(LAYER_testing master cia402 faults telemetry serve)
 set(LAYER_esi device esc)
-set(LAYER_network cia402 esi)      # networks of mixed devices from a file
+set(LAYER_network cia402 esi io)   # networks of mixed devices from a file
 set(LAYER_replay network esc)     # replay of real captures against a line built from a file or the capture
 set(LAYER_clone master network)    # vecat clone: a line read with the master, written as a network file
-set(LAYER_cli master telemetry cia402 faults esi serve esc report network replay foe clone)
+set(LAYER_cli master telemetry cia402 faults esi serve esc report network replay foe clone io)
 
 # ---------------------------------------------------------------------------------------------------------
 if(NOT SOURCE_DIR OR NOT LINKS)

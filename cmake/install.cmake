@@ -5,7 +5,7 @@
 include(CMakePackageConfigHelpers)
 
 set(VECAT_INSTALL_LIBS vecat_common vecat_protocol vecat_device vecat_esc vecat_coe vecat_twinsync_parameters vecat_twinsync vecat_motion vecat_drive_core vecat_cia402
-                       vecat_net vecat_serve vecat_report vecat_faults vecat_master vecat_telemetry vecat_testing vecat_esi vecat_network)
+                       vecat_net vecat_serve vecat_report vecat_faults vecat_io vecat_master vecat_telemetry vecat_testing vecat_esi vecat_network)
 if(VECAT_TELEMETRY)
   list(APPEND VECAT_INSTALL_LIBS vecat_telemetry_idl)
 endif()
@@ -37,7 +37,7 @@ install(FILES ${PROJECT_BINARY_DIR}/vecatConfig.cmake ${PROJECT_BINARY_DIR}/veca
         DESTINATION ${VECAT_CMAKE_DIR})
 
 # pkg-config: all libraries, users first (static linking resolves left to right).
-set(VECAT_PC_LIBS "-lvecat_network -lvecat_testing -lvecat_esi -lvecat_master -lvecat_faults -lvecat_telemetry")
+set(VECAT_PC_LIBS "-lvecat_network -lvecat_io -lvecat_testing -lvecat_esi -lvecat_master -lvecat_faults -lvecat_telemetry")
 if(VECAT_TELEMETRY)
   string(APPEND VECAT_PC_LIBS " -lvecat_telemetry_idl")
   set(VECAT_PC_REQUIRES "fmt yaml-cpp pugixml libcap CycloneDDS")

@@ -34,13 +34,18 @@ void add_run_fault_options(CLI::App* run, RunFaultOptions& o) {
     run->add_option("--fault-seed", o.seed, "Seed of the fault probabilities (a scenario's seed: wins)");
 }
 
-std::unique_ptr<FaultSession> start_fault_session(esc::Segment& seg, const RunFaultOptions& o, bool& ok) {
+std::unique_ptr<FaultSession> start_fault_session(esc::Segment& seg, const RunFaultOptions& o, bool& ok,
+                                                  std::shared_ptr<io::IoBus> io) {
     ok = true;
     if (o.scenario.empty() && o.control.empty()) return nullptr;
     auto s = std::make_unique<FaultSession>();
     s->injector = std::make_unique<faults::FaultInjector>(seg, o.seed);
     s->injector->on_event = [](const std::string& line) { fmt::print("vecat: {}\n", line); };
     register_fault_handlers(*s, seg);
+    if (io) {
+        s->inputs = std::make_unique<io::InputForcing>(seg, std::move(io));
+        s->injector->register_handler(io::InputForcing::kKind, *s->inputs);
+    }
     try {
         if (!o.scenario.empty()) {
             const auto sc = faults::load_scenario(o.scenario);

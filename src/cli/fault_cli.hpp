@@ -10,6 +10,7 @@
 #include "faults/control.hpp"
 #include "faults/injector.hpp"
 #include "faults/twinsync_faults.hpp"
+#include "io/terminals.hpp"
 
 namespace vecat::cli {
 
@@ -24,10 +25,13 @@ void add_run_fault_options(CLI::App* run, RunFaultOptions& o);
 // scenario nor a control socket was asked for (frames then go straight to the segment).
 struct FaultSession {
     std::unique_ptr<faults::TwinsyncFaults> twinsync;  // outlives the injector that calls it
+    std::unique_ptr<io::InputForcing> inputs;          // set_input, where the network has I/O terminals
     std::unique_ptr<faults::FaultInjector> injector;
     std::unique_ptr<faults::ControlServer> control;
 };
-std::unique_ptr<FaultSession> start_fault_session(esc::Segment& seg, const RunFaultOptions& o, bool& ok);
+// io: the I/O terminals of a network file (set_input), or null.
+std::unique_ptr<FaultSession> start_fault_session(esc::Segment& seg, const RunFaultOptions& o, bool& ok,
+                                                  std::shared_ptr<io::IoBus> io = {});
 void print_fault_summary(const FaultSession& s);
 
 // vecat fault ...: returns the subcommand; run_fault_command runs it when it was given.

@@ -189,6 +189,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     std::string served;  // what the start line names
     // With --eni and --report: the ENI's register writes, which the master's are compared with.
     std::vector<vecat::report::ExpectedWrite> eni_writes;
+    std::shared_ptr<vecat::io::IoBus> io_bus;  // the I/O terminals of a network file (fault set_input)
     if (!network_path.empty() || !eni_path.empty()) {
         const std::string& file = eni_path.empty() ? network_path : eni_path;
         try {
@@ -207,6 +208,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             for (const auto& n : built.notes)
                 fmt::print(stderr, "vecat: {}\n", n);
             seg = std::move(built.segment);
+            io_bus = std::move(built.io);
         } catch (const vecat::network::NetworkFileError& e) {
             fmt::print(stderr, "vecat: {}\n", e.what());
             return 1;
@@ -255,7 +257,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         pcap =
             std::make_unique<vecat::net::PcapngWriter>(pcap_path, iface, std::uint64_t{pcap_limit_mb} << 20);
     bool faults_ok = true;
-    auto faults = vecat::cli::start_fault_session(*seg, fault_opts, faults_ok);
+    auto faults = vecat::cli::start_fault_session(*seg, fault_opts, faults_ok, io_bus);
     if (!faults_ok) return 1;
     if (!ready) install_signals();
     fmt::print(log, "vecat: {} on {}; Ctrl-C stops\n", served, iface);

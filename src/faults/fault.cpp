@@ -42,6 +42,10 @@ constexpr std::array kKinds{
         "hot connect: the group (a device and everything downstream of it) is unplugged; when the "
         "fault ends it is plugged back (where it was, or with to=SLAVE:PORT into that free port) and "
         "starts in INIT, station address cleared"},
+    FaultKindInfo{
+        "set_input", K::External, "slave, channel, value",
+        "an input of a built-in input terminal (network file) reads value until the fault ends (needs "
+        "the I/O terminals' handler: vecat run --network)"},
     FaultKindInfo{"twinsync_cable_break", K::External, "slave",
                   "TWINsync: the drive-to-drive cable is cut (needs the TWINsync port's handler)"},
     FaultKindInfo{"twinsync_crc_errors", K::External, "slave",

@@ -224,13 +224,50 @@ std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept {
     return ports;
 }
 
+// The built-in I/O terminals get their behaviour (src/io): output terminals show their outputs on the bus,
+// input terminals read their signals, wires and forced values.
+void attach_io(const DeviceEntry& e, Made& m, BuiltNetwork& b) {
+    const bool digital = e.source == Source::DigitalIn || e.source == Source::DigitalOut;
+    const io::ChannelKind kind = digital ? io::ChannelKind::Digital : io::ChannelKind::Analog;
+    const unsigned channels = e.channels ? e.channels : digital ? 8u : 4u;
+    if (e.source == Source::DigitalOut || e.source == Source::AnalogOut) {
+        const std::size_t slot = b.io->output_slot(e.name);
+        m.factory = [bus = b.io,
+                     slot](const device::DeviceDescription& d) -> std::unique_ptr<esc::Application> {
+            return std::make_unique<io::OutputTerminal>(d.output_bytes(), d.input_bytes(), bus, slot);
+        };
+    } else if (e.source == Source::DigitalIn || e.source == Source::AnalogIn) {
+        std::vector<io::InputSource> sources(channels);
+        for (const auto& in : e.inputs) {
+            sources[in.channel].signal = in.signal;
+            if (in.signal.kind == io::SignalKind::Wire)
+                sources[in.channel].wire_slot = b.io->output_slot(in.signal.device);
+        }
+        const std::size_t slot = b.io->add_input(e.name, channels);
+        m.factory = [bus = b.io, slot, kind,
+                     sources](const device::DeviceDescription& d) -> std::unique_ptr<esc::Application> {
+            return std::make_unique<io::InputTerminal>(d.output_bytes(), d.input_bytes(), kind, sources, bus,
+                                                       slot);
+        };
+    }
+}
+
 BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
     BuiltNetwork b;
     b.segment = std::make_unique<esc::Segment>();
+    b.io = std::make_shared<io::IoBus>();
+    for (const DeviceEntry& e : f.devices)
+        if (e.source == Source::DigitalOut || e.source == Source::AnalogOut)
+            b.io->add_output(
+                e.name, e.source == Source::DigitalOut ? io::ChannelKind::Digital : io::ChannelKind::Analog,
+                e.channels                       ? e.channels
+                : e.source == Source::DigitalOut ? 8u
+                                                 : 4u);
     std::vector<std::uint8_t> ports;
     for (const DeviceEntry& e : f.devices) {
         const std::string at = file + ":" + std::to_string(e.line) + ": " + e.name + ": ";
         Made m = make_device(e, at, b.notes);
+        attach_io(e, m, b);
         apply_esc(m.esc, e.esc);
         if (e.esc.ram_kib && *e.esc.ram_kib < 8)
             b.notes.push_back(at + "esc: ram_kib " + std::to_string(*e.esc.ram_kib) +

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "esc/segment.hpp"
+#include "io/terminals.hpp"
 #include "network/dictionary_file.hpp"
 #include "network/network_file.hpp"
 
@@ -16,6 +17,8 @@ namespace vecat::network {
 
 struct BuiltNetwork {
     std::unique_ptr<esc::Segment> segment;
+    // What the I/O terminals share (wires, forced inputs); the handler of the fault set_input goes with it.
+    std::shared_ptr<io::IoBus> io;
     std::vector<std::string> notes;  // "FILE:LINE: NAME: ..." what was guessed or left out per device
 };
 

@@ -4,10 +4,13 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <charconv>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <system_error>
 
 #include "protocol/registers.hpp"
 
@@ -32,6 +35,126 @@ bool is_io(Source s) {
 }
 
 using Reader = YamlReader<NetworkFileError>;
+
+// The channels of a built-in I/O terminal (its default when channels: is not given).
+unsigned channels_of(const DeviceEntry& d) {
+    return d.channels                                                          ? d.channels
+           : (d.source == Source::DigitalIn || d.source == Source::DigitalOut) ? 8u
+                                                                               : 4u;
+}
+
+double real(const Reader& r, const YAML::Node& n, const std::string& key) {
+    const std::string s = r.scalar(n, key);
+    double v = 0;
+    const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (s.empty() || res.ec != std::errc{} || res.ptr != s.data() + s.size() || !std::isfinite(v))
+        r.fail(n, key + ": \"" + s + "\" is not a number");
+    return v;
+}
+
+std::uint64_t milliseconds(const Reader& r, const YAML::Node& n, const std::string& key) {
+    const double ms = real(r, n, key);
+    if (ms < 0 || ms > 1e9) r.fail(n, key + ": from 0 to 1e9 ms");
+    return static_cast<std::uint64_t>(ms * 1e6);
+}
+
+// inputs: of an input terminal: CHANNEL: {signal: KIND, parameters...} or CHANNEL: {wire: DEVICE:CHANNEL}.
+void parse_inputs(const Reader& r, const YAML::Node& n, DeviceEntry& d, const std::string& folder) {
+    if (!n.IsMap()) r.fail(n, "inputs: a map of channel: {signal: ...} or channel: {wire: DEVICE:CHANNEL}");
+    d.inputs_line = Reader::line(n);
+    for (const auto& item : n) {
+        DeviceEntry::Input in;
+        in.line = Reader::line(item.first);
+        in.channel = static_cast<unsigned>(r.number(item.first, "inputs: channel", kMaxChannels - 1));
+        for (const auto& other : d.inputs)
+            if (other.channel == in.channel)
+                r.fail(item.first, "inputs: channel " + std::to_string(in.channel) + " is given twice");
+        const YAML::Node& spec = item.second;
+        if (!spec.IsMap()) r.fail(spec, "inputs: a channel takes {signal: ...} or {wire: DEVICE:CHANNEL}");
+        io::Signal& sig = in.signal;
+        bool kind_given = false;
+        std::uint64_t period = 0;
+        bool period_given = false;
+        for (const auto& kv : spec) {
+            const std::string key = r.scalar(kv.first, "key");
+            const YAML::Node& v = kv.second;
+            if (key == "signal") {
+                const std::string k = r.scalar(v, key);
+                static constexpr std::pair<std::string_view, io::SignalKind> kinds[] = {
+                    {"constant", io::SignalKind::Constant},
+                    {"square", io::SignalKind::Square},
+                    {"sine", io::SignalKind::Sine},
+                    {"ramp", io::SignalKind::Ramp},
+                    {"table", io::SignalKind::Table}};
+                const auto* it = std::find_if(std::begin(kinds), std::end(kinds),
+                                              [&](const auto& p) { return p.first == k; });
+                if (it == std::end(kinds))
+                    r.fail(v, "signal: unknown signal " + k + " (constant, square, sine, ramp, table)");
+                sig.kind = it->second;
+                kind_given = true;
+            } else if (key == "wire") {
+                const std::string w = r.scalar(v, key);
+                const auto colon = w.rfind(':');
+                if (colon == std::string::npos || colon == 0)
+                    r.fail(v, "wire: DEVICE:CHANNEL, an output terminal and its channel");
+                sig.kind = io::SignalKind::Wire;
+                sig.device = w.substr(0, colon);
+                const std::string c = w.substr(colon + 1);
+                if (c.empty() || c.size() > 2 || !std::all_of(c.begin(), c.end(), ::isdigit))
+                    r.fail(v, "wire: the channel after ':' is a number");
+                sig.channel = static_cast<unsigned>(std::stoul(c));
+                kind_given = true;
+            } else if (key == "value") {
+                sig.value = real(r, v, key);
+            } else if (key == "low") {
+                sig.low = real(r, v, key);
+            } else if (key == "high") {
+                sig.high = real(r, v, key);
+            } else if (key == "amplitude") {
+                sig.amplitude = real(r, v, key);
+            } else if (key == "offset") {
+                sig.offset = real(r, v, key);
+            } else if (key == "from") {
+                sig.from = real(r, v, key);
+            } else if (key == "to") {
+                sig.to = real(r, v, key);
+            } else if (key == "period_ms") {
+                period = milliseconds(r, v, key);
+                if (period == 0) r.fail(v, "period_ms: more than 0");
+                period_given = true;
+            } else if (key == "phase_ms") {
+                sig.phase_ns = milliseconds(r, v, key);
+            } else if (key == "file") {
+                std::string path = r.scalar(v, key);
+                if (std::filesystem::path(path).is_relative())
+                    path = (std::filesystem::path(folder) / path).string();
+                std::ifstream f(path, std::ios::binary);
+                if (!f) r.fail(v, "file: cannot read " + path);
+                std::stringstream text;
+                text << f.rdbuf();
+                try {
+                    sig.table = io::parse_table(text.str());
+                } catch (const std::invalid_argument& e) {
+                    r.fail(v, "file: " + path + ":" + e.what());
+                }
+            } else {
+                r.fail(kv.first,
+                       "inputs: unknown key " + key +
+                           " (signal, wire, value, low, high, amplitude, offset, from, to, period_ms, "
+                           "phase_ms, file)");
+            }
+        }
+        if (!kind_given)
+            r.fail(in.line, "inputs: channel " + std::to_string(in.channel) + ": give signal: or wire:");
+        if (sig.kind == io::SignalKind::Table && sig.table.empty())
+            r.fail(in.line, "inputs: a table signal takes file: (CSV rows time_ms,value)");
+        if (period_given)
+            sig.period_ns = period;
+        else if (sig.kind == io::SignalKind::Table)
+            sig.period_ns = 0;  // holds its last value
+        d.inputs.push_back(std::move(in));
+    }
+}
 
 void parse_upstream(const Reader& r, const YAML::Node& n, DeviceEntry& d) {
     const std::string s = r.scalar(n, "upstream");
@@ -162,6 +285,8 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
                 d.dictionary = (std::filesystem::path(folder) / d.dictionary).string();
         } else if (key == "esc") {
             parse_esc(r, v, d.esc);
+        } else if (key == "inputs") {
+            parse_inputs(r, v, d, folder);
         } else if (key == "hot_connect") {
             d.hot_connect = r.scalar(v, key);
             d.hot_connect_line = Reader::line(v);
@@ -169,7 +294,7 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
         } else {
             r.fail(item.first, "unknown key " + key +
                                    " (name, device, esi, sii, type, product, revision, channels, upstream, "
-                                   "cable_delay_ns, alias, identity, dictionary, esc, hot_connect)");
+                                   "cable_delay_ns, alias, identity, dictionary, esc, hot_connect, inputs)");
         }
     }
     if (d.name.empty()) r.fail(d.line, "a device without name:");
@@ -180,6 +305,13 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
         r.fail(d.dictionary_line, d.name + ": dictionary: is for an sii: device");
     if (channels_line && !is_io(d.source))
         r.fail(*channels_line, d.name + ": channels: is for the built-in I/O terminals");
+    if (d.inputs_line && d.source != Source::DigitalIn && d.source != Source::AnalogIn)
+        r.fail(d.inputs_line,
+               d.name + ": inputs: is for the built-in input terminals (digital-in, analog-in)");
+    for (const auto& in : d.inputs)
+        if (in.channel >= channels_of(d))
+            r.fail(in.line, d.name + ": inputs: channel " + std::to_string(in.channel) +
+                                ": it has channels 0-" + std::to_string(channels_of(d) - 1));
     return d;
 }
 
@@ -264,6 +396,21 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
                                            std::to_string(it->second->hot_connect_line) +
                                            "); a group is a device and everything downstream of it");
     }
+    // Wires: each names an output terminal of the file and one of its channels.
+    for (const DeviceEntry& d : f.devices)
+        for (const auto& in : d.inputs) {
+            if (in.signal.kind != io::SignalKind::Wire) continue;
+            const auto it = std::find_if(f.devices.begin(), f.devices.end(),
+                                         [&](const DeviceEntry& o) { return o.name == in.signal.device; });
+            if (it == f.devices.end())
+                r.fail(in.line, d.name + ": wire: no device named " + in.signal.device);
+            if (it->source != Source::DigitalOut && it->source != Source::AnalogOut)
+                r.fail(in.line,
+                       d.name + ": wire: " + it->name + " is no output terminal (digital-out, analog-out)");
+            if (in.signal.channel >= channels_of(*it))
+                r.fail(in.line, d.name + ": wire: " + it->name + " has channels 0-" +
+                                    std::to_string(channels_of(*it) - 1));
+        }
     if (has_redundancy) {
         // The same NAME:PORT as upstream:, for the port the redundancy cable leaves the line at.
         DeviceEntry at;

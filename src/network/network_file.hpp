@@ -29,6 +29,8 @@
 #include <string>
 #include <vector>
 
+#include "io/signal.hpp"
+
 namespace vecat::network {
 
 // Where a device comes from.
@@ -91,6 +93,15 @@ struct DeviceEntry {
     // unplugged and plugged back at run time (fault unplug group=NAME). Empty: none.
     std::string hot_connect;
     unsigned hot_connect_line = 0;
+    // Built-in input terminals: what a channel reads (inputs:, docs/network-file.md); channels not named read
+    // 0. A wire names an output terminal of the file (io::Signal::device, channel).
+    struct Input {
+        unsigned channel = 0;
+        io::Signal signal;
+        unsigned line = 0;
+    };
+    std::vector<Input> inputs;
+    unsigned inputs_line = 0;
     // An sii: device whose image is given here instead of a file (a device made from an ENI alone,
     // network/eni_network.hpp); path is then only its name in messages.
     std::shared_ptr<const std::vector<std::uint8_t>> sii_image;

@@ -75,9 +75,9 @@ TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
     EXPECT_EQ(test::lock_calls() - locks_before, 0u);
 }
 
-// A tree of mixed devices (network file: coupler, I/O terminals on its E-bus, a junction with drives and
-// terminals on its ports), watched by the report on the master: cycles of process data through it
-// allocate nothing and take no lock.
+// A tree of mixed devices (network file: coupler, I/O terminals on its E-bus with signals and wires on their
+// inputs, a junction with drives and terminals on its ports), watched by the report on the master: cycles of
+// process data through it allocate nothing and take no lock.
 TEST(NoAllocation, MixedNetworkTreeWithTheReportOnTheMaster) {
     auto built = network::build_network(network::parse_network(R"(
 devices:
@@ -86,6 +86,14 @@ devices:
   - name: di
     device: digital-in
     upstream: coupler:3
+    inputs:
+      0: {signal: square, period_ms: 4}
+      1: {wire: do:3}
+  - name: ai
+    device: analog-in
+    inputs:
+      0: {signal: sine, period_ms: 20, amplitude: 1000}
+      1: {wire: ao:0}
   - name: ao
     device: analog-out
   - name: junction

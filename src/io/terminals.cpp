@@ -1,0 +1,147 @@
+#include "io/terminals.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "common/bytes.hpp"
+#include "esc/segment.hpp"
+
+namespace vecat::io {
+
+std::size_t IoBus::add_output(std::string name, ChannelKind kind, unsigned channels) {
+    outputs_.push_back(Output{std::move(name), kind, channels, nullptr});
+    return outputs_.size() - 1;
+}
+
+std::size_t IoBus::add_input(std::string name, unsigned channels) {
+    inputs_.push_back(
+        Input{std::move(name), std::vector<double>(channels, 0.0), std::vector<std::uint8_t>(channels, 0)});
+    return inputs_.size() - 1;
+}
+
+std::size_t IoBus::output_slot(std::string_view name) const {
+    for (std::size_t i = 0; i < outputs_.size(); ++i)
+        if (outputs_[i].name == name) return i;
+    return kNone;
+}
+
+double IoBus::output(std::size_t slot, unsigned channel) const noexcept {
+    if (slot >= outputs_.size()) return 0;
+    const Output& o = outputs_[slot];
+    if (!o.image || channel >= o.channels) return 0;
+    const std::vector<std::uint8_t>& img = *o.image;
+    if (o.kind == ChannelKind::Digital)
+        return channel / 8 < img.size() ? static_cast<double>((img[channel / 8] >> (channel % 8)) & 1u) : 0.0;
+    return 2 * channel + 1 < img.size()
+               ? static_cast<double>(static_cast<std::int16_t>(ld_le16(&img[2 * channel])))
+               : 0.0;
+}
+
+void IoBus::force(std::size_t slot, unsigned channel, double v) {
+    Input& in = inputs_.at(slot);
+    in.value.at(channel) = v;
+    in.forced.at(channel) = 1;
+}
+
+void IoBus::release(std::size_t slot, unsigned channel) {
+    if (slot < inputs_.size() && channel < inputs_[slot].forced.size()) inputs_[slot].forced[channel] = 0;
+}
+
+bool IoBus::forced(std::size_t slot, unsigned channel, double& v) const noexcept {
+    if (slot >= inputs_.size() || channel >= inputs_[slot].forced.size() || !inputs_[slot].forced[channel])
+        return false;
+    v = inputs_[slot].value[channel];
+    return true;
+}
+
+InputTerminal::InputTerminal(unsigned output_bytes, unsigned input_bytes, ChannelKind kind,
+                             std::vector<InputSource> sources, std::shared_ptr<IoBus> bus, std::size_t slot)
+    : ProcessImageApplication(output_bytes, input_bytes),
+      kind_(kind),
+      sources_(std::move(sources)),
+      bus_(std::move(bus)),
+      slot_(slot) {}
+
+void InputTerminal::exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes in) {
+    if (!started_) {
+        started_ = true;
+        origin_ns_ = now_ns;
+    }
+    const std::uint64_t t = now_ns >= origin_ns_ ? now_ns - origin_ns_ : 0;
+    std::vector<std::uint8_t>& img = inputs();
+    for (unsigned c = 0; c < sources_.size(); ++c) {
+        const InputSource& s = sources_[c];
+        double v = 0;
+        if (!bus_->forced(slot_, c, v))
+            v = s.wire_slot != IoBus::kNone ? bus_->output(s.wire_slot, s.signal.channel)
+                                            : value_at(s.signal, t);
+        if (kind_ == ChannelKind::Digital) {
+            if (c / 8 >= img.size()) break;
+            const auto bit = static_cast<std::uint8_t>(1u << (c % 8));
+            img[c / 8] = static_cast<std::uint8_t>(v > 0.5 ? img[c / 8] | bit : img[c / 8] & ~bit);
+        } else {
+            if (2 * c + 1 >= img.size()) break;
+            const double r = std::isfinite(v) ? std::clamp(std::round(v), -32768.0, 32767.0) : 0.0;
+            st_le16(&img[2 * c], static_cast<std::uint16_t>(static_cast<std::int16_t>(r)));
+        }
+    }
+    ProcessImageApplication::exchange(now_ns, outputs, apply, in);
+}
+
+OutputTerminal::OutputTerminal(unsigned output_bytes, unsigned input_bytes, std::shared_ptr<IoBus> bus,
+                               std::size_t slot)
+    : ProcessImageApplication(output_bytes, input_bytes), bus_(std::move(bus)), slot_(slot) {
+    bus_->publish(slot_, &outputs());
+}
+
+OutputTerminal::~OutputTerminal() {
+    bus_->publish(slot_, nullptr);
+}
+
+std::pair<std::size_t, unsigned> InputForcing::target(const faults::FaultSpec& f) const {
+    if (f.slave >= seg_.size())
+        throw std::invalid_argument("set_input: slave " + std::to_string(f.slave) + " is not on the line");
+    auto* t = dynamic_cast<InputTerminal*>(&seg_.slave(f.slave).app());
+    if (!t)
+        throw std::invalid_argument("set_input: slave " + std::to_string(f.slave) + " is no input terminal");
+    const auto ch = f.params.find("channel");
+    if (ch == f.params.end()) throw std::invalid_argument("set_input: give channel=N");
+    unsigned c = 0;
+    try {
+        std::size_t used = 0;
+        const unsigned long v = std::stoul(ch->second, &used, 0);
+        if (used != ch->second.size() || v >= t->channels()) throw std::out_of_range(ch->second);
+        c = static_cast<unsigned>(v);
+    } catch (const std::exception&) {
+        throw std::invalid_argument("set_input: channel " + ch->second + ": the terminal has channels 0-" +
+                                    std::to_string(t->channels() - 1));
+    }
+    return {t->slot(), c};
+}
+
+void InputForcing::start(const faults::FaultSpec& f, std::uint64_t) {
+    const auto [slot, channel] = target(f);
+    const auto v = f.params.find("value");
+    if (v == f.params.end()) throw std::invalid_argument("set_input: give value=V");
+    double value = 0;
+    try {
+        std::size_t used = 0;
+        value = std::stod(v->second, &used);
+        if (used != v->second.size() || !std::isfinite(value)) throw std::invalid_argument(v->second);
+    } catch (const std::exception&) {
+        throw std::invalid_argument("set_input: value " + v->second + " is no number");
+    }
+    bus_->force(slot, channel, value);
+}
+
+void InputForcing::stop(const faults::FaultSpec& f, std::uint64_t) {
+    try {
+        const auto [slot, channel] = target(f);
+        bus_->release(slot, channel);
+    } catch (const std::invalid_argument&) {
+        // The terminal went (a restart keeps its slot: the next start of the fault finds it again).
+    }
+}
+
+}  // namespace vecat::io

@@ -1,0 +1,115 @@
+// The built-in I/O terminals with behaviour (network files, docs/network-file.md): an input terminal's
+// channels follow their signal sources (signal.hpp) or are wired to a channel of an output terminal, and any
+// input can be forced at run time through the control socket (fault set_input, src/faults) until the fault
+// is cleared. The terminals of one network share an IoBus: the output images for the wires, resolved to
+// slots once when the network is built, and the forced inputs, which outlive a restart of their terminal.
+// Nothing on the cyclic path allocates or looks anything up by name.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "esc/slave.hpp"
+#include "faults/injector.hpp"
+#include "io/signal.hpp"
+
+namespace vecat::esc {
+class Segment;
+}
+
+namespace vecat::io {
+
+// A digital channel is one bit (an input reads 1 when its signal is above 0.5), an analog one a 16-bit
+// signed integer (the signal rounded and limited to -32768..32767).
+enum class ChannelKind : std::uint8_t { Digital, Analog };
+
+class IoBus {
+  public:
+    static constexpr std::size_t kNone = ~std::size_t{0};
+    // Slots, made while the network is built; names are the devices' names in the network file.
+    std::size_t add_output(std::string name, ChannelKind kind, unsigned channels);
+    std::size_t add_input(std::string name, unsigned channels);
+    std::size_t output_slot(std::string_view name) const;  // kNone when there is none
+    // The output terminal of a slot shows its image there while it exists (nullptr: gone).
+    void publish(std::size_t slot, const std::vector<std::uint8_t>* image) {
+        outputs_.at(slot).image = image;
+    }
+    // Channel c of the output terminal in slot s: 0 or 1, or the 16-bit value (0 when it is gone).
+    double output(std::size_t slot, unsigned channel) const noexcept;
+    // Forced inputs of input slot s.
+    void force(std::size_t slot, unsigned channel, double v);
+    void release(std::size_t slot, unsigned channel);
+    bool forced(std::size_t slot, unsigned channel, double& v) const noexcept;
+
+  private:
+    struct Output {
+        std::string name;
+        ChannelKind kind = ChannelKind::Digital;
+        unsigned channels = 0;
+        const std::vector<std::uint8_t>* image = nullptr;
+    };
+    struct Input {
+        std::string name;
+        std::vector<double> value;
+        std::vector<std::uint8_t> forced;
+    };
+    std::vector<Output> outputs_;
+    std::vector<Input> inputs_;
+};
+
+// What one input channel reads when it is not forced.
+struct InputSource {
+    Signal signal;                         // Constant 0 unless given
+    std::size_t wire_slot = IoBus::kNone;  // a wire: this output slot and channel (signal.channel)
+};
+
+class InputTerminal final : public esc::ProcessImageApplication {
+  public:
+    InputTerminal(unsigned output_bytes, unsigned input_bytes, ChannelKind kind,
+                  std::vector<InputSource> sources, std::shared_ptr<IoBus> bus, std::size_t slot);
+    void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) override;
+    std::size_t slot() const { return slot_; }
+    unsigned channels() const { return static_cast<unsigned>(sources_.size()); }
+
+  private:
+    ChannelKind kind_;
+    std::vector<InputSource> sources_;
+    std::shared_ptr<IoBus> bus_;
+    std::size_t slot_;
+    bool started_ = false;
+    std::uint64_t origin_ns_ = 0;
+};
+
+class OutputTerminal final : public esc::ProcessImageApplication {
+  public:
+    OutputTerminal(unsigned output_bytes, unsigned input_bytes, std::shared_ptr<IoBus> bus, std::size_t slot);
+    ~OutputTerminal() override;
+    OutputTerminal(const OutputTerminal&) = delete;
+    OutputTerminal& operator=(const OutputTerminal&) = delete;
+
+  private:
+    std::shared_ptr<IoBus> bus_;
+    std::size_t slot_;
+};
+
+// The fault set_input slave=N channel=C value=V: the input reads V until the fault ends. Registered with the
+// injector where a network has input terminals (vecat run).
+class InputForcing final : public faults::FaultHandler {
+  public:
+    InputForcing(esc::Segment& seg, std::shared_ptr<IoBus> bus) : seg_(seg), bus_(std::move(bus)) {}
+    void start(const faults::FaultSpec& f, std::uint64_t now_ns) override;
+    void stop(const faults::FaultSpec& f, std::uint64_t now_ns) override;
+    static constexpr const char* kKind = "set_input";
+
+  private:
+    // The input slot and channel a fault names; throws std::invalid_argument.
+    std::pair<std::size_t, unsigned> target(const faults::FaultSpec& f) const;
+    esc::Segment& seg_;
+    std::shared_ptr<IoBus> bus_;
+};
+
+}  // namespace vecat::io

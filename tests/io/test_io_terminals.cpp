@@ -1,0 +1,229 @@
+// The built-in I/O terminals with behaviour (src/io, network files' inputs:): signal sources, wires from an
+// output terminal to an input terminal, inputs forced through the fault injector (set_input), as the
+// project's master sees them in its process data; and the network file's refusals of bad inputs: entries.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "faults/injector.hpp"
+#include "io/signal.hpp"
+#include "io/terminals.hpp"
+#include "master/master.hpp"
+#include "network/build.hpp"
+#include "network/network_file.hpp"
+#include "serve/in_process_link.hpp"
+
+namespace vecat {
+namespace {
+
+using protocol::AlState;
+
+TEST(Signals, EachKindAtItsTimes) {
+    io::Signal s;
+    s.kind = io::SignalKind::Square;
+    s.period_ns = 100;
+    s.low = 2;
+    s.high = 5;
+    EXPECT_EQ(io::value_at(s, 0), 2);
+    EXPECT_EQ(io::value_at(s, 49), 2);
+    EXPECT_EQ(io::value_at(s, 50), 5);
+    EXPECT_EQ(io::value_at(s, 150), 5);
+    s.phase_ns = 50;
+    EXPECT_EQ(io::value_at(s, 0), 5);
+    s = {};
+    s.kind = io::SignalKind::Sine;
+    s.period_ns = 400;
+    s.amplitude = 10;
+    s.offset = 1;
+    EXPECT_NEAR(io::value_at(s, 100), 11, 1e-9);
+    EXPECT_NEAR(io::value_at(s, 300), -9, 1e-9);
+    s = {};
+    s.kind = io::SignalKind::Ramp;
+    s.period_ns = 100;
+    s.from = 0;
+    s.to = 1000;
+    EXPECT_NEAR(io::value_at(s, 25), 250, 1e-9);
+    EXPECT_NEAR(io::value_at(s, 125), 250, 1e-9);
+    s = {};
+    s.kind = io::SignalKind::Table;
+    s.table = io::parse_table("# t,v\n0,1\n10,2.5\n\n30,-4\n");
+    s.period_ns = 0;
+    EXPECT_EQ(io::value_at(s, 5'000'000), 1);
+    EXPECT_EQ(io::value_at(s, 10'000'000), 2.5);
+    EXPECT_EQ(io::value_at(s, 99'000'000), -4);  // the last value holds
+    s.period_ns = 40'000'000;
+    EXPECT_EQ(io::value_at(s, 45'000'000), 1);  // ... or the table starts again
+}
+
+TEST(Signals, ATableThatIsNoTableSaysWhichLine) {
+    const auto refused = [](const std::string& csv) {
+        try {
+            io::parse_table(csv);
+        } catch (const std::invalid_argument& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    EXPECT_EQ(refused("0,1\n5\n"), "2: expected time_ms,value");
+    EXPECT_NE(refused("0,1\n5,x\n").find("2: the value \"x\""), std::string::npos);
+    EXPECT_NE(refused("0,1\n-5,2\n").find("2: the time"), std::string::npos);
+    EXPECT_EQ(refused("0,1\n0,2\n"), "2: the times must rise");
+    EXPECT_EQ(refused("# nothing\n"), "1: no rows (time_ms,value)");
+    EXPECT_NE(refused("0,nan\n").find("1: the value"), std::string::npos);
+}
+
+// An output terminal wired to a digital input terminal and an analog input terminal with signals; the
+// time of the line is the link's, 1 ms per cycle.
+constexpr const char* kIo = R"(
+devices:
+  - name: outs
+    device: digital-out
+    channels: 4
+  - name: ins
+    device: digital-in
+    channels: 4
+    inputs:
+      0: {wire: outs:2}
+      1: {signal: square, period_ms: 10}
+      3: {signal: constant, value: 1}
+  - name: levels
+    device: analog-in
+    channels: 2
+    inputs:
+      0: {signal: ramp, period_ms: 100, from: 0, to: 1000}
+      1: {wire: aouts:1}
+  - name: aouts
+    device: analog-out
+    channels: 2
+)";
+
+struct IoLine {
+    IoLine()
+        : built(network::build_network(network::parse_network(kIo, "io.yaml"), "io.yaml")),
+          link(*built.segment),
+          inj(*built.segment),
+          forcing(*built.segment, built.io),
+          m(link) {
+        link.set_time(now);
+        link.set_filter(&inj);
+        inj.register_handler(io::InputForcing::kKind, forcing);
+    }
+    void cycle() {
+        now += 1'000'000;
+        link.set_time(now);
+        ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+    }
+    // An output reaches its terminal with one frame and is copied out after it; an input is sampled after a
+    // frame and read with the next one: three cycles bring an output through a wire to the master in any
+    // order of the terminals on the line.
+    void settle() {
+        for (int i = 0; i < 3; ++i)
+            cycle();
+    }
+    std::uint8_t digital() const { return m.inputs(1)[0] & 0x0F; }
+    std::int16_t analog(unsigned c) const {
+        return static_cast<std::int16_t>(ld_le16(m.inputs(2).data() + 2 * c));
+    }
+    network::BuiltNetwork built;
+    net::InProcessLink link;
+    faults::FaultInjector inj;
+    io::InputForcing forcing;
+    master::Master m;
+    std::uint64_t now = 1'000'000'000;
+};
+
+TEST(IoTerminals, InputsFollowTheirSignalsAndWires) {
+    IoLine l;
+    std::string why;
+    ASSERT_TRUE(l.m.startup(AlState::Op, &why)) << why;
+    // The output terminal's channel 2 drives input 0; input 3 is constantly on; input 2 has no source.
+    l.m.outputs(0)[0] = 0x04;
+    st_le16(l.m.outputs(3).data() + 2, static_cast<std::uint16_t>(-1234));
+    l.settle();
+    EXPECT_EQ(l.digital() & 0x09, 0x09);
+    EXPECT_EQ(l.analog(1), -1234);
+    l.m.outputs(0)[0] = 0x00;
+    l.settle();
+    EXPECT_EQ(l.digital() & 0x0D, 0x08);
+    // Input 1: a 10 ms square: five cycles low, five high.
+    unsigned high = 0, changes = 0;
+    std::uint8_t last = l.digital() & 0x02;
+    for (int i = 0; i < 40; ++i) {
+        l.cycle();
+        high += (l.digital() & 0x02) != 0;
+        changes += (l.digital() & 0x02) != last;
+        last = l.digital() & 0x02;
+    }
+    EXPECT_EQ(high, 20u);
+    EXPECT_GE(changes, 7u);
+    // The ramp rises 10 per ms.
+    const std::int16_t a = l.analog(0);
+    l.cycle();
+    EXPECT_EQ((l.analog(0) - a + 1000) % 1000, 10);
+}
+
+TEST(IoTerminals, AnInputForcedThroughTheControlSocketUntilTheFaultIsCleared) {
+    IoLine l;
+    std::string why;
+    ASSERT_TRUE(l.m.startup(AlState::Op, &why)) << why;
+    l.cycle();
+    EXPECT_EQ(l.digital() & 0x04, 0);
+    EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=2 value=1 id=f", l.now).rfind("ok", 0), 0u);
+    EXPECT_EQ(l.inj.execute("inject set_input slave=2 channel=0 value=-70000 id=g", l.now).rfind("ok", 0),
+              0u);
+    l.settle();
+    EXPECT_EQ(l.digital() & 0x04, 0x04);
+    EXPECT_EQ(l.analog(0), -32768);  // limited to 16 bits
+    EXPECT_EQ(l.inj.execute("clear f", l.now).rfind("ok", 0), 0u);
+    l.settle();
+    EXPECT_EQ(l.digital() & 0x04, 0);
+    // Refused: no input terminal, a channel it lacks, no value.
+    EXPECT_EQ(l.inj.execute("inject set_input slave=0 channel=0 value=1", l.now).rfind("error", 0), 0u);
+    EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=4 value=1", l.now).rfind("error", 0), 0u);
+    EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=0", l.now).rfind("error", 0), 0u);
+}
+
+TEST(IoTerminals, TheNetworkFileRefusesBadInputsNamingTheLine) {
+    const auto refused = [](const std::string& text) {
+        try {
+            network::parse_network(text, "net.yaml");
+        } catch (const network::NetworkFileError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    const std::string out = "devices:\n  - name: o\n    device: digital-out\n    channels: 2\n";
+    EXPECT_EQ(refused(out + "    inputs: {0: {signal: constant}}\n"),
+              "net.yaml:5: o: inputs: is for the built-in input terminals (digital-in, analog-in)");
+    const std::string in = out + "  - name: i\n    device: digital-in\n    channels: 2\n";
+    EXPECT_EQ(refused(in + "    inputs: {2: {signal: constant}}\n"),
+              "net.yaml:8: i: inputs: channel 2: it has channels 0-1");
+    EXPECT_EQ(refused(in + "    inputs: {0: {wire: nobody:0}}\n"),
+              "net.yaml:8: i: wire: no device named nobody");
+    EXPECT_EQ(refused(in + "    inputs: {0: {wire: i:0}}\n"),
+              "net.yaml:8: i: wire: i is no output terminal (digital-out, analog-out)");
+    EXPECT_EQ(refused(in + "    inputs: {0: {wire: o:5}}\n"), "net.yaml:8: i: wire: o has channels 0-1");
+    EXPECT_EQ(refused(in + "    inputs: {0: {signal: noise}}\n"),
+              "net.yaml:8: signal: unknown signal noise (constant, square, sine, ramp, table)");
+    EXPECT_EQ(refused(in + "    inputs: {0: {value: 1}}\n"),
+              "net.yaml:8: inputs: channel 0: give signal: or wire:");
+    EXPECT_EQ(refused(in + "    inputs: {0: {signal: square, period_ms: 0}}\n"),
+              "net.yaml:8: period_ms: more than 0");
+    EXPECT_EQ(refused(in + "    inputs: {0: {signal: table}}\n"),
+              "net.yaml:8: inputs: a table signal takes file: (CSV rows time_ms,value)");
+    EXPECT_NE(refused(in + "    inputs: {0: {signal: table, file: /nonexistent.csv}}\n")
+                  .find("file: cannot read /nonexistent.csv"),
+              std::string::npos);
+    const auto csv = (std::filesystem::temp_directory_path() / "vecat-io-bad.csv").string();
+    std::ofstream(csv) << "0,1\n1,oops\n";
+    EXPECT_EQ(refused(in + "    inputs: {0: {signal: table, file: " + csv + "}}\n"),
+              "net.yaml:8: file: " + csv + ":2: the value \"oops\" is no number");
+    std::filesystem::remove(csv);
+    EXPECT_EQ(refused(in + "    inputs: {0: {signal: sine, amplitude: x}}\n"),
+              "net.yaml:8: amplitude: \"x\" is not a number");
+}
+
+}  // namespace
+}  // namespace vecat
