@@ -57,6 +57,22 @@ def test_the_capture_and_summary_are_written_when_the_network_stops(vecat_networ
     assert "frames received" in vecat_network.output()
 
 
+IO_NETWORK = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "networks", "io-signals.yaml")
+
+
+@pytest.mark.vecat(network=IO_NETWORK)
+def test_a_network_file_is_served_and_its_inputs_can_be_forced(vecat_network):
+    assert broadcast_read_wkc(vecat_network.iface) == 4  # coupler, output, input and analog terminals
+    forced = vecat_network.set_input(slave=2, channel=1, value=0)
+    assert forced in vecat_network.command("list")
+    vecat_network.release_input(forced)
+    assert forced not in vecat_network.command("list")
+    from vecat import FaultError
+
+    with pytest.raises(FaultError):
+        vecat_network.set_input(slave=1, channel=0, value=1)  # an output terminal has no inputs to force
+
+
 def test_the_report_on_the_master_is_silent_for_a_master_that_breaks_no_rule(vecat_network):
     assert broadcast_read_wkc(vecat_network.iface) == 2
     assert vecat_network.report_findings() == []

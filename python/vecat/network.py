@@ -33,14 +33,15 @@ def _ip(*args):
 
 
 class Network:
-    """A line of virtual slaves served by `vecat run`.
+    """A line of virtual slaves served by `vecat run`: `slaves` vecat drives, or the devices and cabling of a
+    network file (`network`, docs/network-file.md).
 
     iface: the master's end of the veth pair (open it with your master); control: the fault-injection socket;
     pcap: the capture of every frame in and out and report: the report on the master (JUnit XML, see
     docs/master-report.md), both written when the network stops; log: vecat's output.
     """
 
-    def __init__(self, slaves=2, args=(), vecat=None, workdir=None, startup_timeout=20.0):
+    def __init__(self, slaves=2, args=(), vecat=None, workdir=None, startup_timeout=20.0, network=None):
         if os.environ.get("VECAT_EXEC") != "1":
             raise NotInPrivateNamespace(
                 "vecat networks are made in a private network namespace: run the tests under "
@@ -58,7 +59,8 @@ class Network:
         try:
             _ip("link", "set", "dev", self.iface, "up")
             _ip("link", "set", "dev", self.slave_iface, "up")
-            cmd = [_vecat_binary(vecat), "run", "--iface", self.slave_iface, "--slaves", str(slaves),
+            served = ["--network", str(network)] if network else ["--slaves", str(slaves)]
+            cmd = [_vecat_binary(vecat), "run", "--iface", self.slave_iface, *served,
                    "--control", self.control, "--pcap", self.pcap, "--report", self.report, *args]
             with open(self.log, "w") as log:
                 self._proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
@@ -108,6 +110,16 @@ class Network:
     def clear(self, what="all"):
         return self.command(f"clear {what}")
 
+    def set_input(self, slave, channel, value):
+        """Forces an input of a built-in input terminal of a network file (slave: its position on the line)
+        to value until release_input() with the id this returns (fault set_input)."""
+        reply = self.inject("set_input", slave=slave, channel=channel, value=value)
+        return reply.split()[1]  # "ok ID"
+
+    def release_input(self, forced_id):
+        """The input follows its signal or wire again."""
+        return self.clear(forced_id)
+
     def report_findings(self):
         """The rules of the report on the master that the master broke, as dicts with the rule's id, its
         severity ("error" or "warning") and what happened; [] when it broke none. Stops the network first
@@ -142,6 +154,7 @@ class Network:
         self.stop()
 
 
-def start_network(slaves=2, args=(), vecat=None, workdir=None):
-    """Serves `slaves` virtual drives (plus any `vecat run` options in args); use it as a context manager."""
-    return Network(slaves=slaves, args=args, vecat=vecat, workdir=workdir)
+def start_network(slaves=2, args=(), vecat=None, workdir=None, network=None):
+    """Serves `slaves` virtual drives, or the network file `network` (plus any `vecat run` options in args);
+    use it as a context manager."""
+    return Network(slaves=slaves, args=args, vecat=vecat, workdir=workdir, network=network)
