@@ -51,6 +51,7 @@ struct Sampler::Slot {
     std::uint64_t samples = 0;
     // Previous values for the event detection.
     std::uint8_t al_status = 0;
+    std::uint16_t statusword_seen = 0;  // the statusword cia402_state was decoded from
     std::uint8_t cia402_state = 0;
     std::int8_t mode_value = 0;
     std::uint16_t fault = 0;
@@ -100,7 +101,10 @@ Sampler::Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt) : seg
             s.emergencies = s.coe->sdo_server().counters().emergencies_sent;
         }
         s.al_status = s.slave->esc().al_status();
-        if (s.axis) s.cia402_state = cia402_state(read<std::uint16_t>(s.statusword));
+        if (s.axis) {
+            s.statusword_seen = read<std::uint16_t>(s.statusword);
+            s.cia402_state = cia402_state(s.statusword_seen);
+        }
         s.mode_value = read<std::int8_t>(s.mode);
         s.fault = read<std::uint16_t>(s.error_code);
     }
@@ -143,8 +147,9 @@ void Sampler::sample(Slot& s, std::uint64_t now_ns) {
         a.time_ns = now_ns;
         a.cycle = s.coe->exchanges();
         a.slave = s.position;
-        a.statusword = read<std::uint16_t>(s.statusword);
-        a.cia402_state = cia402_state(a.statusword);
+        // The statusword detect_events read and decoded just before, in the same frame.
+        a.statusword = s.statusword_seen;
+        a.cia402_state = s.cia402_state;
         a.mode = read<std::int8_t>(s.mode);
         a.controlword = read<std::uint16_t>(s.controlword);
         a.error_code = read<std::uint16_t>(s.error_code);
@@ -224,10 +229,14 @@ void Sampler::detect_events(Slot& s, std::uint64_t now_ns) {
         status(s, now_ns);
     }
     if (s.axis) {
-        const std::uint8_t st = cia402_state(read<std::uint16_t>(s.statusword));
-        if (st != s.cia402_state) {
-            event(s, now_ns, EventKind::Cia402State, 0, s.cia402_state, st);
-            s.cia402_state = st;
+        const auto sw = read<std::uint16_t>(s.statusword);
+        if (sw != s.statusword_seen) {  // the state is the statusword's: decoded when that changed
+            s.statusword_seen = sw;
+            const std::uint8_t st = cia402_state(sw);
+            if (st != s.cia402_state) {
+                event(s, now_ns, EventKind::Cia402State, 0, s.cia402_state, st);
+                s.cia402_state = st;
+            }
         }
     }
     if (!s.coe) return;

@@ -60,7 +60,7 @@ class Sampler {
 
   private:
     struct Slot;
-    void sample(Slot& s, std::uint64_t now_ns);
+    void sample(Slot& s, std::uint64_t now_ns);  // after detect_events(s) of the same frame
     void status(Slot& s, std::uint64_t now_ns);
     void detect_events(Slot& s, std::uint64_t now_ns);
     void event(const Slot& s, std::uint64_t now_ns, EventKind k, std::uint32_t code, std::int64_t old_value,
