@@ -21,7 +21,7 @@ namespace vecat::cia402 {
 
 // Mode, supported(), fault:: codes and sw:: bits: drive_io.hpp.
 
-class Drive : public coe::CoeApplication {
+class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     friend std::shared_ptr<twinsync::Channel> connect_twinsync(Drive&, Drive&, double, double);
 
   public:
@@ -43,7 +43,7 @@ class Drive : public coe::CoeApplication {
     std::uint64_t simulated_time_ns() const { return sim_ns_; }
     // The TWINsync option card of this drive, and its status (nullptr when no cable is connected).
     twinsync::Port& twinsync_port() { return *twin_; }
-    const twinsync::LinkStatus* twinsync_status() const {
+    const twinsync::LinkStatus* twinsync_status() const override {
         return twin_->channel() ? &twin_->status() : nullptr;
     }
     // The TWINsync error the drive has raised as a fault (40-xx, 39-xx), if any.

@@ -1,4 +1,4 @@
-// The ESC silicon as one unit (about 650 lines): a datagram's way through the register space, the FMMUs
+// The ESC silicon as one unit (about 700 lines): a datagram's way through the register space, the FMMUs
 // and the SII interface is one piece of logic that each part must see whole. The SyncManagers (their
 // state, their ECAT accesses and the PDI side) are in esc_sync_managers.cpp, the DC unit in
 // distributed_clock, the wire layouts in src/protocol. The access rules are listed in README.md.
@@ -149,13 +149,6 @@ bool Esc::port_open(unsigned port) const {
     return false;
 }
 
-std::uint8_t Esc::open_ports() const {
-    std::uint8_t m = 0;
-    for (unsigned p = 0; p < 4; ++p)
-        if (port_open(p)) m = static_cast<std::uint8_t>(m | (1u << p));
-    return m;
-}
-
 void Esc::set_port_link(unsigned port, bool up) {
     if (port > 3) return;
     if (!up && port_link(port)) {
@@ -181,12 +174,17 @@ void Esc::update_dl_status() {
     // Enhanced link detection activated for at least one port (0x0141 bits 1, 4-7; section II 0x0110 bit 2).
     if (mem_[addr(Reg::EscConfiguration)] & protocol::esc_config::EnhancedLinkDetection)
         v |= dl_status::EnhancedLinkDetection;
+    std::uint8_t open = 0;
     for (unsigned p = 0; p < 4; ++p) {
         const bool implemented = ((cfg_.port_descriptor >> (2 * p)) & 0x3) != 0;
         if (implemented && port_link(p))
             v |= static_cast<std::uint16_t>(dl_status::link(p) | dl_status::communication(p));
-        if (!port_open(p)) v |= dl_status::loop_closed(p);
+        if (port_open(p))
+            open = static_cast<std::uint8_t>(open | (1u << p));
+        else
+            v |= dl_status::loop_closed(p);
     }
+    open_ports_ = open;
     st_le16(&mem_[addr(Reg::DlStatus)], v);
 }
 
@@ -203,21 +201,6 @@ void Esc::count_forwarded_error(unsigned port) {
 
 void Esc::count_processing_unit_error() {
     saturating_inc(mem_[addr(Reg::EcatProcessingUnitErrorCounter)]);
-}
-
-void Esc::set_al_event(std::uint32_t bits) {
-    st_le32(&mem_[addr(Reg::AlEventRequest)], ld_le32(&mem_[addr(Reg::AlEventRequest)]) | bits);
-}
-void Esc::clear_al_event(std::uint32_t bits) {
-    st_le32(&mem_[addr(Reg::AlEventRequest)], ld_le32(&mem_[addr(Reg::AlEventRequest)]) & ~bits);
-}
-
-void Esc::copy_out(std::uint8_t* dst, const std::uint8_t* src, std::size_t n, bool or_into) {
-    if (or_into)
-        for (std::size_t k = 0; k < n; ++k)
-            dst[k] |= src[k];
-    else
-        std::memcpy(dst, src, n);
 }
 
 bool Esc::addressed_fixed(std::uint16_t adp) const {
@@ -437,6 +420,67 @@ bool Esc::ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_i
     return counted;
 }
 
+bool Esc::plain_register_write(std::uint32_t first, std::uint32_t last) const {
+    return !overlaps(first, last, addr(Reg::AlControl), 2) &&
+           !overlaps(first, last, sm_addr(0), kSmSize * cfg_.sm_count) &&
+           !(overlaps(first, last, addr(Reg::DigitalOutputData), protocol::kDigitalOutputSize) &&
+             has_digital_io()) &&
+           (cfg_.dc_system_time_unit ||
+            !overlaps(first, last, kDcSystemTimeFirst, kDcEnd - kDcSystemTimeFirst));
+}
+
+bool Esc::write_registers_masked(std::uint32_t a, const std::uint8_t* src, std::size_t n) {
+    std::uint8_t* mem = mem_.data() + a;
+    const std::uint8_t* mask = wmask_.mask.data() + a;
+    std::size_t k = 0;
+    for (; k + 8 <= n; k += 8) {  // eight bytes at a time (the system time, a DC start time, an FMMU)
+        std::uint64_t m, v, old;
+        std::memcpy(&m, mask + k, 8);
+        std::memcpy(&v, src + k, 8);
+        std::memcpy(&old, mem + k, 8);
+        old = (old & ~m) | (v & m);
+        std::memcpy(mem + k, &old, 8);
+    }
+    for (; k < n; ++k)
+        mem[k] = static_cast<std::uint8_t>((mem[k] & ~mask[k]) | (src[k] & mask[k]));
+    // Counted when one byte lies in a register the master may write, even if its value is ignored
+    // (reserved bits); read-only and absent registers are not written (ESC datasheet section I 2.4,
+    // section II 1).
+    for (std::size_t j = 0; j < n; ++j)
+        if (wmask_.writable(static_cast<std::uint16_t>(a + j))) return true;
+    return false;
+}
+
+bool Esc::write_registers_bytewise(std::uint32_t a, const std::uint8_t* src, std::size_t n,
+                                   bool& al_control_written) {
+    const bool al_control_refused = al_control_refuses_writes();
+    bool counted = false;
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t ad = a + static_cast<std::uint32_t>(k);
+        if (absent_dc_unit(ad)) continue;  // not there: not written, not counted
+        std::uint8_t m = wmask_.mask[ad];
+        if (ad - addr(Reg::AlControl) < 2u) {
+            if (al_control_refused) continue;  // still unread by the PDI: not written, not counted
+            al_control_written = true;
+        }
+        if (ad - addr(Reg::DigitalOutputData) < protocol::kDigitalOutputSize && has_digital_io()) {
+            // A SyncManager on the digital output register guards it like RAM.
+            if (const int si = sm_covering(ad); si >= 0) {
+                const auto i = static_cast<unsigned>(si);
+                if (!sm_[i].locked && sm_ecat_write(i, ad - sm_[i].start, src + k, 1)) counted = true;
+                continue;
+            }
+        }
+        if (ad >= 0x0800 && ad < sm_addr(cfg_.sm_count) && (ad & 7) < 5 &&
+            (mem_[(ad & ~7u) + sm::Activate] & sm::ActEnable))
+            m = 0;  // SyncManager configuration is locked while the SM is enabled
+        mem_[ad] = static_cast<std::uint8_t>((mem_[ad] & ~m) | (src[k] & m));
+        // Counted as in write_registers_masked, also when the SM configuration is locked.
+        counted |= wmask_.writable(static_cast<std::uint16_t>(ad));
+    }
+    return counted;
+}
+
 bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t) {
     bool counted = false;
     std::uint32_t reg_lo = 0xFFFF, reg_hi = 0;
@@ -444,7 +488,6 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
     std::array<std::uint8_t, 8> systime{};
     std::uint8_t systime_bytes = 0;
     const std::uint8_t activation_before = mem_[addr(Reg::DcActivation)];
-    const bool al_control_refused = al_control_refuses_writes();
     bool al_control_written = false;
     std::size_t pos = 0;
     while (pos < n) {
@@ -454,43 +497,29 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
         if (cur > 0xFFFF) break;
         if (cur < kRegisterSpaceSize) {
             run = std::min<std::size_t>(rem, kRegisterSpaceSize - cur);
-            for (std::size_t k = 0; k < run; ++k) {
-                const std::uint32_t ad = cur + static_cast<std::uint32_t>(k);
-                if (absent_dc_unit(ad)) continue;  // not there: not written, not counted
-                std::uint8_t m = wmask_.mask[ad];
-                if (ad - addr(Reg::AlControl) < 2u) {
-                    if (al_control_refused) continue;  // still unread by the PDI: not written, not counted
-                    al_control_written = true;
-                }
-                if (ad - addr(Reg::DigitalOutputData) < protocol::kDigitalOutputSize && has_digital_io()) {
-                    // A SyncManager on the digital output register guards it like RAM.
-                    if (const int si = sm_covering(ad); si >= 0) {
-                        const auto i = static_cast<unsigned>(si);
-                        if (!sm_[i].locked && sm_ecat_write(i, ad - sm_[i].start, src + pos + k, 1))
-                            counted = true;
-                        continue;
-                    }
-                }
-                if (ad >= 0x0800 && ad < sm_addr(cfg_.sm_count) && (ad & 7) < 5 &&
-                    (mem_[(ad & ~7u) + sm::Activate] & sm::ActEnable))
-                    m = 0;  // SyncManager configuration is locked while the SM is enabled
-                const std::uint8_t v = src[pos + k];
-                if (ad == addr(Reg::SiiControl) + 1) {
-                    written_sii_cmd_ = v;
-                    sii_cmd_written = true;
-                } else if (ad >= addr(Reg::DcSystemTime) && ad < addr(Reg::DcSystemTime) + 8u) {
-                    systime[ad - addr(Reg::DcSystemTime)] = v;
-                    systime_bytes =
-                        static_cast<std::uint8_t>(systime_bytes | (1u << (ad - addr(Reg::DcSystemTime))));
-                }
-                mem_[ad] = static_cast<std::uint8_t>((mem_[ad] & ~m) | (v & m));
-                // Counted when one byte lies in a register the master may write, even if its value is
-                // ignored (reserved bits, SM configuration locked); read-only and absent registers are
-                // not written (ESC datasheet section I 2.4, section II 1).
-                counted |= wmask_.writable(static_cast<std::uint16_t>(ad));
+            const std::uint32_t last = cur + static_cast<std::uint32_t>(run) - 1;
+            const std::uint8_t* v = src + pos;
+            // Most writes (the system time of the cyclic FRMW, error counters, FMMUs, SII address) touch
+            // none of the registers with rules of their own: those take the masked copy of the whole run.
+            if (plain_register_write(cur, last))
+                counted |= write_registers_masked(cur, v, run);
+            else
+                counted |= write_registers_bytewise(cur, v, run, al_control_written);
+            // What a write starts acts on the value the master sent: the SII command byte, the system time
+            // (only where the ESC has the system time unit).
+            constexpr std::uint32_t sii_cmd = addr(Reg::SiiControl) + 1;
+            if (overlaps(cur, last, sii_cmd, 1)) {
+                written_sii_cmd_ = v[sii_cmd - cur];
+                sii_cmd_written = true;
+            }
+            constexpr std::uint32_t st = addr(Reg::DcSystemTime);
+            if (cfg_.dc_system_time_unit && overlaps(cur, last, st, 8)) {
+                const std::uint32_t lo = std::max(cur, st), hi = std::min(last, st + 7);
+                std::memcpy(&systime[lo - st], v + (lo - cur), hi - lo + 1);
+                systime_bytes |= static_cast<std::uint8_t>(((1u << (hi - lo + 1)) - 1) << (lo - st));
             }
             reg_lo = std::min(reg_lo, cur);
-            reg_hi = std::max(reg_hi, cur + static_cast<std::uint32_t>(run) - 1);
+            reg_hi = std::max(reg_hi, last);
         } else if (cur < mem_.size()) {
             const int s = sm_covering(cur);
             if (s >= 0) {
@@ -522,7 +551,7 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
         after_register_write(static_cast<std::uint16_t>(reg_lo), static_cast<std::uint16_t>(reg_hi), t);
         if (overlaps(reg_lo, reg_hi, kDcFirst, kDcSize))
             dc_.after_write(static_cast<std::uint16_t>(reg_lo), static_cast<std::uint16_t>(reg_hi), t,
-                            open_ports(), activation_before);
+                            open_ports_, activation_before);
     }
     return counted;
 }

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "common/bytes.hpp"
@@ -107,6 +108,11 @@ class Esc {
     };
     SmConfigView sm_config(unsigned i) const;
     protocol::SmConfig sm_block(unsigned i) const;  // SyncManager i's register block as written
+    // The master's enable bit of SyncManager i (0x0806 + 8 i, bit 0): sm_config(i).ecat_enabled without
+    // unpacking the block (the firmware asks it at every process data exchange).
+    bool sm_ecat_enabled(unsigned i) const {
+        return (mem_[protocol::sm_addr(i) + protocol::sm::Activate] & protocol::sm::ActEnable) != 0;
+    }
     void pdi_deactivate_sm(unsigned i, bool deactivate);
     // SM activation register changed by the master (enable or repeat request): cleared by this read.
     bool pdi_take_sm_activation_event();
@@ -205,7 +211,13 @@ class Esc {
     };
 
     // Copies memory into a datagram, or ORs it in (broadcast reads).
-    static void copy_out(std::uint8_t* dst, const std::uint8_t* src, std::size_t n, bool or_into);
+    static void copy_out(std::uint8_t* dst, const std::uint8_t* src, std::size_t n, bool or_into) {
+        if (or_into)
+            for (std::size_t k = 0; k < n; ++k)
+                dst[k] |= src[k];
+        else
+            std::memcpy(dst, src, n);
+    }
     void physical(protocol::DatagramView d, std::uint16_t ado, bool do_read, bool do_write, bool or_read,
                   const FrameTiming& t, unsigned& wkc_add);
     void logical(protocol::DatagramView d, bool do_read, bool do_write, const FrameTiming& t,
@@ -214,6 +226,16 @@ class Esc {
     // Accesses with full ECAT semantics (masks, SyncManagers, side effects); true if any byte counted.
     bool ecat_read(std::uint16_t a, std::uint8_t* dst, std::size_t n, bool or_into, const FrameTiming& t);
     bool ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, const FrameTiming& t);
+    // A write of the registers first..last that touches none of the registers whose write is more than the
+    // masked copy (AL control, the SyncManager blocks, the digital output register, an absent DC unit).
+    bool plain_register_write(std::uint32_t first, std::uint32_t last) const;
+    // The masked copy of n register bytes from a: the bits of the write mask are stored; true if any byte
+    // is one the master may write.
+    bool write_registers_masked(std::uint32_t a, const std::uint8_t* src, std::size_t n);
+    // The same byte by byte with the rules of the registers plain_register_write names; al_control_written
+    // is set when AL control took a byte.
+    bool write_registers_bytewise(std::uint32_t a, const std::uint8_t* src, std::size_t n,
+                                  bool& al_control_written);
     bool al_control_refuses_writes() const;
     bool absent_dc_unit(std::uint32_t a) const;  // in the system time unit of an ESC without one
     // Where a SyncManager of span bytes may lie: in the process RAM, or on the digital output register
@@ -222,19 +244,26 @@ class Esc {
     bool has_digital_io() const;
     bool sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into);
     bool sm_ecat_write(unsigned i, std::size_t off, const std::uint8_t* src, std::size_t n);
-    int sm_covering(std::uint32_t a) const;  // an active or locked SM guarding this byte; -1 if none
-    std::uint32_t next_sm_start(std::uint32_t a) const;
-    std::uint8_t* ecat_write_target(std::uint32_t a);  // where an ECAT write of this byte lands
+    // An active or locked SM guarding this byte; -1 if none. Inline (below): every access to the process RAM
+    // asks it.
+    int sm_covering(std::uint32_t a) const;
+    std::uint32_t next_sm_start(std::uint32_t a) const;  // the first guarded area above a (or the end)
+    std::uint8_t* ecat_write_target(std::uint32_t a);    // where an ECAT write of this byte lands
 
     void refresh_dynamic_registers(std::uint16_t first, std::uint16_t last, const FrameTiming& t);
     void after_register_write(std::uint16_t first, std::uint16_t last, const FrameTiming& t);
-    std::uint8_t open_ports() const;  // bit p: port_open(p)
     void update_sm(unsigned i);
     void update_sm_status(unsigned i);
     void update_fmmu(unsigned i);
     void sii_command(std::uint8_t cmd_byte);
-    void set_al_event(std::uint32_t bits);
-    void clear_al_event(std::uint32_t bits);
+    void set_al_event(std::uint32_t bits) {
+        std::uint8_t* r = &mem_[protocol::addr(protocol::Reg::AlEventRequest)];
+        st_le32(r, ld_le32(r) | bits);
+    }
+    void clear_al_event(std::uint32_t bits) {
+        std::uint8_t* r = &mem_[protocol::addr(protocol::Reg::AlEventRequest)];
+        st_le32(r, ld_le32(r) & ~bits);
+    }
     void update_dl_status();
 
     EscConfig cfg_;
@@ -253,6 +282,9 @@ class Esc {
     std::uint64_t* port_changes_ = nullptr;
     std::uint8_t auto_closed_ = 0;  // ports that "auto close" closed at a link loss, until the master reopens
     std::uint8_t link_mask_ = 0x01;
+    // Bit p: port_open(p), as update_dl_status last found it (it runs whenever a link, the loop setting of
+    // DL control or an auto close changes).
+    std::uint8_t open_ports_ = 0;
     std::uint8_t written_sii_cmd_ = 0;
     // AL control written by the master and not yet read by the PDI: without device emulation the
     // register then refuses further writes (ESC datasheet section II 0x0120, "behaves like a mailbox").
@@ -265,5 +297,23 @@ class Esc {
     std::array<std::uint8_t, 2048 + 16> scratch_{};
     EscCounters counters_;
 };
+
+inline int Esc::sm_covering(std::uint32_t a) const {
+    for (std::uint32_t m = sm_guard_mask_; m; m &= m - 1) {
+        const auto i = static_cast<unsigned>(__builtin_ctz(m));
+        const SmState& s = sm_[i];
+        if (a >= s.start && a < static_cast<std::uint32_t>(s.start) + s.length) return static_cast<int>(i);
+    }
+    return -1;
+}
+
+inline std::uint32_t Esc::next_sm_start(std::uint32_t a) const {
+    auto best = static_cast<std::uint32_t>(mem_.size());
+    for (std::uint32_t m = sm_guard_mask_; m; m &= m - 1) {
+        const auto i = static_cast<unsigned>(__builtin_ctz(m));
+        if (sm_[i].start > a && sm_[i].start < best) best = sm_[i].start;
+    }
+    return best;
+}
 
 }  // namespace vecat::esc

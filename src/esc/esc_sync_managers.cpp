@@ -1,7 +1,7 @@
-// The ESC's SyncManagers (part of class Esc, see esc.cpp): which SyncManager guards an address, their
-// state from the register blocks 0x0800 + 8 n, the ECAT accesses of their areas (mailbox, three buffers,
-// one byte, locked when the PDI deactivated them) and the PDI side. ESC datasheet section I chapter 8;
-// the rules are listed in README.md.
+// The ESC's SyncManagers (part of class Esc, see esc.cpp): their state from the register blocks
+// 0x0800 + 8 n, the ECAT accesses of their areas (mailbox, three buffers, one byte, locked when the PDI
+// deactivated them) and the PDI side; which SyncManager guards an address is inline in esc.hpp (every
+// access of the process RAM asks it). ESC datasheet section I chapter 8; the rules are listed in README.md.
 #include <algorithm>
 #include <cstring>
 
@@ -18,28 +18,6 @@ using protocol::sm_addr;
 using protocol::SmConfig;
 namespace al_event = protocol::al_event;
 namespace sm = protocol::sm;
-
-int Esc::sm_covering(std::uint32_t a) const {
-    std::uint32_t m = sm_guard_mask_;
-    while (m) {
-        const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
-        m &= m - 1;
-        const SmState& s = sm_[i];
-        if (a >= s.start && a < static_cast<std::uint32_t>(s.start) + s.length) return static_cast<int>(i);
-    }
-    return -1;
-}
-
-std::uint32_t Esc::next_sm_start(std::uint32_t a) const {
-    std::uint32_t best = static_cast<std::uint32_t>(mem_.size());
-    std::uint32_t m = sm_guard_mask_;
-    while (m) {
-        const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
-        m &= m - 1;
-        if (sm_[i].start > a) best = std::min<std::uint32_t>(best, sm_[i].start);
-    }
-    return best;
-}
 
 bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size_t n, bool or_into) {
     SmState& s = sm_[i];

@@ -149,6 +149,14 @@ Slave::Slave(const DeviceModel& model, EscConfig esc_cfg, std::unique_ptr<Applic
     sm_mbx_in_ = idx(device::SmType::MailboxIn);
     sm_out_ = idx(device::SmType::Outputs);
     sm_in_ = idx(device::SmType::Inputs);
+    decl_out_ = desc_.sm_of_type(device::SmType::Outputs);
+    decl_in_ = desc_.sm_of_type(device::SmType::Inputs);
+    const auto may_bypass = [](const device::SyncManagerConfig* decl, int smi) {
+        return decl && smi >= 0 &&
+               (!(decl->enable & device::sm_enable::Enable) || (decl->enable & device::sm_enable::Virtual));
+    };
+    out_may_bypass_ = may_bypass(decl_out_, sm_out_);
+    in_may_bypass_ = may_bypass(decl_in_, sm_in_);
     // Mailbox buffers of the mailbox sizes the description declares (an ESI may declare more than the
     // usual 1486 bytes; a master fills such a mailbox with several datagrams).
     const auto boot = desc_.bootstrap_mailbox();
@@ -326,27 +334,20 @@ AlStatusCode Slave::check_process_data_config() const {
     return AlStatusCode::NoError;
 }
 
-bool Slave::through_sm(int smi, device::SmType type) const {
-    const auto* decl = desc_.sm_of_type(type);
-    if (!decl || smi < 0 || esc_.sm_config(static_cast<unsigned>(smi)).ecat_enabled) return true;
-    return (decl->enable & device::sm_enable::Enable) && !(decl->enable & device::sm_enable::Virtual);
-}
-
 bool Slave::read_outputs(unsigned len) {
     if (len == 0 || sm_out_ < 0) return false;
-    if (through_sm(sm_out_, device::SmType::Outputs))
+    if (through_sm(sm_out_, out_may_bypass_))
         return esc_.pdi_buffer_read(static_cast<unsigned>(sm_out_), Bytes(outputs_.data(), len));
-    esc_.pdi_read_memory(desc_.sm_of_type(device::SmType::Outputs)->start, Bytes(outputs_.data(), len));
+    esc_.pdi_read_memory(decl_out_->start, Bytes(outputs_.data(), len));
     return true;
 }
 
 void Slave::write_inputs(unsigned len) {
     if (len == 0 || sm_in_ < 0) return;
-    if (through_sm(sm_in_, device::SmType::Inputs))
+    if (through_sm(sm_in_, in_may_bypass_))
         esc_.pdi_buffer_write(static_cast<unsigned>(sm_in_), ConstBytes(inputs_.data(), len));
     else
-        esc_.pdi_write_memory(desc_.sm_of_type(device::SmType::Inputs)->start,
-                              ConstBytes(inputs_.data(), len));
+        esc_.pdi_write_memory(decl_in_->start, ConstBytes(inputs_.data(), len));
 }
 
 void Slave::handle_al_control(std::uint64_t now_ns) {
@@ -429,8 +430,7 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
 }
 
 bool Slave::outputs_valid() const {
-    if (app_->output_bytes() == 0 || sm_out_ < 0 || !through_sm(sm_out_, device::SmType::Outputs))
-        return true;
+    if (app_->output_bytes() == 0 || sm_out_ < 0 || !through_sm(sm_out_, out_may_bypass_)) return true;
     return esc_.sm_buffer_writes(static_cast<unsigned>(sm_out_)) > outputs_at_safeop_;
 }
 

@@ -179,8 +179,11 @@ class Slave {
     void reset_mailbox();
     protocol::AlStatusCode check_process_data_config() const;
     // The process data of this direction goes through its SyncManager; false: through an FMMU alone (the
-    // SM is virtual, or declared not enabled and left off by the master).
-    bool through_sm(int smi, device::SmType type) const;
+    // SM is virtual, or declared not enabled and left off by the master). may_bypass: out_may_bypass_ or
+    // in_may_bypass_.
+    bool through_sm(int smi, bool may_bypass) const {
+        return !may_bypass || esc_.sm_ecat_enabled(static_cast<unsigned>(smi));
+    }
     bool read_outputs(unsigned len);
     void write_inputs(unsigned len);
     void service_mailbox();
@@ -204,6 +207,12 @@ class Slave {
     std::uint64_t op_pending_since_ = 0;
     std::uint64_t outputs_at_safeop_ = 0;
     int sm_mbx_out_ = -1, sm_mbx_in_ = -1, sm_out_ = -1, sm_in_ = -1;
+    // The process data SyncManagers as the description declares them (nullptr: none), looked up once, and
+    // whether the data of that direction may bypass it: declared virtual, or not enabled (the master may
+    // leave it off).
+    const device::SyncManagerConfig* decl_out_ = nullptr;
+    const device::SyncManagerConfig* decl_in_ = nullptr;
+    bool out_may_bypass_ = false, in_may_bypass_ = false;
     std::uint8_t last_counter_ = 0;
     std::uint8_t reply_counter_ = 0;
     std::unique_ptr<MailboxReplySink> sink_;

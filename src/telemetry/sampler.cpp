@@ -1,9 +1,10 @@
 #include "telemetry/sampler.hpp"
 
-#include "cia402/drive.hpp"
 #include "coe/coe_application.hpp"
+#include "protocol/cia402.hpp"
 #include "protocol/cia402_objects.hpp"
 #include "protocol/registers.hpp"
+#include "twinsync/status.hpp"
 
 namespace vecat::telemetry {
 
@@ -32,7 +33,9 @@ struct Sampler::Slot {
     std::uint16_t position = 0;
     esc::Slave* slave = nullptr;
     coe::CoeApplication* coe = nullptr;  // nullptr: no CoE (status only)
-    cia402::Drive* drive = nullptr;      // nullptr: no drive (no axis samples)
+    // A CiA 402 device: its dictionary has the statusword 0x6041 (axis samples, CiA 402 state events).
+    bool axis = false;
+    const twinsync::StatusSource* twinsync = nullptr;  // nullptr: no TWINsync option card
     // The CiA 402 objects (unbound where the device has none: they read 0).
     coe::Value<std::uint16_t> controlword;
     coe::Value<std::uint16_t> statusword;
@@ -48,6 +51,7 @@ struct Sampler::Slot {
     std::uint64_t samples = 0;
     // Previous values for the event detection.
     std::uint8_t al_status = 0;
+    std::uint16_t statusword_seen = 0;  // the statusword cia402_state was decoded from
     std::uint8_t cia402_state = 0;
     std::int8_t mode_value = 0;
     std::uint16_t fault = 0;
@@ -63,6 +67,12 @@ T read(const coe::Value<T>& v) {
     return v.get_or(T{});
 }
 
+// The CiA 402 state the statusword shows (IEC 61800-7-201 Table 30), kNoCia402State for a pattern of none.
+std::uint8_t cia402_state(std::uint16_t statusword) {
+    const auto st = protocol::cia402::decode_state(statusword);
+    return st ? static_cast<std::uint8_t>(*st) : kNoCia402State;
+}
+
 }  // namespace
 
 Sampler::Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt) : seg_(seg), q_(q), opt_(opt) {
@@ -74,7 +84,7 @@ Sampler::Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt) : seg
         s.position = static_cast<std::uint16_t>(i);
         s.slave = &seg.slave(i);
         s.coe = dynamic_cast<coe::CoeApplication*>(&s.slave->app());
-        s.drive = dynamic_cast<cia402::Drive*>(&s.slave->app());
+        s.twinsync = dynamic_cast<const twinsync::StatusSource*>(&s.slave->app());
         if (s.coe) {
             auto& od = s.coe->dictionary();
             s.controlword = coe::bind(od, obj::controlword);
@@ -86,11 +96,15 @@ Sampler::Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt) : seg
             s.velocity_actual = coe::bind(od, obj::velocity_actual_value);
             s.torque_actual = coe::bind(od, obj::torque_actual_value);
             s.following_error = coe::bind(od, obj::following_error_actual_value);
+            s.axis = s.statusword.bound();
             s.last_exchange = s.coe->exchanges();
             s.emergencies = s.coe->sdo_server().counters().emergencies_sent;
         }
         s.al_status = s.slave->esc().al_status();
-        if (s.drive) s.cia402_state = static_cast<std::uint8_t>(s.drive->cia402_state());
+        if (s.axis) {
+            s.statusword_seen = read<std::uint16_t>(s.statusword);
+            s.cia402_state = cia402_state(s.statusword_seen);
+        }
         s.mode_value = read<std::int8_t>(s.mode);
         s.fault = read<std::uint16_t>(s.error_code);
     }
@@ -128,15 +142,16 @@ void Sampler::sample_all(std::uint64_t now_ns) {
 }
 
 void Sampler::sample(Slot& s, std::uint64_t now_ns) {
-    if (s.drive) {
+    if (s.axis) {
         AxisSample a;
         a.time_ns = now_ns;
         a.cycle = s.coe->exchanges();
         a.slave = s.position;
-        a.cia402_state = static_cast<std::uint8_t>(s.drive->cia402_state());
+        // The statusword detect_events read and decoded just before, in the same frame.
+        a.statusword = s.statusword_seen;
+        a.cia402_state = s.cia402_state;
         a.mode = read<std::int8_t>(s.mode);
         a.controlword = read<std::uint16_t>(s.controlword);
-        a.statusword = read<std::uint16_t>(s.statusword);
         a.error_code = read<std::uint16_t>(s.error_code);
         a.position_demand = read<std::int32_t>(s.position_demand);
         a.position_actual = read<std::int32_t>(s.position_actual);
@@ -144,7 +159,7 @@ void Sampler::sample(Slot& s, std::uint64_t now_ns) {
         a.torque_actual = read<std::int16_t>(s.torque_actual);
         a.following_error = read<std::int32_t>(s.following_error);
         if (q_.push(Record{a})) ++stats_.samples;
-        if (const twinsync::LinkStatus* ts = s.drive->twinsync_status()) {
+        if (const twinsync::LinkStatus* ts = s.twinsync ? s.twinsync->twinsync_status() : nullptr) {
             TwinsyncSample t;
             t.time_ns = now_ns;
             t.slave = s.position;
@@ -213,11 +228,15 @@ void Sampler::detect_events(Slot& s, std::uint64_t now_ns) {
         s.al_status = al;
         status(s, now_ns);
     }
-    if (s.drive) {
-        const auto st = static_cast<std::uint8_t>(s.drive->cia402_state());
-        if (st != s.cia402_state) {
-            event(s, now_ns, EventKind::Cia402State, 0, s.cia402_state, st);
-            s.cia402_state = st;
+    if (s.axis) {
+        const auto sw = read<std::uint16_t>(s.statusword);
+        if (sw != s.statusword_seen) {  // the state is the statusword's: decoded when that changed
+            s.statusword_seen = sw;
+            const std::uint8_t st = cia402_state(sw);
+            if (st != s.cia402_state) {
+                event(s, now_ns, EventKind::Cia402State, 0, s.cia402_state, st);
+                s.cia402_state = st;
+            }
         }
     }
     if (!s.coe) return;

@@ -1,8 +1,11 @@
 // The cyclic-thread side of the telemetry: after each frame the serve loop processed, the sampler reads
-// the segment's slaves (the drive's dictionary objects, the ESC registers, the TWINsync link status) and
-// pushes records into the bounded queue. It samples an axis when its slave exchanged process data, every
-// `decimation`-th exchange; it detects events (AL state, CiA 402 state, mode, 0x603F faults, emergencies)
-// on every frame. It neither allocates nor blocks: a full queue drops the record and counts it.
+// the segment's slaves (the dictionary objects of each CiA 402 device, the ESC registers, the TWINsync link
+// status) and pushes records into the bounded queue. It samples an axis when its slave exchanged process
+// data, every `decimation`-th exchange; it detects events (AL state, CiA 402 state, mode, 0x603F faults,
+// emergencies) on every frame. A CiA 402 device is one whose dictionary has the statusword 0x6041; its state
+// is the statusword decoded (protocol::cia402::decode_state), as a master sees it. The TWINsync status comes
+// from an application that is a twinsync::StatusSource (the drive). It neither allocates nor blocks: a full
+// queue drops the record and counts it.
 #pragma once
 
 #include <cstdint>
@@ -16,9 +19,6 @@ namespace vecat::coe {
 class CoeApplication;
 class Entry;
 }  // namespace vecat::coe
-namespace vecat::cia402 {
-class Drive;
-}
 
 namespace vecat::telemetry {
 
@@ -60,7 +60,7 @@ class Sampler {
 
   private:
     struct Slot;
-    void sample(Slot& s, std::uint64_t now_ns);
+    void sample(Slot& s, std::uint64_t now_ns);  // after detect_events(s) of the same frame
     void status(Slot& s, std::uint64_t now_ns);
     void detect_events(Slot& s, std::uint64_t now_ns);
     void event(const Slot& s, std::uint64_t now_ns, EventKind k, std::uint32_t code, std::int64_t old_value,

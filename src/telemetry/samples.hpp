@@ -8,6 +8,9 @@
 
 namespace vecat::telemetry {
 
+// AxisSample::cia402_state of a statusword that shows no state (IEC 61800-7-201 Table 30).
+inline constexpr std::uint8_t kNoCia402State = 0xFF;
+
 // One axis in one sampled cycle. Drive values are those of the dictionary objects, as a master reads them
 // over EtherCAT (user units of the drive's factor group; torque in per mille of the rated torque).
 struct AxisSample {
@@ -15,7 +18,7 @@ struct AxisSample {
     std::uint64_t cycle = 0;    // process data exchanges of the slave so far
     std::uint16_t slave = 0;    // position on the line
     std::uint8_t axis = 0;
-    std::uint8_t cia402_state = 0;     // cia402::State
+    std::uint8_t cia402_state = 0;     // protocol::cia402::State the statusword shows, or kNoCia402State
     std::int8_t mode = 0;              // 0x6061 modes of operation display
     std::uint16_t controlword = 0;     // 0x6040
     std::uint16_t statusword = 0;      // 0x6041
@@ -65,7 +68,7 @@ struct TwinsyncSample {
 
 enum class EventKind : std::uint8_t {
     AlState = 1,       // AL status register changed (old/new: 0x0130), code: 0x0134
-    Cia402State = 2,   // old/new: cia402::State
+    Cia402State = 2,   // old/new: AxisSample::cia402_state (the statusword decoded)
     Mode = 3,          // modes of operation display changed
     Fault = 4,         // a new non-zero 0x603F error code (code)
     FaultCleared = 5,  // 0x603F back to zero (old: the code)

@@ -1,6 +1,7 @@
 // What a TWINsync option card reports about its link: the values behind P2612, P2617, P2619 and P2623,
 // and the counters a scope or the telemetry shows. Filled by the drive's TWINsync port every control cycle.
-// And what the drive tells the port about itself (LocalState, made by the drive core's TWINsync coupling).
+// And what the drive tells the port about itself (LocalState, made by the drive core's TWINsync coupling),
+// and the interface of a device that reports a link (StatusSource).
 #pragma once
 
 #include <cstdint>
@@ -27,6 +28,17 @@ struct LinkStatus {
     std::uint8_t error_number = 0;     // MSD error (40 or 39), 0 = none
     std::uint8_t error_location = 0;
     float tracking_error = 0;  // gantry: master position minus slave position (user units)
+};
+
+// A device with a TWINsync option card, as the telemetry sees it: its link status (nullptr while no cable
+// is connected). The drive (cia402::Drive) is one; an application that is one is found by a cross-cast
+// from esc::Application, without knowing the drive class.
+class StatusSource {
+  public:
+    virtual const LinkStatus* twinsync_status() const = 0;
+
+  protected:
+    ~StatusSource() = default;
 };
 
 // What the drive tells the port about itself every cycle.

@@ -1,6 +1,9 @@
 // Register semantics: information registers, read-only bits, write masks, side effects.
 #include <gtest/gtest.h>
 
+#include <random>
+
+#include "esc/sii_image.hpp"
 #include "test_support.hpp"
 
 using namespace vecat;
@@ -168,5 +171,146 @@ TEST(Registers, DeferredFirmwareRunsAfterTheFrameAndBeforeTheNext) {
             b.seg->run_deferred_firmware();  // nothing due any more: a no-op
         }
         EXPECT_NE(b.escx().peek(0x0130) & 0x1F, 0x01);
+    }
+}
+
+// One datagram writing a run of registers against the rules of src/esc/README.md applied byte by byte (the
+// model below: the write mask of the register table, AL control refused while unread, SyncManager
+// configuration locked while enabled, an absent DC unit, a single-byte SyncManager on the digital output
+// register, AL status set by device emulation). The ESC handles a run that touches none of the registers
+// with rules of their own as one masked copy, the others byte by byte: runs of 1 to 24 bytes at every
+// address of the register space (into the process RAM at its end), with random data, cross every border
+// between the two. Bytes that the write's side effects change afterwards (DL status, AL events, error and
+// watchdog counters, the SII interface, SM status, the DC unit) are not compared here; their tests are
+// above and in test_dc.cpp.
+TEST(Registers, AWriteRunStoresAndCountsAsItsBytesOneByOne) {
+    struct Scenario {
+        const char* name;
+        bool al_control_unread = false;
+        bool dc_system_time_unit = true;
+        bool digital_io = false;
+    };
+    const Scenario scenarios[] = {{"plain ESC", false, true, false},
+                                  {"AL control unread", true, true, false},
+                                  {"no DC system time unit", false, false, false},
+                                  {"digital I/O with SM2 on 0x0F00", false, true, true}};
+    auto excluded = [](unsigned a) {
+        return (a >= 0x0110 && a < 0x0112) || (a >= 0x0220 && a < 0x0224) || (a >= 0x0300 && a < 0x0314) ||
+               a == 0x0442 || a == 0x0443 || (a >= 0x0500 && a < 0x0510) ||
+               (a >= 0x0800 && a < 0x0880 && (a & 7) == 5) || (a >= 0x0900 && a < 0x0A00);
+    };
+    std::mt19937 rng(24);
+    for (const Scenario& sc : scenarios) {
+        auto dev = device::default_drive();
+        if (sc.digital_io) dev.pdi_control = 0x0104;
+        const std::vector<std::uint8_t> sii = esc::build_sii_image(dev);
+        esc::EscConfig cfg;
+        cfg.dc_system_time_unit = sc.dc_system_time_unit;
+        const auto table = protocol::make_write_mask_table(cfg.fmmu_count, cfg.sm_count);
+        for (unsigned a = 0; a < protocol::kRegisterSpaceSize; ++a) {
+            const unsigned len = 1 + (a * 7 + (a >> 4)) % 24;
+            esc::Esc esc(cfg, sii);
+            // SM0 enabled (its configuration locked); SM2 on the digital output register where there is one.
+            std::vector<std::uint8_t> sm0{0x00, 0x18, 0x80, 0x00, 0x26, 0x00, 0x01, 0x00};
+            ASSERT_EQ(esc_datagram(esc, protocol::Command::APWR, protocol::sm_addr(0), sm0), 1);
+            if (sc.digital_io) {
+                std::vector<std::uint8_t> sm2{0x00, 0x0F, 0x01, 0x00, 0x44, 0x00, 0x01, 0x00};
+                ASSERT_EQ(esc_datagram(esc, protocol::Command::APWR, protocol::sm_addr(2), sm2), 1);
+            }
+            if (sc.al_control_unread) {
+                std::vector<std::uint8_t> al{0x02, 0x00};
+                ASSERT_EQ(esc_datagram(esc, protocol::Command::APWR, 0x0120, al), 1);
+            }
+            std::vector<std::uint8_t> before(protocol::kRegisterSpaceSize + 24), data(len);
+            for (unsigned k = 0; k < before.size(); ++k)
+                before[k] = esc.peek(static_cast<std::uint16_t>(k));
+            for (auto& v : data)
+                v = static_cast<std::uint8_t>(rng());
+            // The model, byte by byte on the memory before the write.
+            std::vector<std::uint8_t> expected(before);
+            bool counted = false;
+            for (unsigned k = 0; k < len; ++k) {
+                const unsigned ad = a + k;
+                const std::uint8_t v = data[k];
+                if (ad >= protocol::kRegisterSpaceSize) {  // process RAM without SyncManager
+                    expected[ad] = v;
+                    counted = true;
+                    continue;
+                }
+                if (!sc.dc_system_time_unit && ad >= 0x0910 && ad < 0x0A00) continue;
+                if ((ad == 0x0120 || ad == 0x0121) && sc.al_control_unread) continue;
+                const bool dout = ad >= 0x0F00 && ad < 0x0F04;  // the digital output register
+                if (dout && !sc.digital_io) continue;           // absent
+                if (dout) {  // 0x0F00 through SM2 (one byte: no buffer), the rest as plain registers
+                    expected[ad] = v;
+                    counted = true;
+                    continue;
+                }
+                std::uint8_t m = table.mask[ad];
+                if (ad >= 0x0800 && ad < protocol::sm_addr(cfg.sm_count) && (ad & 7) < 5 &&
+                    (before[(ad & ~7u) + 6] & 1))
+                    m = 0;
+                expected[ad] = static_cast<std::uint8_t>((before[ad] & ~m) | (v & m));
+                counted |= table.writable(static_cast<std::uint16_t>(ad));
+            }
+            // Device emulation (the digital I/O ESC's SII): AL status takes what AL control holds after a
+            // write.
+            if (esc.device_emulation() && a <= 0x0121 && a + len > 0x0120) {
+                expected[0x0130] = expected[0x0120];
+                expected[0x0131] = expected[0x0121];
+            }
+            std::vector<std::uint8_t> frame_data(data);
+            const std::uint16_t wkc =
+                esc_datagram(esc, protocol::Command::APWR, static_cast<std::uint16_t>(a), frame_data);
+            ASSERT_EQ(wkc, counted ? 1 : 0)
+                << sc.name << " at 0x" << std::hex << a << " length " << std::dec << len;
+            for (unsigned k = a; k < a + len; ++k) {
+                if (excluded(k)) continue;
+                ASSERT_EQ(esc.peek(static_cast<std::uint16_t>(k)), expected[k])
+                    << sc.name << ": byte 0x" << std::hex << k << " of the write at 0x" << a << std::dec
+                    << " length " << len;
+            }
+        }
+    }
+}
+
+// A write that covers part of the system time (0x0910-0x0917) and read-only registers around it feeds the
+// time control loop with exactly the bytes of the system time it covers, the others being the ESC's own
+// (ETG.1000.4 9.1.3.4: a 32-bit write is compared in 32 bits). With the filter depth 0, the system time
+// difference 0x092C shows what the loop received less the ESC's time: |diff|, bit 31 when the local copy is
+// smaller.
+TEST(Registers, APartialSystemTimeWriteFeedsTheLoopWithItsBytes) {
+    const std::vector<std::uint8_t> sii = esc::build_sii_image(device::default_drive());
+    struct Case {
+        std::uint16_t at;
+        std::size_t len;
+        std::int64_t delta;  // the received time less the ESC's, put into the bytes written
+    };
+    for (const Case c : {Case{0x090C, 8, 0x1234}, Case{0x090E, 4, -0x0567}, Case{0x0900, 0x20, 0x345678},
+                         Case{0x0913, 2, 0x05000000}, Case{0x0910, 8, -77}}) {
+        esc::Esc esc(esc::EscConfig{}, sii);
+        std::vector<std::uint8_t> depth{0x00};
+        ASSERT_EQ(esc_datagram(esc, protocol::Command::APWR, 0x0934, depth), 1);
+        std::vector<std::uint8_t> mine(8);
+        ASSERT_EQ(esc_datagram(esc, protocol::Command::APRD, 0x0910, mine), 1);
+        std::vector<std::uint8_t> sent(8);
+        st_le64(sent.data(), ld_le64(mine.data()) + static_cast<std::uint64_t>(c.delta));
+        std::vector<std::uint8_t> w(c.len, 0xA5), received(mine);
+        bool upper = false;
+        for (std::size_t k = 0; k < c.len; ++k) {
+            const std::size_t b = c.at + k - 0x0910;
+            if (c.at + k < 0x0910 || b >= 8) continue;
+            w[k] = received[b] = sent[b];
+            upper |= b >= 4;
+        }
+        EXPECT_EQ(esc_datagram(esc, protocol::Command::APWR, c.at, w), 1);
+        EXPECT_EQ(esc.dc().counters().system_time_writes, 1u) << std::hex << c.at;
+        const std::uint64_t r = ld_le64(received.data()), m = ld_le64(mine.data());
+        const std::int64_t diff =
+            upper ? static_cast<std::int64_t>(r - m)
+                  : static_cast<std::int32_t>(static_cast<std::uint32_t>(r) - static_cast<std::uint32_t>(m));
+        ASSERT_LT(diff < 0 ? -diff : diff, 0x7FFFFFFF) << std::hex << c.at;
+        const auto mag = static_cast<std::uint32_t>(diff < 0 ? -diff : diff);
+        EXPECT_EQ(esc.peek32(0x092C), mag | (diff > 0 ? 0x80000000u : 0u)) << std::hex << c.at;
     }
 }

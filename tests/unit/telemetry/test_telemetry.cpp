@@ -7,10 +7,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <new>
+#include <set>
 #include <thread>
 
 #include "allocation_counter.hpp"
 #include "cia402/drive.hpp"
+#include "protocol/cia402.hpp"
 #include "telemetry/plot.hpp"
 #include "telemetry/recording.hpp"
 #include "telemetry/sampler.hpp"
@@ -183,6 +185,60 @@ TEST_F(SamplerTest, StateChangesFaultsAndEmergenciesAreEvents) {
     EXPECT_EQ(al->new_value, static_cast<int>(protocol::AlState::SafeOp));
 }
 
+// The CiA 402 state of a sample is its statusword decoded: through enable, a fault and its reset it is
+// the state of the drive's state machine, also in the events. The TWINsync samples are the drive's link.
+TEST_F(SamplerTest, Cia402StateIsTheStatuswordDecodedAndFollowsTheDrive) {
+    Sampler s(*b.seg, q);
+    auto drive = [&](std::uint16_t i) -> const cia402::Drive& {
+        return dynamic_cast<const cia402::Drive&>(b.seg->slave(i).app());
+    };
+    std::set<std::uint8_t> seen;
+    std::vector<std::int64_t> events1;  // drive 1's states, as the events give them
+    int compared = 0;
+    auto check = [&](std::uint16_t cw, int cycles) {
+        for (int i = 0; i < cycles; ++i) {
+            cycle(s, cw, 0, 0);
+            const Recording r = drain();
+            for (const AxisSample& a : r.axes) {
+                const auto st = static_cast<std::uint8_t>(drive(a.slave).cia402_state());
+                EXPECT_EQ(a.cia402_state, st)
+                    << "slave " << a.slave << " statusword 0x" << std::hex << a.statusword;
+                EXPECT_EQ(protocol::cia402::decode_state(a.statusword), drive(a.slave).cia402_state());
+                seen.insert(a.cia402_state);
+                ++compared;
+            }
+            for (const Event& e : r.events)
+                if (e.kind == EventKind::Cia402State && e.slave == 1) events1.push_back(e.new_value);
+            // The two drives are cabled by TWINsync (make_drive_segment): a link sample with each axis
+            // sample.
+            ASSERT_EQ(r.twinsync.size(), r.axes.size());
+            for (const TwinsyncSample& t : r.twinsync) {
+                const twinsync::LinkStatus* ls = drive(t.slave).twinsync_status();
+                ASSERT_NE(ls, nullptr);
+                EXPECT_EQ(t.frames_sent, ls->frames_sent);
+                EXPECT_EQ(t.frames_received, ls->frames_received);
+            }
+        }
+    };
+    check(0, 2);
+    for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
+        check(cw, 3);
+    b.od(1).find(0x2101, 0)->set<std::uint16_t>(cia402::fault::OverCurrent);  // simulated over-current
+    check(0x0F, 10);
+    b.od(1).find(0x2101, 0)->set<std::uint16_t>(0);
+    check(0x00, 3);
+    check(0x80, 3);  // fault reset
+    EXPECT_GT(compared, 0);
+    using protocol::cia402::State;
+    for (const State st : {State::SwitchOnDisabled, State::ReadyToSwitchOn, State::SwitchedOn,
+                           State::OperationEnabled, State::Fault})
+        EXPECT_TRUE(seen.count(static_cast<std::uint8_t>(st))) << protocol::cia402::to_string(st);
+    ASSERT_FALSE(events1.empty());
+    EXPECT_EQ(events1.back(), static_cast<std::int64_t>(State::SwitchOnDisabled));
+    EXPECT_NE(std::find(events1.begin(), events1.end(), static_cast<std::int64_t>(State::Fault)),
+              events1.end());
+}
+
 TEST_F(SamplerTest, CyclicPathAllocatesNothingAndAFullQueueIsCountedNotWaitedFor) {
     Sampler s(*b.seg, q);
     for (int i = 0; i < 10; ++i)
@@ -204,6 +260,45 @@ TEST_F(SamplerTest, CyclicPathAllocatesNothingAndAFullQueueIsCountedNotWaitedFor
         if (auto* e = std::get_if<Event>(&r); e && e->kind == EventKind::Overflow)
             reported = e->new_value == static_cast<std::int64_t>(lost);
     EXPECT_TRUE(reported);
+}
+
+// A CoE device that is not vecat's drive but has the CiA 402 objects (here the drive's dictionary without
+// its behaviour, as a copy made by vecat clone serves it) gives axis samples too: its state is what its
+// statusword shows. It has no TWINsync card.
+TEST(Sampler, AnyDeviceWithTheStatuswordGivesAxisSamples) {
+    test::Bench b{1, {}, device::default_drive(), &coe::make_coe_segment};
+    std::string why;
+    ASSERT_TRUE(b.master.startup(protocol::AlState::Op, &why)) << why;
+    TelemetryQueue q;
+    Sampler s(*b.seg, q);
+    coe::Entry* statusword = b.od(0).find(0x6041, 0);
+    ASSERT_NE(statusword, nullptr);
+    auto cycle_with = [&](std::uint16_t sw) {
+        statusword->set<std::uint16_t>(sw);
+        b.now += 1'000'000;
+        b.link.set_time(b.now);
+        ASSERT_TRUE(b.master.exchange_process_data().has_value());
+        s.on_frame(b.now);
+    };
+    using protocol::cia402::State;
+    cycle_with(0x0237);  // operation enabled, remote
+    cycle_with(0x0218);  // fault
+    cycle_with(0x004F);  // no state of Table 30
+    Recording r;
+    Record rec;
+    while (q.pop(rec))
+        r.add(rec);
+    ASSERT_EQ(r.axes.size(), 3u);
+    EXPECT_EQ(r.axes[0].cia402_state, static_cast<std::uint8_t>(State::OperationEnabled));
+    EXPECT_EQ(r.axes[0].statusword, 0x0237);
+    EXPECT_EQ(r.axes[1].cia402_state, static_cast<std::uint8_t>(State::Fault));
+    EXPECT_EQ(r.axes[2].cia402_state, kNoCia402State);
+    EXPECT_TRUE(r.twinsync.empty());
+    std::vector<std::int64_t> states;
+    for (const Event& e : r.events)
+        if (e.kind == EventKind::Cia402State) states.push_back(e.new_value);
+    EXPECT_EQ(states, (std::vector<std::int64_t>{static_cast<std::int64_t>(State::OperationEnabled),
+                                                 static_cast<std::int64_t>(State::Fault), kNoCia402State}));
 }
 
 // ---- CSV and picture
