@@ -75,31 +75,14 @@ std::uint8_t cia402_state(std::uint16_t statusword) {
 
 }  // namespace
 
-Sampler::Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt) : seg_(seg), q_(q), opt_(opt) {
+Sampler::Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt)
+    : seg_(seg), q_(q), opt_(opt), slaves_epoch_(seg.slaves_epoch()) {
     if (opt_.decimation == 0) opt_.decimation = 1;
     if (opt_.status_every == 0) opt_.status_every = 1;
     slots_.resize(seg.size());
     for (std::size_t i = 0; i < seg.size(); ++i) {
         Slot& s = slots_[i];
-        s.position = static_cast<std::uint16_t>(i);
-        s.slave = &seg.slave(i);
-        s.coe = dynamic_cast<coe::CoeApplication*>(&s.slave->app());
-        s.twinsync = dynamic_cast<const twinsync::StatusSource*>(&s.slave->app());
-        if (s.coe) {
-            auto& od = s.coe->dictionary();
-            s.controlword = coe::bind(od, obj::controlword);
-            s.statusword = coe::bind(od, obj::statusword);
-            s.error_code = coe::bind(od, obj::error_code);
-            s.mode = coe::bind(od, obj::modes_of_operation_display);
-            s.position_demand = coe::bind(od, obj::position_demand_value);
-            s.position_actual = coe::bind(od, obj::position_actual_value);
-            s.velocity_actual = coe::bind(od, obj::velocity_actual_value);
-            s.torque_actual = coe::bind(od, obj::torque_actual_value);
-            s.following_error = coe::bind(od, obj::following_error_actual_value);
-            s.axis = s.statusword.bound();
-            s.last_exchange = s.coe->exchanges();
-            s.emergencies = s.coe->sdo_server().counters().emergencies_sent;
-        }
+        bind(s, i);
         s.al_status = s.slave->esc().al_status();
         if (s.axis) {
             s.statusword_seen = read<std::uint16_t>(s.statusword);
@@ -110,9 +93,52 @@ Sampler::Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt) : seg
     }
 }
 
+void Sampler::bind(Slot& s, std::size_t i) {
+    s.position = static_cast<std::uint16_t>(i);
+    s.slave = &seg_.slave(i);
+    s.coe = dynamic_cast<coe::CoeApplication*>(&s.slave->app());
+    s.twinsync = dynamic_cast<const twinsync::StatusSource*>(&s.slave->app());
+    s.controlword = {};
+    s.statusword = {};
+    s.error_code = {};
+    s.mode = {};
+    s.position_demand = {};
+    s.position_actual = {};
+    s.velocity_actual = {};
+    s.torque_actual = {};
+    s.following_error = {};
+    s.axis = false;
+    if (!s.coe) return;
+    auto& od = s.coe->dictionary();
+    s.controlword = coe::bind(od, obj::controlword);
+    s.statusword = coe::bind(od, obj::statusword);
+    s.error_code = coe::bind(od, obj::error_code);
+    s.mode = coe::bind(od, obj::modes_of_operation_display);
+    s.position_demand = coe::bind(od, obj::position_demand_value);
+    s.position_actual = coe::bind(od, obj::position_actual_value);
+    s.velocity_actual = coe::bind(od, obj::velocity_actual_value);
+    s.torque_actual = coe::bind(od, obj::torque_actual_value);
+    s.following_error = coe::bind(od, obj::following_error_actual_value);
+    s.axis = s.statusword.bound();
+    s.last_exchange = s.coe->exchanges();
+    s.emergencies = s.coe->sdo_server().counters().emergencies_sent;
+}
+
+void Sampler::follow_slaves() {
+    if (seg_.slaves_epoch() == slaves_epoch_) return;
+    // A slave restarted (a new Slave object, power off or hot connect) or the slaves moved: every slot binds
+    // the slave at its position again. What the events compare with stays the slot's, so a restart shows as
+    // the change of state it is; the counters start from the new application's.
+    slaves_epoch_ = seg_.slaves_epoch();
+    if (slots_.size() != seg_.size()) slots_.resize(seg_.size());
+    for (std::size_t i = 0; i < slots_.size(); ++i)
+        bind(slots_[i], i);
+}
+
 Sampler::~Sampler() = default;
 
 void Sampler::on_frame(std::uint64_t now_ns) {
+    follow_slaves();
     ++stats_.frames;
     for (auto& s : slots_) {
         detect_events(s, now_ns);
@@ -135,6 +161,7 @@ void Sampler::on_frame(std::uint64_t now_ns) {
 }
 
 void Sampler::sample_all(std::uint64_t now_ns) {
+    follow_slaves();
     for (auto& s : slots_) {
         detect_events(s, now_ns);
         sample(s, now_ns);

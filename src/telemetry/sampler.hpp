@@ -38,7 +38,8 @@ struct SamplerStats {
 
 class Sampler {
   public:
-    // The segment's slaves are looked up once here (call before the serve loop starts).
+    // The segment's slaves are looked up here (call before the serve loop starts), and again only when the
+    // segment says they changed (esc::Segment::slaves_epoch: a restart, a hot connect move).
     Sampler(esc::Segment& seg, TelemetryQueue& q, SamplerOptions opt = {});
     ~Sampler();
     Sampler(const Sampler&) = delete;
@@ -60,6 +61,8 @@ class Sampler {
 
   private:
     struct Slot;
+    void bind(Slot& s, std::size_t position);  // the slave at position and its objects
+    void follow_slaves();
     void sample(Slot& s, std::uint64_t now_ns);  // after detect_events(s) of the same frame
     void status(Slot& s, std::uint64_t now_ns);
     void detect_events(Slot& s, std::uint64_t now_ns);
@@ -72,6 +75,7 @@ class Sampler {
     std::vector<Slot> slots_;
     SamplerStats stats_;
     std::uint64_t overflows_reported_ = 0;
+    std::uint64_t slaves_epoch_ = 0;
 };
 
 }  // namespace vecat::telemetry

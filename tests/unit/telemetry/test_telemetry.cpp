@@ -185,6 +185,27 @@ TEST_F(SamplerTest, StateChangesFaultsAndEmergenciesAreEvents) {
     EXPECT_EQ(al->new_value, static_cast<int>(protocol::AlState::SafeOp));
 }
 
+// A slave restarted while sampling (power off and on, or a hot connect group plugged back) is a new object:
+// the sampler binds it again instead of reading the one that went, and shows the restart as the change of
+// AL state it is. (Under AddressSanitizer the old code read freed memory here.)
+TEST_F(SamplerTest, ARestartedSlaveIsSampledAgainNotTheOneThatWent) {
+    Sampler s(*b.seg, q);
+    for (int i = 0; i < 3; ++i)
+        cycle(s, 0x06, 0, 0);
+    ASSERT_TRUE(b.seg->restart_slave(1));
+    s.on_frame(b.now);
+    const Recording r = drain();
+    const auto restarted = std::find_if(r.events.begin(), r.events.end(), [](const Event& e) {
+        return e.kind == EventKind::AlState && e.slave == 1;
+    });
+    ASSERT_NE(restarted, r.events.end());
+    EXPECT_EQ(restarted->old_value, static_cast<int>(protocol::AlState::Op));
+    EXPECT_EQ(restarted->new_value, static_cast<int>(protocol::AlState::Init));
+    EXPECT_EQ(std::count_if(r.events.begin(), r.events.end(),
+                            [](const Event& e) { return e.kind == EventKind::Emergency; }),
+              0);  // the new application's counters are not the old one's
+}
+
 // The CiA 402 state of a sample is its statusword decoded: through enable, a fault and its reset it is
 // the state of the drive's state machine, also in the events. The TWINsync samples are the drive's link.
 TEST_F(SamplerTest, Cia402StateIsTheStatuswordDecodedAndFollowsTheDrive) {
