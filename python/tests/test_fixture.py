@@ -43,6 +43,15 @@ def test_a_fault_from_the_control_socket_reaches_the_wire(vecat_network):
     assert broadcast_read_wkc(vecat_network.iface) == 2  # the count is used up
 
 
+def test_the_status_shows_each_slave(vecat_network):
+    status = vecat_network.status()
+    assert [s["slave"] for s in status] == ["0", "1"]
+    assert all(s["al"] == "INIT" for s in status), status
+    assert all(s["state"] == "SWITCH_ON_DISABLED" for s in status), status  # CiA 402 drives
+    vecat_network.inject("link_down", slave=0, port=1, id="cut")
+    assert vecat_network.status()[0]["lost_links"] == "0,1,0,0"
+
+
 def test_an_unknown_fault_is_refused(vecat_network):
     from vecat import FaultError
 

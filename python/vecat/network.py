@@ -110,6 +110,13 @@ class Network:
     def clear(self, what="all"):
         return self.command(f"clear {what}")
 
+    def status(self):
+        """What each slave shows now: a list (by position) of dicts of the control socket's `status` line,
+        e.g. {"slave": "0", "al": "OP", "al_code": "0x0000", "lost_links": "0,0,0,0", "statusword": "0x0237",
+        "state": "OPERATION_ENABLED", "position": "1000", ...}; the CiA 402 keys only for CiA 402 devices."""
+        lines = self.command("status").splitlines()[1:]
+        return [dict(kv.split("=", 1) for kv in line.split()) for line in lines]
+
     def set_input(self, slave, channel, value):
         """Forces an input of a built-in input terminal of a network file (slave: its position on the line)
         to value until release_input() with the id this returns (fault set_input)."""

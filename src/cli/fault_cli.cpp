@@ -30,7 +30,7 @@ void add_run_fault_options(CLI::App* run, RunFaultOptions& o) {
            "Fault scenario (YAML timeline, see src/faults/README.md); times count from the first frame")
         ->check(CLI::ExistingFile);
     run->add_option("--control", o.control,
-                    "Unix socket for `vecat fault` commands while running (inject, clear, list)");
+                    "Unix socket for `vecat fault` commands while running (inject, clear, list, status)");
     run->add_option("--fault-seed", o.seed, "Seed of the fault probabilities (a scenario's seed: wins)");
 }
 
@@ -88,6 +88,10 @@ void add_fault_command(CLI::App& app, FaultCommand& f) {
     socket(f.clear);
     f.list = f.cmd->add_subcommand("list", "List the active faults");
     socket(f.list);
+    f.status = f.cmd->add_subcommand("status",
+                                     "What each slave shows now (AL state, counters, CiA 402 state and "
+                                     "actual values), one line per slave");
+    socket(f.status);
     f.kinds = f.cmd->add_subcommand("kinds", "Describe every fault and its parameters");
 }
 
@@ -96,7 +100,10 @@ int run_fault_command(const FaultCommand& f) {
         fmt::print("{}", kinds_help());
         return 0;
     }
-    std::string line = f.inject->parsed() ? "inject" : f.clear->parsed() ? "clear" : "list";
+    std::string line = f.inject->parsed()   ? "inject"
+                       : f.clear->parsed()  ? "clear"
+                       : f.status->parsed() ? "status"
+                                            : "list";
     for (const auto& w : f.words)
         line += " " + w;
     std::string reply;

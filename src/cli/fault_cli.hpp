@@ -40,6 +40,7 @@ struct FaultCommand {
     CLI::App* inject = nullptr;
     CLI::App* clear = nullptr;
     CLI::App* list = nullptr;
+    CLI::App* status = nullptr;
     CLI::App* kinds = nullptr;
     std::string socket;
     std::vector<std::string> words;  // inject: KIND key=value...; clear: WHAT

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "coe/coe_application.hpp"
+#include "faults/status.hpp"
 #include "protocol/coe.hpp"
 
 namespace vecat::faults {
@@ -465,7 +466,8 @@ std::string FaultInjector::execute(std::string_view command, std::uint64_t now_n
                 s += "\n" + a;
             return s;
         }
-        return "error unknown command '" + std::string(verb) + "' (inject, clear, list)";
+        if (verb == "status") return line_status(seg_);
+        return "error unknown command '" + std::string(verb) + "' (inject, clear, list, status)";
     } catch (const std::invalid_argument& x) {
         return std::string("error ") + x.what();
     }

@@ -223,6 +223,27 @@ TEST(HotConnect, AGroupPluggedBackIntoAnotherPortTakesItsPlaceInTheLine) {
     EXPECT_EQ(again.slaves()[3].parent_port, 1u);
 }
 
+// The control socket's status: what each slave shows, for a test to read while the line runs.
+TEST(ControlStatus, EachSlaveWithItsAlStateCountersAndCia402State) {
+    HotConnectBench b;
+    master::Master m(b.link);
+    std::string why;
+    ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+    b.cycle(m);
+    std::string s = b.execute("status");
+    EXPECT_EQ(s.rfind("ok 4 slaves\nslave=0 al=OP al_code=0x0000 lost_links=0,0,0,0", 0), 0u) << s;
+    EXPECT_NE(s.find("slave=3 al=OP"), std::string::npos) << s;
+    EXPECT_NE(s.find("state=SWITCH_ON_DISABLED mode="), std::string::npos) << s;
+    // A group unplugged and plugged back: its devices in INIT, the cable's loss counted at the port before.
+    ASSERT_EQ(b.execute("inject unplug group=tail id=u").rfind("ok", 0), 0u);
+    b.cycle(m);
+    ASSERT_EQ(b.execute("clear u").rfind("ok", 0), 0u);
+    b.cycle(m);
+    s = b.execute("status");
+    EXPECT_NE(s.find("slave=2 al=INIT"), std::string::npos) << s;
+    EXPECT_NE(s.find("slave=1 al=OP al_code=0x0000 lost_links=0,1,0,0"), std::string::npos) << s;
+}
+
 TEST(HotConnect, LinkDownNeedsACableAtThePort) {
     HotConnectBench b;
     EXPECT_EQ(b.execute("inject link_down slave=0 port=3").rfind("error", 0), 0u);  // nothing cabled there
