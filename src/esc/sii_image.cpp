@@ -19,8 +19,7 @@ class StringTable {
         if (s.empty()) return 0;
         if (auto it = index_.find(s); it != index_.end()) return it->second;
         if (strings_.size() >= 255) throw std::length_error("SII: more than 255 strings");
-        std::string t = s.substr(0, 255);
-        strings_.push_back(t);
+        strings_.push_back(s);  // cut to 255 bytes when written, after its conversion to ISO 8859-1
         const auto idx = static_cast<std::uint8_t>(strings_.size());
         index_.emplace(s, idx);
         return idx;
@@ -170,7 +169,9 @@ std::vector<std::uint8_t> build_sii_image(const device::DeviceDescription& d) {
     {
         LeWriter w(strings);
         w.u8(static_cast<std::uint8_t>(st.strings().size()));
-        for (const auto& s : st.strings()) {
+        for (const auto& text : st.strings()) {
+            // ISO 8859-1 in the image (protocol::utf8_to_sii_text); at most 255 bytes.
+            const std::string s = protocol::utf8_to_sii_text(text).substr(0, 255);
             w.u8(static_cast<std::uint8_t>(s.size()));
             w.str(s);
         }

@@ -81,7 +81,8 @@ SiiInfo parse_sii(ConstBytes image) {
                         s.errors.push_back("string runs past its category");
                         break;
                     }
-                    s.strings.emplace_back(reinterpret_cast<const char*>(data.data() + p), l);
+                    s.strings.push_back(sii_text_to_utf8(
+                        std::string_view(reinterpret_cast<const char*>(data.data() + p), l)));
                     p += l;
                 }
                 break;
@@ -160,6 +161,54 @@ SiiInfo parse_sii(ConstBytes image) {
         m.description = s.string_at(static_cast<unsigned>(std::stoul(m.description)));
     }
     return s;
+}
+
+std::string sii_text_to_utf8(std::string_view latin1) {
+    std::string out;
+    out.reserve(latin1.size());
+    for (const char ch : latin1) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (c < 0x80) {
+            out += ch;
+        } else {
+            out += static_cast<char>(0xC0 | (c >> 6));
+            out += static_cast<char>(0x80 | (c & 0x3F));
+        }
+    }
+    return out;
+}
+
+std::string utf8_to_sii_text(std::string_view utf8) {
+    std::string out;
+    out.reserve(utf8.size());
+    for (std::size_t i = 0; i < utf8.size();) {
+        const auto c = static_cast<unsigned char>(utf8[i]);
+        const auto cont = [&](std::size_t k) {
+            return i + k < utf8.size() && (static_cast<unsigned char>(utf8[i + k]) & 0xC0) == 0x80;
+        };
+        unsigned n = c < 0x80             ? 1
+                     : (c & 0xE0) == 0xC0 ? 2
+                     : (c & 0xF0) == 0xE0 ? 3
+                     : (c & 0xF8) == 0xF0 ? 4
+                                          : 0;
+        bool valid = n >= 1;
+        for (unsigned k = 1; valid && k < n; ++k)
+            valid = cont(k);
+        if (!valid || (n == 2 && c < 0xC2)) {  // no UTF-8 sequence (or an overlong one): the byte as it is
+            out += static_cast<char>(c);
+            ++i;
+            continue;
+        }
+        if (n == 1) {
+            out += static_cast<char>(c);
+        } else if (n == 2 && c <= 0xC3) {  // U+0080..U+00FF: in ISO 8859-1
+            out += static_cast<char>(((c & 0x03) << 6) | (static_cast<unsigned char>(utf8[i + 1]) & 0x3F));
+        } else {
+            out += '?';
+        }
+        i += n;
+    }
+    return out;
 }
 
 }  // namespace vecat::protocol

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "common/bytes.hpp"
@@ -169,7 +170,15 @@ struct SiiInfo {
     std::string device_name() const { return string_at(name_idx); }
 };
 
-// Parses an image; never reads past its end. Problems go to SiiInfo::errors.
+// Parses an image; never reads past its end. Problems go to SiiInfo::errors. Its strings are UTF-8
+// (sii_text_to_utf8).
 SiiInfo parse_sii(ConstBytes image);
+
+// The text of SII strings is 8-bit, ISO 8859-1 as Beckhoff's devices and TwinCAT write it (the EL2262's
+// name says "1 µs" with the byte 0xB5): the parser gives it as UTF-8, and the SII writer (esc/sii_image)
+// stores UTF-8 text as ISO 8859-1, a character beyond it as '?'. A byte that starts no valid UTF-8 sequence
+// is taken as the ISO 8859-1 character it is.
+std::string sii_text_to_utf8(std::string_view latin1);
+std::string utf8_to_sii_text(std::string_view utf8);
 
 }  // namespace vecat::protocol

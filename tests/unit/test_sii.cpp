@@ -1,6 +1,7 @@
 // SII EEPROM: the image built from the device description, and the 0x0500-0x050F interface.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -79,6 +80,32 @@ TEST(SiiImage, ChecksumMatchesRealEeproms) {
         EXPECT_NE(s.identity.vendor_id, 0u) << f;
         EXPECT_FALSE(s.strings.empty()) << f;
     }
+}
+
+// SII text is ISO 8859-1 (the EL2262's "1 µs" is the byte 0xB5); vecat's text is UTF-8. The parser converts
+// one way, the writer the other, and an image written from a description reads back as its text.
+TEST(SiiImage, StringsAreIso8859OneInTheImageAndUtf8InVecat) {
+    EXPECT_EQ(protocol::sii_text_to_utf8("1\xB5s, \xE4"), "1\xC2\xB5s, \xC3\xA4");
+    EXPECT_EQ(protocol::utf8_to_sii_text("1\xC2\xB5s, \xC3\xA4"), "1\xB5s, \xE4");
+    EXPECT_EQ(protocol::utf8_to_sii_text("20 \xE2\x82\xAC"), "20 ?");  // the euro sign has no ISO 8859-1 code
+    EXPECT_EQ(protocol::utf8_to_sii_text("raw \xB5 byte"), "raw \xB5 byte");  // no UTF-8: kept as it is
+    for (unsigned c = 0; c < 256; ++c) {
+        const std::string one(1, static_cast<char>(c));
+        EXPECT_EQ(protocol::utf8_to_sii_text(protocol::sii_text_to_utf8(one)), one) << c;
+    }
+    auto d = device::default_drive();
+    d.name = "Ausgang 24V, 1\xC2\xB5s";
+    const auto img = build_sii_image(d);
+    const std::string text = "Ausgang 24V, 1\xB5s";
+    const std::vector<std::uint8_t> latin1(text.begin(), text.end());
+    EXPECT_NE(std::search(img.begin(), img.end(), latin1.begin(), latin1.end()), img.end());
+    EXPECT_EQ(parse_sii(img).device_name(), d.name);
+}
+
+TEST(SiiImage, TheNameOfARealDeviceReadsAsUtf8) {
+    VECAT_REQUIRE_SHARED_DATA("sii/beckhoff-el2262.bin");
+    const auto s = parse_sii(load("sii/beckhoff-el2262.bin"));
+    EXPECT_NE(s.device_name().find("1\xC2\xB5s"), std::string::npos) << s.device_name();
 }
 
 TEST(SiiImage, ParserSurvivesTruncation) {
