@@ -96,7 +96,7 @@ OutputTerminal::OutputTerminal(unsigned output_bytes, unsigned input_bytes, std:
 }
 
 OutputTerminal::~OutputTerminal() {
-    bus_->publish(slot_, nullptr);
+    bus_->withdraw(slot_, &outputs());
 }
 
 std::pair<std::size_t, unsigned> InputForcing::target(const faults::FaultSpec& f) const {

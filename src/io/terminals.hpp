@@ -34,9 +34,14 @@ class IoBus {
     std::size_t add_output(std::string name, ChannelKind kind, unsigned channels);
     std::size_t add_input(std::string name, unsigned channels);
     std::size_t output_slot(std::string_view name) const;  // kNone when there is none
-    // The output terminal of a slot shows its image there while it exists (nullptr: gone).
+    // The output terminal of a slot shows its image there while it exists. A restarted terminal's new
+    // application publishes before the old one goes: withdrawing takes the image away only if it is still
+    // the one shown.
     void publish(std::size_t slot, const std::vector<std::uint8_t>* image) {
         outputs_.at(slot).image = image;
+    }
+    void withdraw(std::size_t slot, const std::vector<std::uint8_t>* image) {
+        if (outputs_.at(slot).image == image) outputs_[slot].image = nullptr;
     }
     // Channel c of the output terminal in slot s: 0 or 1, or the 16-bit value (0 when it is gone).
     double output(std::size_t slot, unsigned channel) const noexcept;

@@ -147,6 +147,16 @@ TEST(IoTerminals, InputsFollowTheirSignalsAndWires) {
     l.m.outputs(0)[0] = 0x00;
     l.settle();
     EXPECT_EQ(l.digital() & 0x0D, 0x08);
+    // The output terminal restarts (power off and on: a new application); the wire follows the new one once
+    // the master has brought the line to OP again.
+    ASSERT_TRUE(l.built.segment->restart_slave(0));
+    ASSERT_TRUE(l.m.startup(AlState::Op, &why)) << why;
+    l.m.outputs(0)[0] = 0x04;
+    l.settle();
+    EXPECT_EQ(l.digital() & 0x01, 0x01);
+    l.m.outputs(0)[0] = 0x00;
+    l.settle();
+    EXPECT_EQ(l.digital() & 0x01, 0x00);
     // Input 1: a 10 ms square: five cycles low, five high.
     unsigned high = 0, changes = 0;
     std::uint8_t last = l.digital() & 0x02;

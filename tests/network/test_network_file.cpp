@@ -285,9 +285,11 @@ TEST(NetworkPorts, TheFramePassesTheTreeAndEachPortLatchesItsReceiveTime) {
               device::simple_product::DigitalOut | 8);
 }
 
-TEST(NetworkPorts, TheProjectMasterComputesTheTreeAndItsDelaysAsTheFileDescribesThem) {
-    const auto f = parse_network(kTree);
-    auto built = build_network(f, "tree");
+// The project master with distributed clocks brought to PREOP on a network file: it must find the file's
+// devices (identities), tree (parent and its port) and propagation delays (within 10 ns).
+void expect_the_files_tree_and_delays(const NetworkFile& f, const std::string& name,
+                                      const std::vector<std::uint32_t>& delays) {
+    auto built = build_network(f, name);
     net::InProcessLink link(*built.segment);
     master::MasterOptions o;
     o.dc.enable = true;
@@ -299,17 +301,24 @@ TEST(NetworkPorts, TheProjectMasterComputesTheTreeAndItsDelaysAsTheFileDescribes
     ASSERT_TRUE(m.configure_dc());
     const auto& sl = m.slaves();
     ASSERT_EQ(sl.size(), f.devices.size());
+    ASSERT_EQ(delays.size(), f.devices.size());
     for (std::size_t i = 0; i < sl.size(); ++i) {
-        EXPECT_EQ(sl[i].parent, f.parent[i]) << f.devices[i].name;
+        SCOPED_TRACE(f.devices[i].name);
+        EXPECT_EQ(sl[i].sii.identity.product_code,
+                  built.segment->slave(i).description().identity.product_code);
+        EXPECT_EQ(sl[i].parent, f.parent[i]);
         if (f.parent[i] >= 0) {
-            EXPECT_EQ(sl[i].parent_port, f.devices[i].upstream_port) << f.devices[i].name;
+            EXPECT_EQ(sl[i].parent_port, f.devices[i].upstream_port);
         }
+        EXPECT_NEAR(sl[i].dc_delay_ns, delays[i], 10);
     }
+}
+
+TEST(NetworkPorts, TheProjectMasterComputesTheTreeAndItsDelaysAsTheFileDescribesThem) {
     // Propagation delays from the reference clock (the junction): the frame's arrival at each device, from
     // the cable delays of the file and the branches it passes first.
-    const std::uint32_t expected[] = {0, 500, 1000 + 200, 1000 + 200 + 500, 1000 + 1400 + 500};
-    for (std::size_t i = 0; i < sl.size(); ++i)
-        EXPECT_NEAR(sl[i].dc_delay_ns, expected[i], 10) << f.devices[i].name;
+    expect_the_files_tree_and_delays(parse_network(kTree), "tree",
+                                     {0, 500, 1000 + 200, 1000 + 200 + 500, 1000 + 1400 + 500});
 }
 
 // The machine of examples/networks/machine.yaml (EK1100 and four terminals from SII dumps, a junction, two
@@ -318,32 +327,10 @@ TEST(NetworkPorts, TheProjectMasterComputesTheTreeAndItsDelaysAsTheFileDescribes
 TEST(NetworkPorts, TheExampleMachinesTreeAndDelaysAsTheFileDescribesThem) {
     VECAT_REQUIRE_SHARED_DATA("sii/beckhoff-el2262.bin");
     const std::string path = std::string(VECAT_SOURCE_DIR) + "/examples/networks/machine.yaml";
-    const auto f = read_network_file(path);
-    auto built = build_network(f, path);
-    net::InProcessLink link(*built.segment);
-    master::MasterOptions o;
-    o.dc.enable = true;
-    o.dc.sync0_cycle_ns = 0;
-    o.dc.static_drift_frames = 10;
-    master::Master m(link, o);
-    std::string why;
-    ASSERT_TRUE(m.startup(protocol::AlState::PreOp, &why)) << why;
-    ASSERT_TRUE(m.configure_dc());
-    const auto& sl = m.slaves();
-    ASSERT_EQ(sl.size(), 9u);
-    for (std::size_t i = 0; i < sl.size(); ++i) {
-        EXPECT_EQ(sl[i].sii.identity.product_code,
-                  built.segment->slave(i).description().identity.product_code);
-        EXPECT_EQ(sl[i].parent, f.parent[i]) << f.devices[i].name;
-        if (f.parent[i] >= 0) {
-            EXPECT_EQ(sl[i].parent_port, f.devices[i].upstream_port) << f.devices[i].name;
-        }
-    }
     // The coupler's E-bus (port 1) with the junction and its branch of 150 + 700 + 3 x 150 ns comes first;
     // the drives behind its X2 (port 2, 900 ns) see the frame after its round trip through that branch.
-    const std::uint32_t expected[] = {0, 150, 850, 1000, 1150, 1300, 2 * 1300 + 900, 3500 + 500, 4000 + 600};
-    for (std::size_t i = 0; i < sl.size(); ++i)
-        EXPECT_NEAR(sl[i].dc_delay_ns, expected[i], 10) << f.devices[i].name;
+    expect_the_files_tree_and_delays(read_network_file(path), path,
+                                     {0, 150, 850, 1000, 1150, 1300, 2 * 1300 + 900, 3500 + 500, 4000 + 600});
 }
 
 // DL control 0x0101: the loop setting of ports 0-3, two bits each (0 auto, 1 auto close, 2 open, 3 closed).
