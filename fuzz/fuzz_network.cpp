@@ -3,17 +3,34 @@
 // Invariants: the text is accepted or refused with a NetworkFileError that names a line ("NAME:LINE: ...")
 // or the file; nothing else is thrown. An accepted file is a tree: one device on the master, every other one
 // with a parent before it in the order, its port cabled to it and to nothing else. A redundancy port is a
-// free port of a device; hot connect group names are unique.
+// free port of a device; hot connect group names are unique. The inputs of I/O terminals name channels the
+// terminal has, and wires name output terminals of the file. The same text read as a signal's CSV table
+// (io::parse_table) is refused with std::invalid_argument naming a line, or gives rows at rising times with
+// finite values.
+#include <cctype>
+#include <cmath>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 
 #include "fuzz_support.hpp"
+#include "io/signal.hpp"
 #include "network/network_file.hpp"
 
 using namespace vecat;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     const std::string text(reinterpret_cast<const char*>(data), size);
+    try {
+        const auto rows = io::parse_table(text);
+        VECAT_FUZZ_CHECK(!rows.empty());
+        for (std::size_t i = 0; i < rows.size(); ++i) {
+            VECAT_FUZZ_CHECK(std::isfinite(rows[i].second));
+            VECAT_FUZZ_CHECK(i == 0 || rows[i].first > rows[i - 1].first);
+        }
+    } catch (const std::invalid_argument& e) {
+        VECAT_FUZZ_CHECK(std::isdigit(static_cast<unsigned char>(e.what()[0])));
+    }
     network::NetworkFile f;
     try {
         f = network::parse_network(text, "fuzz.yaml", "/nonexistent");
@@ -40,5 +57,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         for (std::size_t j = i + 1; j < n; ++j)
             VECAT_FUZZ_CHECK(f.devices[i].hot_connect.empty() ||
                              f.devices[i].hot_connect != f.devices[j].hot_connect);
+    for (const auto& d : f.devices)
+        for (const auto& in : d.inputs) {
+            VECAT_FUZZ_CHECK(d.source == network::Source::DigitalIn || d.source == network::Source::AnalogIn);
+            VECAT_FUZZ_CHECK(in.channel < network::kMaxChannels);
+            if (in.signal.kind != io::SignalKind::Wire) continue;
+            bool output = false;
+            for (const auto& o : f.devices)
+                output |= o.name == in.signal.device &&
+                          (o.source == network::Source::DigitalOut || o.source == network::Source::AnalogOut);
+            VECAT_FUZZ_CHECK(output);
+        }
     return 0;
 }

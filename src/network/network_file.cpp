@@ -58,6 +58,9 @@ std::uint64_t milliseconds(const Reader& r, const YAML::Node& n, const std::stri
     return static_cast<std::uint64_t>(ms * 1e6);
 }
 
+// The largest CSV table of a signal.
+constexpr std::uintmax_t kMaxTableBytes = 16u << 20;
+
 // inputs: of an input terminal: CHANNEL: {signal: KIND, parameters...} or CHANNEL: {wire: DEVICE:CHANNEL}.
 void parse_inputs(const Reader& r, const YAML::Node& n, DeviceEntry& d, const std::string& folder) {
     if (!n.IsMap()) r.fail(n, "inputs: a map of channel: {signal: ...} or channel: {wire: DEVICE:CHANNEL}");
@@ -128,6 +131,12 @@ void parse_inputs(const Reader& r, const YAML::Node& n, DeviceEntry& d, const st
                 std::string path = r.scalar(v, key);
                 if (std::filesystem::path(path).is_relative())
                     path = (std::filesystem::path(folder) / path).string();
+                // A regular file of sensible size (not a device or a pipe that never ends).
+                std::error_code ec;
+                if (!std::filesystem::is_regular_file(path, ec)) r.fail(v, "file: cannot read " + path);
+                if (std::filesystem::file_size(path, ec) > kMaxTableBytes || ec)
+                    r.fail(v, "file: " + path + " is larger than " + std::to_string(kMaxTableBytes >> 20) +
+                                  " MiB");
                 std::ifstream f(path, std::ios::binary);
                 if (!f) r.fail(v, "file: cannot read " + path);
                 std::stringstream text;

@@ -226,6 +226,9 @@ TEST(IoTerminals, TheNetworkFileRefusesBadInputsNamingTheLine) {
     EXPECT_NE(refused(in + "    inputs: {0: {signal: table, file: /nonexistent.csv}}\n")
                   .find("file: cannot read /nonexistent.csv"),
               std::string::npos);
+    // A device that never ends is no table (nothing hangs reading it).
+    EXPECT_EQ(refused(in + "    inputs: {0: {signal: table, file: /dev/zero}}\n"),
+              "net.yaml:8: file: cannot read /dev/zero");
     const auto csv = (std::filesystem::temp_directory_path() / "vecat-io-bad.csv").string();
     std::ofstream(csv) << "0,1\n1,oops\n";
     EXPECT_EQ(refused(in + "    inputs: {0: {signal: table, file: " + csv + "}}\n"),
