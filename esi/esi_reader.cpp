@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/file.hpp"
 #include "esc/sii_image.hpp"
 #include "protocol/registers.hpp"
 
@@ -717,11 +718,10 @@ std::vector<std::string> complete_for_emulation(device::DeviceDescription& d) {
 }
 
 ImportResult import_esi_file(const std::string& path, const DeviceSelector& sel) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw EsiError("cannot open " + path);
-    std::ostringstream os;
-    os << f.rdbuf();
-    return import_esi_text(os.str(), sel);
+    std::string why;
+    const auto text = read_whole_file(path, kMaxXmlFileBytes, why);
+    if (!text) throw EsiError(why);  // the callers name the file
+    return import_esi_text(*text, sel);
 }
 
 }  // namespace vecat::esi

@@ -22,6 +22,7 @@
 #include "cli/replay_command.hpp"
 #include "cli/telemetry_commands.hpp"
 #include "coe/coe_application.hpp"
+#include "common/file.hpp"
 #include "device/device_description.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
@@ -368,12 +369,13 @@ int cmd_esi_check(const std::string& file, const std::string& sii_path, const st
     if (!dev) return 1;
     std::vector<std::uint8_t> img;
     if (!sii_path.empty()) {
-        std::ifstream f(sii_path, std::ios::binary);
-        if (!f) {
-            fmt::print(stderr, "vecat: cannot open {}\n", sii_path);
+        std::string why;
+        const auto bytes = vecat::read_whole_file(sii_path, vecat::kMaxSiiFileBytes, why);
+        if (!bytes) {
+            fmt::print(stderr, "vecat: {}: {}\n", sii_path, why);
             return 1;
         }
-        img.assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+        img.assign(bytes->begin(), bytes->end());
     } else {
         img = vecat::esc::build_sii_image(*dev);
     }

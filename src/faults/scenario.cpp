@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/file.hpp"
+
 namespace vecat::faults {
 namespace {
 
@@ -89,12 +91,11 @@ Scenario parse_scenario(const std::string& yaml_text) {
 }
 
 Scenario load_scenario(const std::string& path) {
-    std::ifstream f(path);
-    if (!f) throw std::invalid_argument("cannot read " + path);
-    std::stringstream ss;
-    ss << f.rdbuf();
+    std::string why;
+    const auto text = read_whole_file(path, kMaxTextFileBytes, why);
+    if (!text) throw std::invalid_argument(path + ": " + why);
     try {
-        return parse_scenario(ss.str());
+        return parse_scenario(*text);
     } catch (const std::invalid_argument& x) {
         throw std::invalid_argument(path + ": " + x.what());
     }

@@ -5,6 +5,7 @@
 
 #include "cia402/drive.hpp"
 #include "coe/coe_application.hpp"
+#include "common/file.hpp"
 #include "device/from_sii.hpp"
 #include "device/simple_devices.hpp"
 #include "esi/esi_reader.hpp"
@@ -103,9 +104,10 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
             if (e.sii_image) {
                 img = *e.sii_image;
             } else {
-                std::ifstream in(e.path, std::ios::binary);
-                if (!in) throw NetworkFileError(at + e.path + ": cannot be read");
-                img.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+                std::string why;
+                const auto bytes = read_whole_file(e.path, kMaxSiiFileBytes, why);
+                if (!bytes) throw NetworkFileError(at + e.path + ": " + why);
+                img.assign(bytes->begin(), bytes->end());
             }
             patch(img, e);
             std::shared_ptr<const DeviceDictionary> dict;

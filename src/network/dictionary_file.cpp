@@ -1,4 +1,5 @@
 #include "network/dictionary_file.hpp"
+#include "common/file.hpp"
 #include "network/yaml_reader.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -295,11 +296,10 @@ DeviceDictionary parse_dictionary(const std::string& text, const std::string& na
 }
 
 DeviceDictionary read_dictionary_file(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw DictionaryFileError(path + ": cannot be read");
-    std::stringstream s;
-    s << in.rdbuf();
-    return parse_dictionary(s.str(), path);
+    std::string why;
+    const auto text = read_whole_file(path, kMaxTextFileBytes, why);
+    if (!text) throw DictionaryFileError(path + ": " + why);
+    return parse_dictionary(*text, path);
 }
 
 std::string write_dictionary(const DeviceDictionary& d, const std::vector<std::string>& header) {

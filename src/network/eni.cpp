@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "common/file.hpp"
 #include "device/device_description.hpp"
 
 namespace vecat::network {
@@ -405,11 +406,10 @@ Eni parse_eni(const std::string& text, const std::string& name) {
 }
 
 Eni read_eni_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw EniError(path + ": cannot be read");
-    std::stringstream s;
-    s << in.rdbuf();
-    return parse_eni(s.str(), path);
+    std::string why;
+    const auto text = read_whole_file(path, kMaxXmlFileBytes, why);
+    if (!text) throw EniError(path + ": " + why);
+    return parse_eni(*text, path);
 }
 
 }  // namespace vecat::network

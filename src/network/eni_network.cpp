@@ -6,6 +6,7 @@
 #include <map>
 #include <sstream>
 
+#include "common/file.hpp"
 #include "esc/sii_image.hpp"
 #include "esi/esi_reader.hpp"
 #include "protocol/registers.hpp"
@@ -79,11 +80,14 @@ EsiIndex index_esi_dir(const Eni& eni, const std::string& dir, std::vector<std::
     }
     std::sort(files.begin(), files.end());  // the same choice whatever order the folder lists them in
     for (const auto& p : files) {
-        std::ifstream in(p, std::ios::binary);
-        std::stringstream s;
-        s << in.rdbuf();
+        std::string why;
+        const auto text = read_whole_file(p.string(), kMaxXmlFileBytes, why);
+        if (!text) {
+            notes.push_back(eni.file + ": " + p.string() + ": not read as an ESI file: it " + why);
+            continue;
+        }
         try {
-            for (auto& d : esi::list_devices_text(s.str()))
+            for (auto& d : esi::list_devices_text(*text))
                 idx.entries.push_back({p.string(), std::move(d)});
         } catch (const std::exception& x) {
             notes.push_back(eni.file + ": " + p.string() + ": not read as an ESI file: " + x.what());

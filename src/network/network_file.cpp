@@ -12,6 +12,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "common/file.hpp"
 #include "protocol/registers.hpp"
 
 namespace vecat::network {
@@ -57,9 +58,6 @@ std::uint64_t milliseconds(const Reader& r, const YAML::Node& n, const std::stri
     if (ms < 0 || ms > 1e9) r.fail(n, key + ": from 0 to 1e9 ms");
     return static_cast<std::uint64_t>(ms * 1e6);
 }
-
-// The largest CSV table of a signal.
-constexpr std::uintmax_t kMaxTableBytes = 16u << 20;
 
 // inputs: of an input terminal: CHANNEL: {signal: KIND, parameters...} or CHANNEL: {wire: DEVICE:CHANNEL}.
 void parse_inputs(const Reader& r, const YAML::Node& n, DeviceEntry& d, const std::string& folder) {
@@ -131,18 +129,11 @@ void parse_inputs(const Reader& r, const YAML::Node& n, DeviceEntry& d, const st
                 std::string path = r.scalar(v, key);
                 if (std::filesystem::path(path).is_relative())
                     path = (std::filesystem::path(folder) / path).string();
-                // A regular file of sensible size (not a device or a pipe that never ends).
-                std::error_code ec;
-                if (!std::filesystem::is_regular_file(path, ec)) r.fail(v, "file: cannot read " + path);
-                if (std::filesystem::file_size(path, ec) > kMaxTableBytes || ec)
-                    r.fail(v, "file: " + path + " is larger than " + std::to_string(kMaxTableBytes >> 20) +
-                                  " MiB");
-                std::ifstream f(path, std::ios::binary);
-                if (!f) r.fail(v, "file: cannot read " + path);
-                std::stringstream text;
-                text << f.rdbuf();
+                std::string why;
+                const auto text = read_whole_file(path, kMaxTextFileBytes, why);
+                if (!text) r.fail(v, "file: " + path + " " + why);
                 try {
-                    sig.table = io::parse_table(text.str());
+                    sig.table = io::parse_table(*text);
                 } catch (const std::invalid_argument& e) {
                     r.fail(v, "file: " + path + ":" + e.what());
                 }
@@ -520,12 +511,11 @@ NetworkFile arrange_network(std::vector<DeviceEntry> devices, const std::vector<
 }
 
 NetworkFile read_network_file(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw NetworkFileError(path + ": cannot be read");
-    std::stringstream s;
-    s << in.rdbuf();
+    std::string why;
+    const auto text = read_whole_file(path, kMaxTextFileBytes, why);
+    if (!text) throw NetworkFileError(path + ": " + why);
     const auto folder = std::filesystem::path(path).parent_path();
-    return parse_network(s.str(), path, folder.empty() ? "." : folder.string());
+    return parse_network(*text, path, folder.empty() ? "." : folder.string());
 }
 
 }  // namespace vecat::network

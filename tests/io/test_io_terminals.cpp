@@ -224,11 +224,11 @@ TEST(IoTerminals, TheNetworkFileRefusesBadInputsNamingTheLine) {
     EXPECT_EQ(refused(in + "    inputs: {0: {signal: table}}\n"),
               "net.yaml:8: inputs: a table signal takes file: (CSV rows time_ms,value)");
     EXPECT_NE(refused(in + "    inputs: {0: {signal: table, file: /nonexistent.csv}}\n")
-                  .find("file: cannot read /nonexistent.csv"),
+                  .find("file: /nonexistent.csv cannot be read"),
               std::string::npos);
     // A device that never ends is no table (nothing hangs reading it).
     EXPECT_EQ(refused(in + "    inputs: {0: {signal: table, file: /dev/zero}}\n"),
-              "net.yaml:8: file: cannot read /dev/zero");
+              "net.yaml:8: file: /dev/zero is larger than 16 MiB");
     const auto csv = (std::filesystem::temp_directory_path() / "vecat-io-bad.csv").string();
     std::ofstream(csv) << "0,1\n1,oops\n";
     EXPECT_EQ(refused(in + "    inputs: {0: {signal: table, file: " + csv + "}}\n"),

@@ -1,8 +1,11 @@
 // Bad input never crashes, hangs or reads out of bounds (run under ASan/UBSan with VECAT_SANITIZE=ON).
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <random>
 
+#include "common/file.hpp"
 #include "master/coe_client.hpp"
 #include "test_support.hpp"
 
@@ -183,4 +186,21 @@ TEST(BadInput, MailboxLargerThanAnEthernetFrame) {
     EXPECT_EQ(r[5] & 0x0F, 0x03);
     EXPECT_EQ(ld_le32(&r[10]), 2000u) << "payload bytes handed over";
     EXPECT_EQ(ld_le32(&r[6]), 2000u) << "sum of the payload";
+}
+
+// Input files are read with a limit: a device that never ends (/dev/zero) or a file past it is refused, not
+// read for ever; what can be read comes back whole.
+TEST(BadInput, InputFilesAreReadWithALimit) {
+    std::string why;
+    EXPECT_FALSE(read_whole_file("/dev/zero", 1u << 20, why).has_value());
+    EXPECT_EQ(why, "is larger than 1 MiB");
+    EXPECT_FALSE(read_whole_file("/nonexistent/vecat-file", 1u << 20, why).has_value());
+    EXPECT_EQ(why, "cannot be read");
+    const auto path = (std::filesystem::temp_directory_path() / "vecat-read-whole-file").string();
+    std::string text(200'000, 'x');
+    text[123'456] = '\0';
+    std::ofstream(path, std::ios::binary) << text;
+    EXPECT_EQ(read_whole_file(path, text.size(), why).value_or(""), text);
+    EXPECT_FALSE(read_whole_file(path, text.size() - 1, why).has_value());
+    std::filesystem::remove(path);
 }
