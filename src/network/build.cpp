@@ -136,16 +136,16 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
             d = device::junction();
             break;
         case Source::DigitalIn:
-            d = device::digital_input_terminal(e.channels ? e.channels : 8);
+            d = device::digital_input_terminal(channels_of(e));
             break;
         case Source::DigitalOut:
-            d = device::digital_output_terminal(e.channels ? e.channels : 8);
+            d = device::digital_output_terminal(channels_of(e));
             break;
         case Source::AnalogIn:
-            d = device::analog_input_terminal(e.channels ? e.channels : 4);
+            d = device::analog_input_terminal(channels_of(e));
             break;
         case Source::AnalogOut:
-            d = device::analog_output_terminal(e.channels ? e.channels : 4);
+            d = device::analog_output_terminal(channels_of(e));
             break;
     }
     apply(d, e);
@@ -231,7 +231,7 @@ std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept {
 void attach_io(const DeviceEntry& e, Made& m, BuiltNetwork& b) {
     const bool digital = e.source == Source::DigitalIn || e.source == Source::DigitalOut;
     const io::ChannelKind kind = digital ? io::ChannelKind::Digital : io::ChannelKind::Analog;
-    const unsigned channels = e.channels ? e.channels : digital ? 8u : 4u;
+    const unsigned channels = channels_of(e);
     if (e.source == Source::DigitalOut || e.source == Source::AnalogOut) {
         const std::size_t slot = b.io->output_slot(e.name);
         m.factory = [bus = b.io,
@@ -262,9 +262,7 @@ BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
         if (e.source == Source::DigitalOut || e.source == Source::AnalogOut)
             b.io->add_output(
                 e.name, e.source == Source::DigitalOut ? io::ChannelKind::Digital : io::ChannelKind::Analog,
-                e.channels                       ? e.channels
-                : e.source == Source::DigitalOut ? 8u
-                                                 : 4u);
+                channels_of(e));
     std::vector<std::uint8_t> ports;
     for (const DeviceEntry& e : f.devices) {
         const std::string at = file + ":" + std::to_string(e.line) + ": " + e.name + ": ";

@@ -37,13 +37,6 @@ bool is_io(Source s) {
 
 using Reader = YamlReader<NetworkFileError>;
 
-// The channels of a built-in I/O terminal (its default when channels: is not given).
-unsigned channels_of(const DeviceEntry& d) {
-    return d.channels                                                          ? d.channels
-           : (d.source == Source::DigitalIn || d.source == Source::DigitalOut) ? 8u
-                                                                               : 4u;
-}
-
 double real(const Reader& r, const YAML::Node& n, const std::string& key) {
     const std::string s = r.scalar(n, key);
     double v = 0;
@@ -508,6 +501,11 @@ NetworkFile arrange_network(std::vector<DeviceEntry> devices, const std::vector<
         out.children.push_back(ch);
     }
     return out;
+}
+
+unsigned channels_of(const DeviceEntry& d) noexcept {
+    if (d.channels) return d.channels;
+    return d.source == Source::DigitalIn || d.source == Source::DigitalOut ? 8u : 4u;
 }
 
 NetworkFile read_network_file(const std::string& path) {

@@ -121,6 +121,9 @@ struct NetworkFile {
     unsigned redundancy_line = 0;
 };
 
+// The channels of a built-in I/O terminal: channels:, or its kind's default (8 digital, 4 analog).
+unsigned channels_of(const DeviceEntry& d) noexcept;
+
 class NetworkFileError : public std::runtime_error {
   public:
     using std::runtime_error::runtime_error;
