@@ -20,7 +20,7 @@ using namespace vecat;
 void BM_Network1000Cycle(benchmark::State& state) {
     // VECAT_BENCH_NETWORK: another file (a smaller one to profile).
     const char* other = std::getenv("VECAT_BENCH_NETWORK");
-    const std::string file = other ? other : VECAT_BENCH_DIR "/network-1000.yaml";
+    const std::string file = other && *other ? other : VECAT_BENCH_DIR "/network-1000.yaml";
     auto built = network::build_network(network::read_network_file(file), file);
     net::InProcessLink link(*built.segment);
     std::uint64_t now = 1'000'000'000;
