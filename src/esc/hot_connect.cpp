@@ -5,7 +5,7 @@
 #include <string>
 
 #include "esc/segment.hpp"
-#include "protocol/frame.hpp"
+#include "protocol/topology.hpp"
 
 namespace vecat::esc {
 
@@ -65,16 +65,8 @@ bool Segment::move_group(std::size_t head, std::size_t parent, unsigned port, st
     std::vector<std::array<int, 4>> child = child_;
     child[static_cast<std::size_t>(parent_[head])][parent_port_[head]] = -1;
     child[parent][port] = static_cast<int>(head);
-    // Depth first from the master, ports 3, 1, 2: order[new] = old.
-    order.clear();
-    std::vector<std::size_t> todo{0};
-    while (!todo.empty()) {
-        const std::size_t at = todo.back();
-        todo.pop_back();
-        order.push_back(at);
-        for (auto p = protocol::kPortsAfterPort0.rbegin(); p != protocol::kPortsAfterPort0.rend(); ++p)
-            if (const int c = child[at][*p]; c >= 0) todo.push_back(static_cast<std::size_t>(c));
-    }
+    // The order the frame reaches them now: order[new] = old.
+    order = protocol::frame_order(child);
     if (order.size() != n) {  // cannot happen: the parent lies outside the group
         if (why) *why = "the cabling would leave slaves without a way to the master";
         return false;

@@ -5,6 +5,7 @@
 
 #include "protocol/frame.hpp"
 #include "protocol/registers.hpp"
+#include "protocol/topology.hpp"
 
 namespace vecat::esc {
 
@@ -68,15 +69,8 @@ bool Segment::set_topology(const std::vector<int>& parents, const std::vector<st
         if (slot >= 0) return fail("slave " + std::to_string(k) + ": port cabled twice");
         slot = static_cast<int>(k);
     }
-    // Depth first, ports 3, 1, 2: the order must be the slaves' own.
-    std::vector<std::size_t> order, todo{0};
-    while (n && !todo.empty()) {
-        const std::size_t at = todo.back();
-        todo.pop_back();
-        order.push_back(at);
-        for (auto p = protocol::kPortsAfterPort0.rbegin(); p != protocol::kPortsAfterPort0.rend(); ++p)
-            if (const int c = child[at][*p]; c >= 0) todo.push_back(static_cast<std::size_t>(c));
-    }
+    // The order the frame reaches them must be the slaves' own.
+    const std::vector<std::size_t> order = protocol::frame_order(child);
     for (std::size_t k = 0; k < order.size(); ++k)
         if (order[k] != k) return fail("the slaves are not in the order the frame reaches them");
     if (redundant() && child[red_slave_][red_port_] >= 0) return fail("the redundancy port is cabled twice");

@@ -14,6 +14,7 @@
 
 #include "common/file.hpp"
 #include "protocol/registers.hpp"
+#include "protocol/topology.hpp"
 
 namespace vecat::network {
 
@@ -477,15 +478,7 @@ NetworkFile arrange_network(std::vector<DeviceEntry> devices, const std::vector<
     }
 
     // The order the frame reaches them: depth first from the master, ports 3, 1, 2 of each device.
-    std::vector<std::size_t> order;
-    std::vector<std::size_t> stack{0};
-    while (!stack.empty()) {
-        const std::size_t at = stack.back();
-        stack.pop_back();
-        order.push_back(at);
-        for (auto p = protocol::kPortsAfterPort0.rbegin(); p != protocol::kPortsAfterPort0.rend(); ++p)
-            if (const int c = f.children[at][*p]; c >= 0) stack.push_back(static_cast<std::size_t>(c));
-    }
+    const std::vector<std::size_t> order = protocol::frame_order(f.children);
     std::vector<int> position(n, -1);
     for (std::size_t k = 0; k < order.size(); ++k)
         position[order[k]] = static_cast<int>(k);

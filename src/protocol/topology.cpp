@@ -32,4 +32,22 @@ std::vector<Upstream> topology_from_open_ports(std::span<const std::uint8_t> ope
     return up;
 }
 
+std::vector<std::size_t> frame_order(std::span<const std::array<int, 4>> children) {
+    std::vector<std::size_t> order;
+    if (children.empty()) return order;
+    std::vector<bool> seen(children.size(), false);
+    std::vector<std::size_t> todo{0};
+    while (!todo.empty()) {
+        const std::size_t at = todo.back();
+        todo.pop_back();
+        if (seen[at]) continue;
+        seen[at] = true;
+        order.push_back(at);
+        for (auto p = kPortsAfterPort0.rbegin(); p != kPortsAfterPort0.rend(); ++p)
+            if (const int c = children[at][*p]; c >= 0 && static_cast<std::size_t>(c) < children.size())
+                todo.push_back(static_cast<std::size_t>(c));
+    }
+    return order;
+}
+
 }  // namespace vecat::protocol

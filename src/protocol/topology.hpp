@@ -4,6 +4,8 @@
 // behind it, which the frame reaches next, depth first.
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -21,5 +23,11 @@ struct Upstream {
 
 // Per slave, where its port 0 is cabled, from the open ports of every slave in frame order.
 std::vector<Upstream> topology_from_open_ports(std::span<const std::uint8_t> open_ports);
+
+// The order in which a frame reaches the devices of a tree: depth first from device 0, each device's ports
+// in the order 3, 1, 2 after port 0 (ESC datasheet section I, frame processing). children[d][p] is the device
+// cabled to port p of device d, -1 for none. A device reached twice (cables in a loop) is taken once; devices
+// not reached from device 0 are not in the order. Empty for no devices.
+std::vector<std::size_t> frame_order(std::span<const std::array<int, 4>> children);
 
 }  // namespace vecat::protocol

@@ -17,6 +17,7 @@
 #include "protocol/sdo_abort.hpp"
 #include "protocol/sii.hpp"
 #include "protocol/sync_manager.hpp"
+#include "protocol/topology.hpp"
 
 using namespace vecat;
 using namespace vecat::protocol;
@@ -437,4 +438,16 @@ TEST(ProtocolSii, TruncatedImageReportsAndNeverReadsPast) {
     const auto s = parse_sii(img);
     EXPECT_FALSE(s.errors.empty());
     EXPECT_EQ(s.device_name(), "Drv1");  // what came before is kept
+}
+
+// The frame's order through a tree (ESC datasheet section I: ports 0 -> 3 -> 1 -> 2), depth first.
+TEST(Topology, FrameOrderVisitsPort3ThenPort1ThenPort2DepthFirst) {
+    // 0: port 1 -> 1, port 2 -> 4, port 3 -> 2; 2: port 1 -> 3.
+    const std::vector<std::array<int, 4>> children = {
+        {-1, 1, 4, 2}, {-1, -1, -1, -1}, {-1, 3, -1, -1}, {-1, -1, -1, -1}, {-1, -1, -1, -1}};
+    EXPECT_EQ(protocol::frame_order(children), (std::vector<std::size_t>{0, 2, 3, 1, 4}));
+    // Cables in a loop: each device once; a device not reached is not in the order.
+    const std::vector<std::array<int, 4>> loop = {{-1, 1, -1, -1}, {-1, 0, -1, -1}, {-1, -1, -1, -1}};
+    EXPECT_EQ(protocol::frame_order(loop), (std::vector<std::size_t>{0, 1}));
+    EXPECT_TRUE(protocol::frame_order({}).empty());
 }
