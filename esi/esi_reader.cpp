@@ -1,4 +1,4 @@
-// The ESI reader (about 690 lines): one vendor file to one DeviceDescription, element by element of the
+// The ESI reader (about 730 lines): one vendor file to one DeviceDescription, element by element of the
 // ETG.2000 schema (identity, SyncManagers, PDOs, Dictionary, Modules/Slots, DC), each with its bad-input
 // messages.
 #include "esi/esi_reader.hpp"
