@@ -117,6 +117,7 @@ struct Options {
     bool dc = true;
     bool with_reflector = false;  // soak: every cycle also sends the frames to the reflector
     std::int64_t tick_us = net::ServeOptions{}.tick_us;
+    std::int64_t catch_up_us = net::ServeOptions{}.catch_up_budget_us;
     std::string network;  // a network file instead of a line of drives
 };
 
@@ -264,6 +265,7 @@ int run(const Options& o) {
     sopt.busy_poll = o.busy;
     sopt.park = &park_vecat;
     sopt.tick_us = o.tick_us;
+    sopt.catch_up_budget_us = o.catch_up_us;
     net::ServeCounters serve_count;
     sopt.counters = &serve_count;
     std::thread server([&] {
@@ -460,10 +462,11 @@ int run(const Options& o) {
         if (c_vecat > 0 && !o.busy)
             fmt::print(
                 "  serve loop per vecat cycle: {:.2f} wake-ups, {:.2f} frames, {:.2f} firmware runs without "
-                "a frame (ticks, SYNC pulses)\n",
+                "a frame (deadlines, catch-up ticks; catch-up period at the end {} us)\n",
                 static_cast<double>(wakeups) / static_cast<double>(c_vecat),
                 static_cast<double>(frames) / static_cast<double>(c_vecat),
-                static_cast<double>(ticks) / static_cast<double>(c_vecat));
+                static_cast<double>(ticks) / static_cast<double>(c_vecat),
+                serve_count.catch_up_ns.load() / 1000);
         if (misses) rc = 1;
     }
     stop = true;
@@ -500,8 +503,11 @@ int main(int argc, char** argv) {
     app.add_flag("--with-reflector", o.with_reflector,
                  "Soak: every cycle also sends the same frames to the raw reflector, whose losses are "
                  "counted apart (the floor under the same conditions)");
-    app.add_option("--tick-us", o.tick_us,
-                   "Firmware tick of the serve loop between frames (as vecat run --tick-us)")
+    app.add_option(
+        "--tick-us", o.tick_us,
+        "The slaves' local cycle and shortest firmware tick between frames (as vecat run --tick-us)");
+    app.add_option("--catch-up-us", o.catch_up_us,
+                   "Budget of firmware work a frame may find waiting (net::ServeOptions::catch_up_budget_us)")
         ->check(CLI::Range(10, 100000));
     CLI11_PARSE(app, argc, argv);
     struct sigaction sa {};

@@ -234,6 +234,7 @@ Drive::~Drive() {
 
 void Drive::tick(std::uint64_t now_ns) {
     advance(now_ns);
+    CoeApplication::tick(now_ns);  // the SYNC supervision and the SDO server's timeout
 }
 
 void Drive::cycle(std::uint64_t now_ns, bool) {

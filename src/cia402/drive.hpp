@@ -57,6 +57,8 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
 
   protected:
     void cycle(std::uint64_t now_ns, bool outputs_applied) override;
+    void advance_to(std::uint64_t now_ns) override { advance(now_ns); }
+    bool coupled() const override { return twin_partner_ != nullptr; }
 
   private:
     void advance(std::uint64_t now_ns);

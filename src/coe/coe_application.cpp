@@ -65,6 +65,7 @@ protocol::AlStatusCode CoeApplication::check_transition(AlState from, AlState to
 void CoeApplication::on_state_change(AlState from, AlState to) {
     state_ = to;
     requested_ = to;
+    inputs_latched_ = false;
     if (to != AlState::Op) outputs_received_ = false;
     outputs_pending_ = false;
     sync_->on_state_change(from, to);
@@ -88,7 +89,14 @@ void CoeApplication::tick(std::uint64_t now_ns) {
     sdo_->tick(now_ns);
 }
 
+std::uint64_t CoeApplication::next_event_ns() const {
+    return std::min(sync_->next_deadline_ns(state_), sdo_->next_deadline_ns());
+}
+
 void CoeApplication::sync_event(unsigned signal, std::uint64_t now_ns) {
+    // The device's periods up to the event first: what the event does (new outputs, a sync error that
+    // takes them away) starts at the event, however late the firmware takes it.
+    advance_to(now_ns);
     if (!sync_->on_sync_event(signal, now_ns, state_)) return;
     if (outputs_pending_) {
         map_->copy_outputs(pending_outputs_);
@@ -100,6 +108,7 @@ void CoeApplication::sync_event(unsigned signal, std::uint64_t now_ns) {
 bool CoeApplication::refresh_inputs(Bytes inputs) {
     if (!sync_->dc_mode()) return false;
     map_->copy_inputs(inputs);
+    inputs_latched_ = true;
     return true;
 }
 
@@ -126,6 +135,7 @@ void CoeApplication::on_al_error(protocol::AlStatusCode code) {
 
 void CoeApplication::exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) {
     const bool applied = apply && !outputs.empty();
+    advance_to(now_ns);
     if (applied && sync_->dc_mode()) {
         // DC synchronous: the outputs take effect at the next SYNC0 (SYNC1) event, whenever in the cycle
         // the frame came (ETG.1020 synchronisation: the application reads SM2 at the sync event). Taken at
@@ -137,7 +147,10 @@ void CoeApplication::exchange(std::uint64_t now_ns, ConstBytes outputs, bool app
     }
     outputs_received_ |= applied && state_ == AlState::Op;
     if (!sync_->dc_mode()) cycle(now_ns, applied);
-    map_->copy_inputs(inputs);
+    // DC synchronous: the input buffer holds what the device latched at the last SYNC0 (SYNC1) event
+    // (ETG.1020 synchronisation: inputs are latched at the sync event and written once per cycle), not
+    // whatever its state is when the firmware happens to run; before the first event, its state.
+    if (!sync_->dc_mode() || !inputs_latched_) map_->copy_inputs(inputs);
     ++exchanges_;
 }
 

@@ -68,6 +68,7 @@ class CoeApplication : public esc::Application {
     esc::OpReadiness op_readiness(std::uint64_t now_ns, std::uint64_t since_ns) override;
     // A firmware update (the bootloader, src/foe): 0x1018:03 reports the new revision.
     void on_revision_change(std::uint32_t revision) override;
+    std::uint64_t next_event_ns() const override;
 
     // Parameter persistence (0x1010/0x1011) in the file at path: applies the stored set now. A corrupted
     // or foreign file leaves the defaults and queues an emergency 0x6300 (data set) with "PRM" and the
@@ -88,6 +89,11 @@ class CoeApplication : public esc::Application {
     // mode it runs on every process data exchange; in DC mode on every SYNC0 (SYNC1) event, after the outputs
     // received since the previous event were stored (outputs_applied: in OP with valid outputs).
     virtual void cycle(std::uint64_t /*now_ns*/, bool /*outputs_applied*/) {}
+    // The device's own time up to now_ns with the outputs it has, before new ones are stored: a device
+    // that runs in periods of its own (a drive's servo periods) runs those that ended by then. New outputs
+    // then take effect after the exchange or the SYNC event that brought them, whenever the firmware ran
+    // last (ticks between frames or not: the results are the same).
+    virtual void advance_to(std::uint64_t /*now_ns*/) {}
 
   private:
     ObjectDictionary od_;
@@ -100,6 +106,9 @@ class CoeApplication : public esc::Application {
     // DC mode: the outputs of the last frame, stored into the dictionary at the next sync event.
     std::vector<std::uint8_t> pending_outputs_;
     bool outputs_pending_ = false;
+    // DC mode: the inputs were latched at a SYNC event since the state changed; exchanges leave them as
+    // they were latched until the next event.
+    bool inputs_latched_ = false;
     AlState state_ = AlState::Init;
     AlState requested_ = AlState::Init;  // target of the transition being checked (emergency code)
     Entry* error_register_ = nullptr;

@@ -103,6 +103,12 @@ void SdoServer::reset() {
     emcy_head_ = emcy_count_ = 0;
 }
 
+std::uint64_t SdoServer::next_deadline_ns() const {
+    if (std::holds_alternative<Idle>(transfer_)) return ~std::uint64_t{0};
+    if (quiet_since_ns_ == kNotYet) return 0;
+    return quiet_since_ns_ + kSdoTimeoutNs;
+}
+
 void SdoServer::tick(std::uint64_t now_ns) {
     if (std::holds_alternative<Idle>(transfer_)) return;
     if (quiet_since_ns_ == kNotYet) {

@@ -45,6 +45,9 @@ class SdoServer final : public esc::MailboxProtocol {
     void reset() override;
     // The time (ns, the segment's clock): a transfer left alone for kSdoTimeoutNs is dropped.
     void tick(std::uint64_t now_ns);
+    // When tick() has something to do: the timeout of the transfer in progress (0: the tick that starts
+    // its clock), ~0 without one.
+    std::uint64_t next_deadline_ns() const;
 
     // Queues an emergency (sent when the reply mailbox is free). False when the queue is full.
     bool emergency(const protocol::Emergency& e);

@@ -291,6 +291,12 @@ bool SyncParameters::on_sync_event(unsigned signal, std::uint64_t now_ns, AlStat
     return true;
 }
 
+std::uint64_t SyncParameters::next_deadline_ns(AlState state) const {
+    if (!dc_mode() || !slave_ || faulted_ || state != AlState::Op || last_event_ns_ == 0)
+        return ~std::uint64_t{0};
+    return last_event_ns_ + std::max<std::uint64_t>(kSyncLostMinNs, 3ull * app_cycle_ns_) + 1;
+}
+
 void SyncParameters::tick(std::uint64_t now_ns, AlState state) {
     if (!dc_mode() || !slave_ || faulted_) return;
     if (state != AlState::SafeOp && state != AlState::Op) return;
@@ -300,8 +306,7 @@ void SyncParameters::tick(std::uint64_t now_ns, AlState state) {
         return;
     }
     if (state != AlState::Op) return;
-    const std::uint64_t lost_after = std::max<std::uint64_t>(kSyncLostMinNs, 3ull * app_cycle_ns_);
-    if (last_event_ns_ != 0 && now_ns > last_event_ns_ && now_ns - last_event_ns_ > lost_after) {
+    if (now_ns >= next_deadline_ns(state)) {
         put<std::uint8_t>(kOutPar, sub::SyncError, 1);
         put<std::uint8_t>(kInPar, sub::SyncError, 1);
         raise(AlStatusCode::FatalSyncError);  // SYNC0 stopped while the drive runs on it

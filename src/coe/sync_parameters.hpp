@@ -69,6 +69,8 @@ class SyncParameters {
     bool on_sync_event(unsigned signal, std::uint64_t now_ns, protocol::AlState state);
     // Time-driven supervision (SYNC lost in OP, PLL).
     void tick(std::uint64_t now_ns, protocol::AlState state);
+    // When tick() would find SYNC lost if no SYNC event came before (~0: it cannot).
+    std::uint64_t next_deadline_ns(protocol::AlState state) const;
 
     SyncMode mode() const { return mode_; }
     bool dc_mode() const { return mode_ == SyncMode::DcSync0 || mode_ == SyncMode::DcSync1; }

@@ -350,6 +350,16 @@ std::uint64_t DistributedClock::next_pulse_host_ns() const {
     return t == kNever ? kNever : host_time_of(t);
 }
 
+std::uint64_t DistributedClock::backlog_deadline_ns(unsigned pulses) const {
+    const std::uint64_t next = next_pulse_host_ns();
+    if (next == kNever || pulses <= 1) return next;
+    const std::uint8_t act = reg(Reg::DcActivation);
+    const std::uint64_t cycle0 = ld_le32(&regs_[addr(Reg::DcSync0CycleTime)]);
+    if (cycle0 == 0) return next;  // single shot: take it on time
+    const std::uint64_t per = (act & dc_act::Sync1) && (act & dc_act::Sync0) ? cycle0 / 2 : cycle0;
+    return next + (pulses - 1) * per;
+}
+
 unsigned DistributedClock::advance(std::uint64_t host_ns, SyncPulse* out, unsigned max) {
     if (!cyclic_active_) return 0;
     const std::uint8_t act = reg(Reg::DcActivation);

@@ -93,6 +93,11 @@ class DistributedClock {
     unsigned advance(std::uint64_t host_ns, SyncPulse* out, unsigned max);
     // Host time of the next pulse, or kNever.
     std::uint64_t next_pulse_host_ns() const;
+    // Host time by which `pulses` pulses would be waiting for the firmware (the next one and those after
+    // it at the SYNC0 cycle, two per cycle with SYNC1 on as well), or kNever. Pulses can wait: the firmware
+    // takes them in time order with their own times whenever it runs (Esc::pdi_take_sync_pulses), but
+    // only so many per run.
+    std::uint64_t backlog_deadline_ns(unsigned pulses) const;
     static constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
 
     struct SyncState {

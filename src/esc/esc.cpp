@@ -692,13 +692,18 @@ void Esc::sii_command(std::uint8_t cmd_byte) {
 // ---------------------------------------------------------------------------------------------
 // Watchdogs
 
+std::uint64_t Esc::watchdog_deadline_ns() const {
+    const std::uint16_t wd_time = ld_le16(&mem_[addr(Reg::WatchdogTimeProcessData)]);
+    if (wd_time == 0 || !wd_armed_) return DistributedClock::kNever;
+    const std::uint64_t divider = ld_le16(&mem_[addr(Reg::WatchdogDivider)]);
+    return wd_last_trigger_ns_ + (divider + 2) * 40 * wd_time + 1;
+}
+
 void Esc::tick(std::uint64_t now_ns) {
     last_host_ns_ = now_ns;
-    const std::uint16_t wd_time = ld_le16(&mem_[addr(Reg::WatchdogTimeProcessData)]);
-    if (wd_time == 0 || !wd_armed_) return;
-    const std::uint64_t divider = ld_le16(&mem_[addr(Reg::WatchdogDivider)]);
-    const std::uint64_t period_ns = (divider + 2) * 40 * wd_time;
-    if (now_ns > wd_last_trigger_ns_ && now_ns - wd_last_trigger_ns_ > period_ns) {
+    const std::uint64_t deadline = watchdog_deadline_ns();
+    if (deadline == DistributedClock::kNever) return;
+    if (now_ns >= deadline) {
         wd_armed_ = false;
         mem_[addr(Reg::WatchdogStatusProcessData)] &= static_cast<std::uint8_t>(~0x01);
         saturating_inc(mem_[addr(Reg::WatchdogCounterProcessData)]);

@@ -140,6 +140,10 @@ class Esc {
 
     // Time: runs the watchdogs. Call regularly with the host clock in ns.
     void tick(std::uint64_t now_ns);
+    // The first host time at which tick() finds the process data watchdog expired (it expires when more
+    // than its time passed since the last trigger, ESC datasheet section I, watchdogs), or kNever while
+    // it is disarmed or off: the firmware need not run before then for the watchdog's sake.
+    std::uint64_t watchdog_deadline_ns() const;
     bool pd_watchdog_expired() const {
         return (mem_[protocol::addr(protocol::Reg::WatchdogStatusProcessData)] & 1) == 0;
     }

@@ -145,9 +145,9 @@ bool Segment::process_ring(Bytes frame, std::size_t& len, std::uint64_t now_ns, 
             slaves_[first]->esc().count_invalid_frame(from == MasterPort::Primary ? 0 : red_port_);
         return false;
     } else {
-        // SYNC pulses that fell due before this frame arrived happen first (the server may be late).
-        for (std::size_t k = 0; k < slaves_.size(); ++k)
-            if (slaves_[k]->esc().dc().next_pulse_host_ns() <= now_ns) run(k, now_ns);
+        // SYNC pulses and deadlines due before this frame arrived happen first, and the slaves' own
+        // cycles catch up (see set_local_cycle_ns).
+        catch_up(now_ns);
         for (const std::size_t k : ring_order_) {
             const FrameTiming& rel = ring_timing_[k];
             const FrameTiming t{now_ns + rel.port0_ns, now_ns + rel.port1_ns, now_ns + rel.port2_ns,

@@ -31,6 +31,7 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     cable_up_.push_back(1);
     halted_.push_back(0);
     last_run_ns_.push_back(0);
+    deadline_ns_.push_back(0);
     latched_.push_back(0);
     // A line: port 0 of the new slave to port 1 of the one before.
     parent_.push_back(static_cast<int>(i) - 1);
@@ -232,7 +233,9 @@ std::size_t Segment::reachable() const {
 }
 
 void Segment::set_firmware_halted(std::size_t i, bool halted) {
-    if (i < halted_.size()) halted_[i] = halted ? 1 : 0;
+    if (i >= halted_.size()) return;
+    halted_[i] = halted ? 1 : 0;
+    deadline_ns_[i] = 0;
 }
 
 bool Segment::restart_slave(std::size_t i) {
@@ -245,6 +248,7 @@ bool Segment::restart_slave(std::size_t i) {
     const DeviceModel model = old.model();
     auto fresh = std::make_unique<Slave>(model, cfg, factory(*model.description));
     slaves_[i] = std::move(fresh);
+    deadline_ns_[i] = 0;
     ++slaves_epoch_;
     slaves_[i]->esc().set_port_change_counter(&port_epoch_);
     ++port_epoch_;
@@ -252,7 +256,29 @@ bool Segment::restart_slave(std::size_t i) {
     return true;
 }
 
+void Segment::deliver_coupled_pulses(std::uint64_t now_ns) {
+    if (coupled_epoch_ != slaves_epoch_) {
+        coupled_epoch_ = slaves_epoch_;
+        coupled_.clear();
+        for (std::size_t k = 0; k < slaves_.size(); ++k)
+            if (slaves_[k]->app().coupled()) coupled_.push_back(k);
+    }
+    for (;;) {
+        std::size_t first = slaves_.size();
+        std::uint64_t t = DistributedClock::kNever;
+        for (const std::size_t k : coupled_)
+            if (!halted_[k])
+                if (const std::uint64_t p = slaves_[k]->esc().dc().next_pulse_host_ns(); p < t) {
+                    t = p;
+                    first = k;
+                }
+        if (first == slaves_.size() || t > now_ns) return;
+        slaves_[first]->deliver_sync_pulses(t);
+    }
+}
+
 void Segment::run_due_firmware(std::uint64_t now_ns) {
+    deliver_coupled_pulses(now_ns);
     for (std::size_t k = 0; k < slaves_.size(); ++k)
         if (last_run_ns_[k] == 0 || now_ns - last_run_ns_[k] >= kMaxRunGapNs || now_ns < last_run_ns_[k])
             run(k, now_ns);
@@ -266,6 +292,7 @@ void Segment::run_deferred_firmware() {
 
 void Segment::run_firmware(std::uint64_t now_ns) {
     run_deferred_firmware();
+    deliver_coupled_pulses(now_ns);
     for (std::size_t k = 0; k < slaves_.size(); ++k)
         run(k, now_ns);
 }
@@ -318,9 +345,9 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
         gone = passed < slaves_.size();
         // An outbound frame damaged on the cable into slave c is processed by the slaves before c only.
         const std::size_t intact = std::min(hit && !damage.returning ? damage.cable : slaves_.size(), passed);
-        // SYNC pulses that fell due before this frame arrived happen first (the server may be late).
-        for (std::size_t k = 0; k < slaves_.size(); ++k)
-            if (slaves_[k]->esc().dc().next_pulse_host_ns() <= now_ns) run(k, now_ns);
+        // SYNC pulses that fell due before this frame arrived happen first, and the slaves' own cycles
+        // catch up (see set_local_cycle_ns).
+        catch_up(now_ns);
         // A latch that goes on downstream: remembered until it returns (see return_frame()).
         const bool onward = downstream_ && m == slaves_.size() && !hit;
         std::size_t latch_pos = pf.count;
@@ -407,16 +434,36 @@ void Segment::run(std::size_t k, std::uint64_t now_ns) {
     else
         slaves_[k]->run(now_ns);
     last_run_ns_[k] = now_ns == 0 ? 1 : now_ns;
+    // A halted firmware has no deadlines but the silicon's watchdog.
+    deadline_ns_[k] = halted_[k] ? slaves_[k]->esc().watchdog_deadline_ns()
+                                 : slaves_[k]->next_event_ns(now_ns + local_cycle_ns_);
 }
 
 void Segment::tick(std::uint64_t now_ns) {
     run_firmware(now_ns);
 }
 
+void Segment::catch_up(std::uint64_t now_ns) {
+    deliver_coupled_pulses(now_ns);
+    for (std::size_t k = 0; k < slaves_.size(); ++k) {
+        const std::uint64_t last = last_run_ns_[k];
+        if (last == 0 || now_ns < last || now_ns - last >= local_cycle_ns_ || deadline_ns_[k] <= now_ns ||
+            slaves_[k]->esc().dc().next_pulse_host_ns() <= now_ns)
+            run(k, now_ns);
+    }
+}
+
 std::uint64_t Segment::next_event_ns() const {
     std::uint64_t t = DistributedClock::kNever;
     for (const auto& s : slaves_)
         t = std::min(t, s->esc().dc().next_pulse_host_ns());
+    return t;
+}
+
+std::uint64_t Segment::next_firmware_ns() const {
+    std::uint64_t t = DistributedClock::kNever;
+    for (const std::uint64_t d : deadline_ns_)
+        t = std::min(t, d);
     return t;
 }
 

@@ -82,9 +82,22 @@ class Segment {
     void set_deferred_firmware(bool on) { defer_firmware_ = on; }
     bool deferred_firmware() const { return defer_firmware_; }
     void run_deferred_firmware();
-    // Host time of the next SYNC pulse of any slave (DistributedClock::kNever if none): the serve loop runs
-    // tick() then, so SYNC events happen on time without frames.
+    // Host time of the next SYNC pulse of any slave (DistributedClock::kNever if none).
     std::uint64_t next_event_ns() const;
+
+    // ---- Firmware when it is needed. A slave's firmware has three kinds of work: what a frame asked for
+    // (it runs after the frame, above), its own cycle (a drive's servo periods, inputs that follow a
+    // signal), and deadlines (the process data watchdog, SYNC pulses piling up, the application's
+    // timeouts). Its own cycle needs no run of its own: every run catches up with the periods since the
+    // last one, and before a frame reaches the ESCs each slave whose last run is local_cycle_ns or more
+    // ago runs, as do the slaves with a SYNC pulse or a deadline due, so that the frame reads what a timer
+    // at the local cycle would have left (a SYNC pulse is taken at its own time, whenever the run is). Only
+    // deadlines need a run on time: next_firmware_ns() is the earliest, and tick() runs them. A server then
+    // wakes up for frames and deadlines, not for every period of every drive (issue: performance).
+    void set_local_cycle_ns(std::uint64_t ns) { local_cycle_ns_ = ns ? ns : 1; }
+    std::uint64_t local_cycle_ns() const { return local_cycle_ns_; }
+    // Host time of the earliest deadline of any slave's firmware (DistributedClock::kNever if none).
+    std::uint64_t next_firmware_ns() const;
 
     const SegmentCounters& counters() const { return counters_; }
 
@@ -261,6 +274,18 @@ class Segment {
     // slave once per frame).
     std::vector<std::uint64_t> last_run_ns_;
     static constexpr std::uint64_t kMaxRunGapNs = 100'000;
+    // Per slave: its earliest deadline as of its last run (Slave::next_event_ns); 0: run it before the next
+    // frame. A frame that moves a deadline earlier (a shorter watchdog) addresses the slave, which then runs
+    // after the frame and looks again.
+    std::vector<std::uint64_t> deadline_ns_;
+    std::uint64_t local_cycle_ns_ = 250'000;
+    // Before a frame: the slaves whose state the frame must find current (see set_local_cycle_ns).
+    void catch_up(std::uint64_t now_ns);
+    // Before any run: the SYNC pulses up to now_ns of the slaves whose applications are coupled
+    // (Application::coupled), one at a time in time order across them.
+    void deliver_coupled_pulses(std::uint64_t now_ns);
+    std::vector<std::size_t> coupled_;  // those slaves, as of coupled_epoch_
+    std::uint64_t coupled_epoch_ = ~std::uint64_t{0};
     void run_due_firmware(std::uint64_t now_ns);
     bool defer_firmware_ = false;
     bool firmware_due_ = false;          // a frame's firmware runs are still to be done

@@ -482,6 +482,11 @@ void Slave::service_mailbox() {
             }
         }
     }
+    post_replies();
+}
+
+void Slave::post_replies() {
+    if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0) return;
     if (state_ != AlState::Boot) {
         if (auto* coe = app_->mailbox_protocol(MailboxType::CoE)) coe->poll(*sink_);
         for (auto& p : own_protocols_)
@@ -514,6 +519,10 @@ void Slave::exchange_process_data(std::uint64_t now_ns) {
 
 void Slave::run(std::uint64_t now_ns) {
     esc_.tick(now_ns);
+    // SYNC pulses first: they happened at their own times, before anything this run does at now_ns (an AL
+    // state change the master asked for, new outputs, the application's periods up to now_ns), however
+    // late the run is.
+    deliver_sync_pulses(now_ns);
     const std::uint32_t ev = esc_.al_events();
     if ((ev & al_event::AlControl) &&
         (al_control_latency_ns_ == 0 || now_ns >= esc_.al_control_written_ns() + al_control_latency_ns_))
@@ -529,8 +538,20 @@ void Slave::run(std::uint64_t now_ns) {
     if (op_pending_) try_enter_op(now_ns);
     if (state_ != AlState::Init) service_mailbox();
     if (rank(state_) >= rank(AlState::SafeOp)) exchange_process_data(now_ns);
-    deliver_sync_pulses(now_ns);
     app_->tick(now_ns);
+    // What the application raised in its cycles just now (the emergency of a fault) goes into the
+    // mailbox at once, as a firmware that polls its mailbox after its cycle: whenever this run happens
+    // (a tick between frames, or the catch-up before one), the next frame finds it.
+    if (state_ != AlState::Init) post_replies();
+}
+
+std::uint64_t Slave::next_event_ns(std::uint64_t poll_ns) const {
+    std::uint64_t t = std::min(esc_.watchdog_deadline_ns(), app_->next_event_ns());
+    t = std::min(t, esc_.dc().backlog_deadline_ns(kMaxPulsesPerRun / 2));
+    if (op_pending_) t = std::min(t, poll_ns);
+    if (esc_.al_events() & al_event::AlControl)
+        t = std::min(t, esc_.al_control_written_ns() + al_control_latency_ns_);
+    return t;
 }
 
 void Slave::try_enter_op(std::uint64_t now_ns) {

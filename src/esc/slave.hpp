@@ -62,6 +62,14 @@ class Application {
     // A firmware update took effect (Slave::apply_firmware_revision): the device now reports this revision
     // (a CoE device in 0x1018:03).
     virtual void on_revision_change(std::uint32_t /*revision*/) {}
+    // Its own cycles also run another slave's application (drives coupled by TWINsync step in lockstep):
+    // the segment then hands out the SYNC pulses of such slaves in time order across them, so that neither
+    // steps the other past a pulse the other has not taken yet.
+    virtual bool coupled() const { return false; }
+    // The host time by which the firmware must run even without a frame, for a deadline of the
+    // application's own (a timeout, a loss of SYNC events), or DistributedClock::kNever. Its own cycle
+    // needs none: it catches up at every run (Segment::set_local_cycle_ns). Asked after each run.
+    virtual std::uint64_t next_event_ns() const { return DistributedClock::kNever; }
 };
 
 // A process image without behaviour: keeps the last outputs and serves inputs set from outside.
@@ -140,6 +148,14 @@ class Slave {
 
     // Firmware step after a frame went through the ESC, and on timer ticks.
     void run(std::uint64_t now_ns);
+    // The host time by which run() must be called again without a frame (after a run; see
+    // Segment::next_firmware_ns): the process data watchdog's expiry, SYNC pulses about to pile up beyond
+    // what one run takes, the AL control read after its latency, the application's deadlines; poll_ns
+    // while a transition waits on conditions that are polled (SAFEOP -> OP).
+    std::uint64_t next_event_ns(std::uint64_t poll_ns) const;
+    // The SYNC pulses up to until_ns to the application, in time order (run() does this first; the segment
+    // calls it ahead for coupled applications).
+    void deliver_sync_pulses(std::uint64_t until_ns);
 
     protocol::AlState state() const { return state_; }
     bool error() const { return error_; }
@@ -188,8 +204,8 @@ class Slave {
     void write_inputs(unsigned len);
     void service_mailbox();
     void send_pending_replies();
+    void post_replies();  // the protocols' own messages (emergencies, SDO information) and queued replies
     void exchange_process_data(std::uint64_t now_ns);
-    void deliver_sync_pulses(std::uint64_t now_ns);
     void try_enter_op(std::uint64_t now_ns);
     void set_sm_group(bool mailbox, bool active);
 

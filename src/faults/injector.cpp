@@ -406,6 +406,18 @@ std::uint64_t FaultInjector::next_due_ns() const {
     return t;
 }
 
+std::uint64_t FaultInjector::next_event_ns() const {
+    if (requests_pending_.load(std::memory_order_acquire) || !origin_set_) return 0;
+    std::uint64_t t = ~std::uint64_t{0};
+    for (std::size_t i = 0; i < scenario_.events.size(); ++i)
+        if (!fired_[i] && !scenario_.events[i].by_cycle) t = std::min(t, origin_ns_ + scenario_.events[i].at);
+    for (const auto& a : active_) {
+        if (a->done) return 0;
+        if (a->until_ns != 0) t = std::min(t, a->until_ns);
+    }
+    return t;
+}
+
 bool FaultInjector::intercept(esc::Slave& slave, const protocol::MailboxHeader& h, ConstBytes payload,
                               esc::MailboxProtocol* protocol, esc::MailboxReplySink& sink) {
     if (active_.empty()) return false;

@@ -84,6 +84,7 @@ class FaultInjector final : public net::FrameFilter, public esc::MailboxIntercep
     void tick(std::uint64_t now_ns) override;
     std::size_t take_due(std::uint64_t now_ns, Bytes out) override;
     std::uint64_t next_due_ns() const override;
+    std::uint64_t next_event_ns() const override;
 
     // esc::MailboxInterceptor
     bool intercept(esc::Slave& slave, const protocol::MailboxHeader& h, ConstBytes payload,

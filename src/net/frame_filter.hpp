@@ -27,6 +27,9 @@ class FrameFilter {
     virtual std::size_t take_due(std::uint64_t now_ns, Bytes out) = 0;
     // Host time of the next held-back reply (max when none).
     virtual std::uint64_t next_due_ns() const = 0;
+    // Host time by which tick() has something to do (a timeline event, the end of a fault, a request
+    // from another thread), max when nothing: an idle transport need not wake up for it before then.
+    virtual std::uint64_t next_event_ns() const { return ~std::uint64_t{0}; }
 };
 
 }  // namespace vecat::net

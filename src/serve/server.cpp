@@ -66,14 +66,38 @@ std::uint64_t frame_time(const RawSocket& sock, std::uint64_t now) {
 // How often the serve loop looks at the link of the downstream interface.
 constexpr std::uint64_t kLinkCheckNs = 10'000'000;
 
+// How long the firmware may go without a run when no frame comes (ServeOptions::catch_up_budget_us). The
+// work a run does grows with the time since the last one (the slaves' cycles to catch up); work_ns took
+// gap_ns of backlog. The period follows the estimate that keeps that work at the budget, smoothed.
+class CatchUp {
+  public:
+    explicit CatchUp(const ServeOptions& opt)
+        : min_ns_(static_cast<std::uint64_t>(std::max<std::int64_t>(opt.tick_us, 1)) * 1000),
+          max_ns_(std::max(min_ns_, static_cast<std::uint64_t>(ServeOptions::kMaxCatchUpUs) * 1000)),
+          budget_ns_(static_cast<std::uint64_t>(std::max<std::int64_t>(opt.catch_up_budget_us, 0)) * 1000),
+          period_ns_(min_ns_) {}
+    std::uint64_t period_ns() const { return period_ns_; }
+    void learn(std::uint64_t gap_ns, std::uint64_t work_ns) {
+        if (gap_ns < min_ns_) return;  // runs close together say little of the backlog
+        const std::uint64_t estimate = work_ns == 0 ? max_ns_ : gap_ns / work_ns * budget_ns_;
+        period_ns_ = std::clamp((3 * period_ns_ + std::min(estimate, max_ns_)) / 4, min_ns_, max_ns_);
+    }
+
+  private:
+    std::uint64_t min_ns_, max_ns_, budget_ns_, period_ns_;
+};
+
 }  // namespace
 
 ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, const std::atomic<bool>& stop) {
     ServeStats st;
     std::array<std::uint8_t, 2048> buf{};
-    std::uint64_t last_tick = monotonic_ns();
-    std::uint64_t last_time = 0;  // latest time given to the segment
-    const std::uint64_t tick_ns = static_cast<std::uint64_t>(opt.tick_us) * 1000;
+    std::uint64_t last_tick = monotonic_ns();  // the last firmware run: a frame's or a tick's
+    std::uint64_t last_time = 0;               // latest time given to the segment
+    const std::uint64_t tick_ns = static_cast<std::uint64_t>(std::max<std::int64_t>(opt.tick_us, 1)) * 1000;
+    const std::uint64_t was_local_cycle = seg.local_cycle_ns();
+    seg.set_local_cycle_ns(tick_ns);
+    CatchUp catch_up(opt);
     std::uint64_t last_link_check = monotonic_ns();
     if (opt.downstream) seg.set_downstream_link(opt.downstream->carrier());
     if (opt.secondary) seg.set_secondary_link(opt.secondary->carrier());
@@ -87,14 +111,12 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     };
     while (!stop.load(std::memory_order_relaxed)) {
         if (opt.counters) bump(opt.counters->wakeups);
-        // Wake up for the next SYNC pulse of the DC units, or after one tick, whichever comes first.
-        const std::uint64_t next_sync = seg.next_event_ns();
-        std::int64_t wait_us = opt.tick_us;
-        if (next_sync != esc::DistributedClock::kNever) {
-            const std::uint64_t t = monotonic_ns();
-            const std::uint64_t until = next_sync > t ? next_sync - t : 0;
-            wait_us = std::min<std::int64_t>(wait_us, static_cast<std::int64_t>(until / 1000));
-        }
+        // Wake up for the next deadline of the firmware or the faults' timeline, or to catch up.
+        std::uint64_t due = std::min(seg.next_firmware_ns(), last_tick + catch_up.period_ns());
+        if (opt.filter) due = std::min(due, opt.filter->next_event_ns());
+        std::int64_t wait_us = 0;
+        if (const std::uint64_t t = monotonic_ns(); due > t)  // rounded up: not awake before it is due
+            wait_us = static_cast<std::int64_t>(std::min<std::uint64_t>((due - t + 999) / 1000, 1'000'000));
         if (opt.filter) send_due_replies(sock, opt, buf, st, wait_us);
         const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
         bool from_down = false;
@@ -139,6 +161,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
                 if (to) ++st.sent_secondary;
                 send_to_master(to ? *opt.secondary : sock, opt, ConstBytes(buf.data(), len), st, at);
             }
+            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now);
             seg.run_deferred_firmware();
             if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);
             last_tick = now;
@@ -176,19 +199,24 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             } else if (reply) {
                 send_to_master(sock, opt, ConstBytes(buf.data(), len), st, at);
             }
+            // The reply path's work, the slaves' catch-up before the frame included.
+            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now);
             seg.run_deferred_firmware();
             if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);
             last_tick = now;
-        } else if (now - last_tick >= tick_ns || now >= next_sync) {
+        } else if (n == 0 && now >= due) {
             seg.tick(now);
             if (opt.counters) bump(opt.counters->ticks);
             if (opt.filter) opt.filter->tick(now);
+            catch_up.learn(now - std::min(now, last_tick), monotonic_ns() - now);
             last_tick = now;
             last_time = std::max(last_time, now);
         }
+        if (opt.counters) opt.counters->catch_up_ns.store(catch_up.period_ns(), std::memory_order_relaxed);
     }
     seg.run_deferred_firmware();
     seg.set_deferred_firmware(was_deferred);
+    seg.set_local_cycle_ns(was_local_cycle);
     if (opt.pcap) opt.pcap->flush();
     return st;
 }

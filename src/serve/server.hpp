@@ -21,14 +21,27 @@ struct ServeCounters {
     // per poll of the socket.
     std::atomic<std::uint64_t> wakeups{0};
     std::atomic<std::uint64_t> frames{0};  // frames from the master side processed
-    std::atomic<std::uint64_t> ticks{0};   // firmware runs without a frame (ticks and SYNC pulses)
+    std::atomic<std::uint64_t> ticks{0};   // firmware runs without a frame (deadlines, catch-up ticks)
+    // The time between firmware runs without a frame that the loop works with now (see
+    // ServeOptions::catch_up_budget_us), ns.
+    std::atomic<std::uint64_t> catch_up_ns{0};
 };
 
 struct ServeOptions {
     bool busy_poll = false;  // spin on the socket instead of sleeping in poll()
-    // Firmware/watchdog tick period when idle: the drives' servo period (cia402::Drive::kServoPeriodNs), so
-    // a drive between frames steps on its own grid; finer ticks only cost CPU with many slaves.
+    // The slaves' local cycle (Segment::set_local_cycle_ns): the drives' servo period
+    // (cia402::Drive::kServoPeriodNs). A slave whose firmware last ran this long ago or longer catches up
+    // before a frame reaches it; it is also the shortest time between two runs of the firmware without a
+    // frame.
     std::int64_t tick_us = 250;
+    // Firmware when it is needed: the loop wakes up for frames, for the slaves' deadlines
+    // (Segment::next_firmware_ns) and the faults' timeline, and otherwise only so often that the firmware
+    // work a frame finds waiting (the slaves' cycles since their last run, done before the frame is
+    // processed) stays near this budget: between tick_us and kMaxCatchUpUs apart, from what that work
+    // cost so far. A few drives at 1 kHz wake the loop once per frame; a large network gets ticks between
+    // frames as before.
+    std::int64_t catch_up_budget_us = 20;
+    static constexpr std::int64_t kMaxCatchUpUs = 10'000;
     PcapngWriter* pcap = nullptr;   // capture of every frame in and out
     FrameFilter* filter = nullptr;  // fault injection (src/faults): frames go through it to the segment
     // Sees every frame from the master as it came, and every reply as it goes back (the report on the
