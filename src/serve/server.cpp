@@ -157,11 +157,12 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
                                           from ? esc::MasterPort::Secondary : esc::MasterPort::Primary);
                 to = seg.reply_port() == esc::MasterPort::Secondary ? 1 : 0;
             }
+            // The reply path's work, the slaves' catch-up before the frame included (not the send).
+            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now);
             if (reply) {
                 if (to) ++st.sent_secondary;
                 send_to_master(to ? *opt.secondary : sock, opt, ConstBytes(buf.data(), len), st, at);
             }
-            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now);
             seg.run_deferred_firmware();
             if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);
             last_tick = now;
@@ -190,6 +191,8 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             if (opt.observer) opt.observer->on_request(ConstBytes(buf.data(), len), at);
             const bool reply = opt.filter ? opt.filter->process_frame(Bytes(buf.data(), buf.size()), len, at)
                                           : seg.process_frame(Bytes(buf.data(), buf.size()), len, at);
+            // The reply path's work, the slaves' catch-up before the frame included (not the send).
+            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now);
             if (reply && opt.downstream && seg.frame_goes_downstream()) {
                 // Port 1 of the last slave has a link: the frame goes on along the line.
                 if (opt.downstream->send(ConstBytes(buf.data(), len)))
@@ -199,8 +202,6 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             } else if (reply) {
                 send_to_master(sock, opt, ConstBytes(buf.data(), len), st, at);
             }
-            // The reply path's work, the slaves' catch-up before the frame included.
-            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now);
             seg.run_deferred_firmware();
             if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);
             last_tick = now;
