@@ -234,6 +234,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
         served = fmt::format("{} x \"{}\" (vendor 0x{:08X}, product 0x{:08X})", slaves, dev.name,
                              dev.identity.vendor_id, dev.identity.product_code);
+        if (dev.quirks.any()) served += fmt::format(" with quirks {}", vecat::device::to_string(dev.quirks));
     }
     if (!redundant_iface.empty() && !seg->redundant()) {
         // No redundancy: port in the network file: the cable leaves port 1 of the last slave.

@@ -10,6 +10,8 @@
 namespace vecat::device {
 namespace {
 
+constexpr int kMaxMailboxDelayMs = 500;  // see Quirks::mailbox_delay_ns
+
 // A decimal number of [lo, hi], the whole text.
 bool whole_number(std::string_view s, unsigned lo, unsigned hi, unsigned& v) {
     const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
@@ -75,13 +77,40 @@ std::string parse_quirk(std::string_view text, Quirks& q) {
         double ms = 0;
         const auto r = std::from_chars(value.data(), value.data() + value.size(), ms);
         if (value.empty() || r.ec != std::errc{} || r.ptr != value.data() + value.size() ||
-            !std::isfinite(ms) || ms < 0 || ms > 10000)
-            return n + ": \"" + std::string(value) + "\" is not 0..10000 (ms)";
+            !std::isfinite(ms) || ms < 0 || ms > kMaxMailboxDelayMs)
+            return n + ": \"" + std::string(value) + "\" is not 0.." + std::to_string(kMaxMailboxDelayMs) +
+                   " (ms)";
         q.mailbox_delay_ns = static_cast<std::uint64_t>(std::llround(ms * 1e6));
         return "";
     }
     if (name == "sii_without") return sii_categories(value, q.sii_without);
     return "unknown quirk \"" + n + "\" (" + std::string(kQuirkNames) + ")";
+}
+
+std::string to_string(const Quirks& q) {
+    std::vector<std::string> parts;
+    if (q.no_sdo_info) parts.emplace_back("no_sdo_info");
+    if (q.no_complete_access) parts.emplace_back("no_complete_access");
+    if (q.fixed_pdos) parts.emplace_back("fixed_pdos");
+    if (q.max_pdo_entries) parts.push_back("max_pdo_entries=" + std::to_string(q.max_pdo_entries));
+    if (q.mailbox_delay_ns) {
+        char ms[32];
+        std::snprintf(ms, sizeof ms, "%g", static_cast<double>(q.mailbox_delay_ns) / 1e6);
+        parts.push_back(std::string("mailbox_delay_ms=") + ms);
+    }
+    if (q.mailbox_drop_every) parts.push_back("mailbox_drop_every=" + std::to_string(q.mailbox_drop_every));
+    if (q.sii_without) {
+        std::string c;
+        const std::pair<std::uint8_t, const char*> names[] = {
+            {sii_optional::Strings, "strings"}, {sii_optional::Pdo, "pdo"}, {sii_optional::Dc, "dc"}};
+        for (const auto& [bit, name] : names)
+            if (q.sii_without & bit) c += (c.empty() ? "" : "+") + std::string(name);
+        parts.push_back("sii_without=" + c);
+    }
+    std::string s;
+    for (const auto& p : parts)
+        s += (s.empty() ? "" : ", ") + p;
+    return s;
 }
 
 std::string apply_quirks(DeviceDescription& d, const Quirks& q) {

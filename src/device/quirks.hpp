@@ -35,7 +35,9 @@ struct Quirks {
     // without PdoAssign and PdoConfig.
     bool fixed_pdos = false;
     // The reply to a mailbox request appears in the mailbox-in SyncManager only this long after the
-    // request was taken (ns; 0: at the next firmware run).
+    // request was taken (ns; 0: at the next firmware run). At most 500 ms: the device's own SDO server drops
+    // a segmented transfer left alone for 1 s (coe::SdoServer::kSdoTimeoutNs), and a delay near it would
+    // let it drop the transfer it is answering; masters give up after 700 ms (SOEM's EC_TIMEOUTRXM).
     std::uint64_t mailbox_delay_ns = 0;
     // Every Kth mailbox reply is lost on its way into the mailbox-in SyncManager (0: none); the master's
     // repeat request (ETG.1000.4 5.6.3) brings it back.
@@ -51,10 +53,13 @@ struct Quirks {
 };
 
 // One quirk as written in a network file's list and on the command line: `no_sdo_info`,
-// `no_complete_access`, `fixed_pdos`, `max_pdo_entries=N` (1..254), `mailbox_delay_ms=T` (0..10000,
+// `no_complete_access`, `fixed_pdos`, `max_pdo_entries=N` (1..254), `mailbox_delay_ms=T` (0..500,
 // fractions allowed), `mailbox_drop_every=K` (2..1000), `sii_without=strings+pdo+dc` (any of them). Adds it
 // to q; returns "" or what is wrong with it.
 std::string parse_quirk(std::string_view text, Quirks& q);
+
+// The quirks of q as parse_quirk reads them, joined by ", " ("" for none): what vecat network check shows.
+std::string to_string(const Quirks& q);
 
 // The names of the quirks, for messages and --help.
 inline constexpr std::string_view kQuirkNames =

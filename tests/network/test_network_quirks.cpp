@@ -128,19 +128,22 @@ devices:
 }
 
 // An sii: device keeps its dump, but for the CoE details byte of its General category: a master reading
-// the SII of the AKD with no_sdo_info learns that it has none, and its SDO information requests are refused.
+// the SII of the SOES device (CoE details 0x2F) with no_sdo_info and no_complete_access learns that it has
+// neither, and its SDO information and complete access requests are refused.
 TEST(NetworkQuirks, AnSiiDumpGetsItsCoeDetailsPatched) {
     VECAT_REQUIRE_SHARED_DATA("sii");
     const std::string sii = test::shared_data("sii/");
-    Served plain("devices:\n  - name: akd\n    sii: " + sii + "kollmorgen-akd.bin\n");
-    Served s("devices:\n  - name: akd\n    sii: " + sii + "kollmorgen-akd.bin\n    quirks: [no_sdo_info]\n");
+    Served plain("devices:\n  - name: soes\n    sii: " + sii + "soes-dynpdo.bin\n");
+    Served s("devices:\n  - name: soes\n    sii: " + sii +
+             "soes-dynpdo.bin\n    quirks: [no_sdo_info, no_complete_access]\n");
     std::string why;
     ASSERT_TRUE(plain.master.startup(AlState::PreOp, &why)) << why;
     ASSERT_TRUE(s.master.startup(AlState::PreOp, &why)) << why;
     const auto& before = plain.master.slaves()[0].sii;
     const auto& after = s.master.slaves()[0].sii;
-    ASSERT_TRUE(before.coe_details & cd::SdoInfo) << "the dump names SDO information";
-    EXPECT_EQ(after.coe_details, before.coe_details & ~cd::SdoInfo);
+    const std::uint8_t lacking = cd::SdoInfo | cd::CompleteAccess;
+    ASSERT_EQ(before.coe_details & lacking, lacking) << "the dump names SDO information and complete access";
+    EXPECT_EQ(after.coe_details, before.coe_details & ~lacking);
     // Every other byte of the image is the dump's.
     const auto& a = plain.built.segment->slave(0).esc().eeprom();
     const auto& b = s.built.segment->slave(0).esc().eeprom();
@@ -151,8 +154,10 @@ TEST(NetworkQuirks, AnSiiDumpGetsItsCoeDetailsPatched) {
     EXPECT_EQ(differ, 1u);
     master::CoeClient c(s.master, s.master.slaves()[0].station);
     EXPECT_FALSE(c.od_list(protocol::sdo_info::ListAll));
+    EXPECT_EQ(c.upload(0x1C12, 0, true).abort, protocol::SdoAbort::UnsupportedAccess);
     master::CoeClient pc(plain.master, plain.master.slaves()[0].station);
     EXPECT_TRUE(pc.od_list(protocol::sdo_info::ListAll));
+    EXPECT_TRUE(pc.upload(0x1C12, 0, true).ok());
 }
 
 }  // namespace

@@ -86,6 +86,19 @@ TEST(Quirks, ParsedAsWrittenAndRefusedWithTheReason) {
     EXPECT_EQ(q.mailbox_delay_ns, 2'500'000u);
     EXPECT_EQ(q.mailbox_drop_every, 4u);
     EXPECT_EQ(q.sii_without, device::sii_optional::Strings | device::sii_optional::Dc);
+    // Written back as read, and read again to the same quirks.
+    const std::string text = device::to_string(q);
+    EXPECT_EQ(text,
+              "no_sdo_info, max_pdo_entries=8, mailbox_delay_ms=2.5, mailbox_drop_every=4, "
+              "sii_without=strings+dc");
+    device::Quirks again;
+    for (std::size_t at = 0; at < text.size();) {
+        const auto comma = std::min(text.find(',', at), text.size());
+        EXPECT_EQ(device::parse_quirk(text.substr(at, comma - at), again), "");
+        at = comma + 1;
+    }
+    EXPECT_EQ(again, q);
+    EXPECT_EQ(device::to_string({}), "");
     const std::pair<const char*, const char*> bad[] = {
         {"no_sdo_info=1", "no_sdo_info: takes no value"},
         {"max_pdo_entries", "max_pdo_entries: needs a value"},
@@ -93,8 +106,9 @@ TEST(Quirks, ParsedAsWrittenAndRefusedWithTheReason) {
         {"max_pdo_entries=255", "is not 1..254"},
         {"max_pdo_entries=4x", "is not 1..254"},
         {"mailbox_drop_every=1", "is not 2..1000"},
-        {"mailbox_delay_ms=-1", "is not 0..10000"},
-        {"mailbox_delay_ms=nan", "is not 0..10000"},
+        {"mailbox_delay_ms=-1", "is not 0..500"},
+        {"mailbox_delay_ms=501", "is not 0..500"},
+        {"mailbox_delay_ms=nan", "is not 0..500"},
         {"sii_without=general", "sii_without: unknown category \"general\""},
         {"sii_without=strings+", "a category after '+'"},
         {"slow", "unknown quirk \"slow\""},
