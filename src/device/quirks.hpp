@@ -7,13 +7,13 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
-#include <vector>
 
 namespace vecat::device {
 
 struct DeviceDescription;
 
-// SII categories a device may lack (ETG.2010 Table 2 lists them as optional); bits of Quirks::sii_without.
+// SII categories a device may lack (ETG.2010 categories a master reads after the fixed words; real dumps
+// lack them: the HBM ClipX and SOES devices have neither TxPDO/RxPDO nor DC); bits of Quirks::sii_without.
 namespace sii_optional {
 inline constexpr std::uint8_t Strings = 0x01;  // no Strings category: names and groups unknown (index 0)
 inline constexpr std::uint8_t Pdo = 0x02;      // no TxPDO/RxPDO categories: the mapping is only in CoE

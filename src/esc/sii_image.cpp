@@ -180,7 +180,7 @@ std::vector<std::uint8_t> build_sii_image(const device::DeviceDescription& d) {
         }
     }
 
-    // Categories a device may lack (ETG.2010 Table 2; quirk sii_without): the master must then take the
+    // Categories a device may lack (ETG.2010; quirk sii_without): the master must then take the
     // names, the PDOs and the DC modes elsewhere (CoE, the ESI file).
     const std::uint8_t without = d.quirks.sii_without;
     if (!(without & device::sii_optional::Strings)) append_category(img, sii::Category::Strings, strings);
