@@ -4,9 +4,9 @@
 // or the file; nothing else is thrown. An accepted file is a tree: one device on the master, every other one
 // with a parent before it in the order, its port cabled to it and to nothing else. A redundancy port is a
 // free port of a device; hot connect group names are unique. The inputs of I/O terminals name channels the
-// terminal has, and wires name output terminals of the file. The same text read as a signal's CSV table
-// (io::parse_table) is refused with std::invalid_argument naming a line, or gives rows at rising times with
-// finite values.
+// terminal has, and wires name output terminals of the file. Quirks hold values within their ranges. The same
+// text read as a signal's CSV table (io::parse_table) is refused with std::invalid_argument naming a line, or
+// gives rows at rising times with finite values.
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -57,6 +57,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         for (std::size_t j = i + 1; j < n; ++j)
             VECAT_FUZZ_CHECK(f.devices[i].hot_connect.empty() ||
                              f.devices[i].hot_connect != f.devices[j].hot_connect);
+    for (const auto& d : f.devices) {
+        // Quirks (device::parse_quirk): only values within their ranges are accepted.
+        const auto& q = d.quirks;
+        VECAT_FUZZ_CHECK(q.max_pdo_entries <= 254);
+        VECAT_FUZZ_CHECK(q.mailbox_drop_every == 0 ||
+                         (q.mailbox_drop_every >= 2 && q.mailbox_drop_every <= 1000));
+        VECAT_FUZZ_CHECK(q.mailbox_delay_ns <= 500'000'000ull);
+        VECAT_FUZZ_CHECK(q.sii_without <= 0x07 && (q.sii_without == 0 || d.source != network::Source::Sii));
+        VECAT_FUZZ_CHECK(!q.any() || d.quirks_line > 0);
+    }
     for (const auto& d : f.devices)
         for (const auto& in : d.inputs) {
             VECAT_FUZZ_CHECK(d.source == network::Source::DigitalIn || d.source == network::Source::AnalogIn);

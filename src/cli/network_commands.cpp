@@ -92,6 +92,7 @@ int cmd_network_check(const std::string& file, const std::string& esi_dir) {
                 "{}\n",
                 i, d.name, network::to_string(d.source), desc.identity.vendor_id, desc.identity.product_code,
                 desc.identity.revision, desc.name, up);
+            if (desc.quirks.any()) fmt::print("       quirks: {}\n", device::to_string(desc.quirks));
         }
         if (f.redundancy_device >= 0)
             fmt::print("  redundancy: port {} of {} cabled back to the master's second port\n",

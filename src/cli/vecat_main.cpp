@@ -133,13 +133,14 @@ struct RunOptions {
     vecat::net::RealtimeOptions rt;
     std::int64_t tick_us = vecat::net::ServeOptions{}.tick_us;
     std::string downstream;
-    std::string network_path;     // --network: the devices and their cabling from a file
-    std::string eni_path;         // --eni: the network of an ENI (EtherCATConfig) file
-    std::string esi_dir;          // --esi-dir: vendor ESI files for the devices an ENI names
-    std::string report_path;      // --report: JUnit XML of the checks on the master
-    bool report_fail = false;     // --report-fail: exit 3 when a check failed
-    vecat::foe::FoeOptions foe;   // --foe-dir, --foe-max-size, --foe-password
-    std::string redundant_iface;  // --redundant-iface: the master's second port (cable redundancy)
+    std::string network_path;         // --network: the devices and their cabling from a file
+    std::string eni_path;             // --eni: the network of an ENI (EtherCATConfig) file
+    std::string esi_dir;              // --esi-dir: vendor ESI files for the devices an ENI names
+    std::string report_path;          // --report: JUnit XML of the checks on the master
+    bool report_fail = false;         // --report-fail: exit 3 when a check failed
+    vecat::foe::FoeOptions foe;       // --foe-dir, --foe-max-size, --foe-password
+    std::string redundant_iface;      // --redundant-iface: the master's second port (cable redundancy)
+    std::vector<std::string> quirks;  // --quirk: of every device of the line (device/quirks.hpp)
 };
 
 // Several observers of the frames (the report's checks), each called in turn.
@@ -161,7 +162,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
                  sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, network_path,
-                 eni_path, esi_dir, report_path, report_fail, foe_opts, redundant_iface] = o;
+                 eni_path, esi_dir, report_path, report_fail, foe_opts, redundant_iface, quirks] = o;
     std::string why;
     for (const std::string& i : {iface, downstream, redundant_iface}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -218,10 +219,22 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     } else {
         auto loaded = load_device(esi_path, sel, true);
         if (!loaded) return 1;
+        if (!quirks.empty()) {
+            vecat::device::Quirks q;
+            std::string bad;
+            for (const auto& t : quirks)
+                if (const auto w = vecat::device::parse_quirk(t, q); !w.empty() && bad.empty()) bad = w;
+            if (bad.empty()) bad = vecat::device::apply_quirks(*loaded, q);
+            if (!bad.empty()) {
+                fmt::print(stderr, "vecat: --quirk: {}\n", bad);
+                return 2;
+            }
+        }
         const auto& dev = *loaded;
         seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
         served = fmt::format("{} x \"{}\" (vendor 0x{:08X}, product 0x{:08X})", slaves, dev.name,
                              dev.identity.vendor_id, dev.identity.product_code);
+        if (dev.quirks.any()) served += fmt::format(" with quirks {}", vecat::device::to_string(dev.quirks));
     }
     if (!redundant_iface.empty() && !seg->redundant()) {
         // No redundancy: port in the network file: the cable leaves port 1 of the last slave.
@@ -529,6 +542,15 @@ int main(int argc, char** argv) {
         c->add_option("--foe-password", ro.foe.password,
                       "Password every FoE request must carry (0x... accepted; a wrong one: FoE error 0x800A)")
             ->capture_default_str();
+        c->add_option("--quirk", ro.quirks,
+                      "Make every device of the line less complete, as some real devices are (repeatable, or "
+                      "a comma-separated list): " +
+                          std::string(vecat::device::kQuirkNames) +
+                          " (docs/network-file.md, Quirks); with --network: quirks: per device in the file")
+            ->delimiter(',')
+            ->allow_extra_args(false)
+            ->excludes(c->get_option("--network"))
+            ->excludes(c->get_option("--eni"));
         add_esi_options(c, true);
         vecat::cli::add_run_fault_options(c, ro.fault_opts);
         vecat::cli::add_telemetry_options(c, ro.telemetry);

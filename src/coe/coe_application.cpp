@@ -10,6 +10,9 @@ CoeApplication::CoeApplication(const device::DeviceDescription& d,
       identity_(d.identity) {
     map_ = std::make_unique<ProcessDataMap>(od_, d);
     sdo_ = std::make_unique<SdoServer>(od_, [this] { return state_; });
+    // Quirks of a less complete device (device/quirks.hpp): what its SII and ESI say, the SDO server does.
+    if (d.quirks.no_sdo_info) sdo_->set_information_served(false);
+    if (d.quirks.no_complete_access) sdo_->set_complete_access_served(false);
     sync_ = std::make_unique<SyncParameters>(od_, d);
     pending_outputs_.reserve(1536);  // a whole frame's worth: no allocation in the cycle
     error_register_ = od_.find(protocol::obj::error_register);

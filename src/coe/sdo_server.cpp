@@ -241,7 +241,7 @@ void SdoServer::initiate_download(const SdoHeader& h, ConstBytes p, MailboxReply
         r.bytes(rsp);
         out.commit(MailboxType::CoE, r.size());
     };
-    if (complete && sub > 1) {
+    if (complete && (sub > 1 || !complete_access_served_)) {
         abort(index, sub, SdoAbort::UnsupportedAccess, out);
         return;
     }
@@ -357,6 +357,10 @@ void SdoServer::initiate_upload(const SdoHeader& h, MailboxReplySink& out) {
     const std::uint16_t index = h.index;
     const std::uint8_t sub = h.subindex;
     const bool complete = h.command & sdo::CompleteAccess;
+    if (complete && !complete_access_served_) {
+        abort(index, sub, SdoAbort::UnsupportedAccess, out);
+        return;
+    }
     std::size_t len = 0;
     const SdoAbort a = od_.upload(index, sub, complete, state_(), Bytes(buf_.data(), buf_.size()), len);
     if (a != SdoAbort::None) {

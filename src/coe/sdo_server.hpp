@@ -63,6 +63,10 @@ class SdoServer final : public esc::MailboxProtocol {
     // with the mailbox error "service not supported" (ETG.1000.4 Table 30), as such devices do. A copy of
     // one made by vecat clone is served so. Served by default.
     void set_information_served(bool served) { info_served_ = served; }
+    // A device without complete access (SII CoE details bit 5 clear, ETG.2010; quirk no_complete_access):
+    // a complete access upload or download is aborted with 0x06010000 "unsupported access to an object"
+    // (ETG.1000.6 Table 41), as such devices answer. Served by default.
+    void set_complete_access_served(bool served) { complete_access_served_ = served; }
 
   private:
     struct Idle {};
@@ -120,6 +124,7 @@ class SdoServer final : public esc::MailboxProtocol {
     std::vector<std::uint8_t> buf_;  // transfer buffer, sized once from the dictionary
     std::vector<std::uint8_t> info_buf_;
     bool info_served_ = true;
+    bool complete_access_served_ = true;
 
     Transfer transfer_ = Idle{};
     // Since when the transfer has not moved: set by the first tick() after a change (the server has no

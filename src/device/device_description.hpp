@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "device/object_description.hpp"
+#include "device/quirks.hpp"
 #include "protocol/sii.hpp"
 
 namespace vecat::device {
@@ -146,6 +147,10 @@ struct DeviceDescription {
     std::vector<ObjectDescription> objects;
 
     std::uint32_t eeprom_size_bytes = 4096;
+
+    // What the device does less completely than vecat's drive (device/quirks.hpp); set by apply_quirks,
+    // which also makes the flags above agree with them.
+    Quirks quirks;
 
     // Byte sizes of the default process data image for the SM of a given type.
     unsigned output_bytes() const;

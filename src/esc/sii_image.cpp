@@ -15,8 +15,10 @@ using Buffer = std::vector<std::uint8_t>;
 // The string table of the Strings category; index 0 means "no string".
 class StringTable {
   public:
+    // Without a Strings category (quirk sii_without=strings) every string is "none".
+    explicit StringTable(bool kept = true) : kept_(kept) {}
     std::uint8_t add(const std::string& s) {
-        if (s.empty()) return 0;
+        if (s.empty() || !kept_) return 0;
         if (auto it = index_.find(s); it != index_.end()) return it->second;
         if (strings_.size() >= 255) throw std::length_error("SII: more than 255 strings");
         strings_.push_back(s);  // cut to 255 bytes when written, after its conversion to ISO 8859-1
@@ -27,6 +29,7 @@ class StringTable {
     const std::vector<std::string>& strings() const { return strings_; }
 
   private:
+    bool kept_ = true;
     std::vector<std::string> strings_;
     std::map<std::string, std::uint8_t> index_;
 };
@@ -101,7 +104,7 @@ std::vector<std::uint8_t> build_sii_image(const device::DeviceDescription& d) {
     word(sii::Version, 1);
 
     // SOEM shows SII string #1 as the slave's name, so the device name is added first.
-    StringTable st;
+    StringTable st(!(d.quirks.sii_without & device::sii_optional::Strings));
     const std::uint8_t name_idx = st.add(d.name);
     const std::uint8_t group_idx = st.add(d.group_type);
     const std::uint8_t order_idx = st.add(d.order_code);
@@ -177,13 +180,17 @@ std::vector<std::uint8_t> build_sii_image(const device::DeviceDescription& d) {
         }
     }
 
-    append_category(img, sii::Category::Strings, strings);
+    // Categories a device may lack (ETG.2010; quirk sii_without): the master must then take the
+    // names, the PDOs and the DC modes elsewhere (CoE, the ESI file).
+    const std::uint8_t without = d.quirks.sii_without;
+    if (!(without & device::sii_optional::Strings)) append_category(img, sii::Category::Strings, strings);
     append_category(img, sii::Category::General, general);
     append_category(img, sii::Category::Fmmu, fmmu);
     append_category(img, sii::Category::SyncM, syncm);
-    if (!txpdo.empty()) append_category(img, sii::Category::TxPdo, txpdo);
-    if (!rxpdo.empty()) append_category(img, sii::Category::RxPdo, rxpdo);
-    if (!dc.empty()) append_category(img, sii::Category::Dc, dc);
+    const bool pdo = !(without & device::sii_optional::Pdo);
+    if (pdo && !txpdo.empty()) append_category(img, sii::Category::TxPdo, txpdo);
+    if (pdo && !rxpdo.empty()) append_category(img, sii::Category::RxPdo, rxpdo);
+    if (!dc.empty() && !(without & device::sii_optional::Dc)) append_category(img, sii::Category::Dc, dc);
     LeWriter(img).u16(sii::kEndMarker);
     LeWriter(img).u16(0xFFFF);
 

@@ -114,6 +114,7 @@ class SlaveReplySink final : public MailboxReplySink {
         h.counter = s_.reply_counter_;
         write_mailbox_header(Bytes(slot.data(), kMailboxHeaderSize), h);
         s_.queue_len_[slot_i] = kMailboxHeaderSize + payload_len;
+        s_.queue_due_[slot_i] = s_.now_ns_ + s_.desc_.quirks.mailbox_delay_ns;
         ++s_.q_count_;
     }
 
@@ -235,6 +236,7 @@ void Slave::reset_mailbox() {
     q_head_ = q_count_ = 0;
     last_counter_ = 0;
     last_reply_len_ = 0;
+    lost_reply_waiting_ = false;
 }
 
 void Slave::add_mailbox_protocol(std::unique_ptr<MailboxProtocol> p) {
@@ -447,6 +449,7 @@ void Slave::service_mailbox() {
             ++counters_.mailbox_repeats;
             if (last_reply_len_ && !esc_.sm_mailbox_full(in_idx))
                 esc_.pdi_mailbox_put(in_idx, ConstBytes(last_reply_.data(), last_reply_len_));
+            lost_reply_waiting_ = false;
             esc_.pdi_set_repeat_ack(in_idx, req);
         }
     }
@@ -497,10 +500,21 @@ void Slave::post_replies() {
 
 void Slave::send_pending_replies() {
     const auto in_idx = static_cast<unsigned>(sm_mbx_in_);
-    while (q_count_ > 0 && !esc_.sm_mailbox_full(in_idx)) {
+    const unsigned drop_every = desc_.quirks.mailbox_drop_every;
+    // A lost reply (quirk) holds the queue until the master's repeat request has brought it back.
+    while (q_count_ > 0 && !lost_reply_waiting_ && !esc_.sm_mailbox_full(in_idx)) {
+        if (queue_due_[q_head_] > now_ns_) break;  // quirk mailbox_delay_ms: not yet
         const auto& slot = queue_[q_head_];
         const std::size_t len = queue_len_[q_head_];
-        if (!esc_.pdi_mailbox_put(in_idx, ConstBytes(slot.data(), len))) break;
+        // Quirk mailbox_drop_every: every Kth reply never reaches SM1, as if the firmware lost it; it stays
+        // the last reply, which the repeat request (ETG.1000.4 5.6.3) puts into SM1.
+        const bool lost = drop_every != 0 && (replies_out_ + 1) % drop_every == 0;
+        if (!lost && !esc_.pdi_mailbox_put(in_idx, ConstBytes(slot.data(), len))) break;
+        ++replies_out_;
+        if (lost) {
+            ++counters_.mailbox_replies_lost;
+            lost_reply_waiting_ = true;
+        }
         std::memcpy(last_reply_.data(), slot.data(), len);
         last_reply_len_ = len;
         q_head_ = (q_head_ + 1) % kReplySlots;
@@ -518,6 +532,7 @@ void Slave::exchange_process_data(std::uint64_t now_ns) {
 }
 
 void Slave::run(std::uint64_t now_ns) {
+    now_ns_ = now_ns;
     esc_.tick(now_ns);
     // SYNC pulses first: they happened at their own times, before anything this run does at now_ns (an AL
     // state change the master asked for, new outputs, the application's periods up to now_ns), however

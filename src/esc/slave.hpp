@@ -117,6 +117,7 @@ struct SlaveCounters {
     std::uint64_t mailbox_repeats = 0;
     std::uint64_t mailbox_duplicates = 0;
     std::uint64_t mailbox_replies_dropped = 0;
+    std::uint64_t mailbox_replies_lost = 0;  // quirk mailbox_drop_every: lost until a repeat request
     std::uint64_t watchdog_expiries = 0;
 };
 
@@ -239,6 +240,12 @@ class Slave {
     static constexpr std::size_t kReplySlots = 8;
     std::array<std::vector<std::uint8_t>, kReplySlots> queue_;
     std::array<std::size_t, kReplySlots> queue_len_{};
+    // Quirk mailbox_delay_ms: when each queued reply may enter the mailbox-in SyncManager.
+    std::array<std::uint64_t, kReplySlots> queue_due_{};
+    std::uint64_t now_ns_ = 0;  // of the current run
+    // Quirk mailbox_drop_every: replies that left the queue, and a lost one waiting for the repeat request.
+    std::uint64_t replies_out_ = 0;
+    bool lost_reply_waiting_ = false;
     std::size_t q_head_ = 0, q_count_ = 0;
     std::vector<std::uint8_t> outputs_, inputs_;
     static constexpr unsigned kMaxPulsesPerRun = 16;  // SYNC pulses taken per firmware run; more are missed

@@ -31,6 +31,23 @@ std::uint8_t CoeClient::next_counter() {
     return *counter_;
 }
 
+bool CoeClient::repeat(std::chrono::milliseconds timeout) {
+    const auto at = static_cast<std::uint16_t>(sm_addr(1) + sm::Activate);  // activate, PDI control
+    std::uint8_t b[2] = {};
+    if (auto w = m_.fprd(station_, at, Bytes(b, 2)); !w || *w != 1) return false;
+    const std::uint8_t activate = b[0] ^ sm::ActRepeatRequest;
+    if (!m_.write8(station_, at, activate)) return false;
+    const bool want = (activate & sm::ActRepeatRequest) != 0;
+    const auto deadline = Clock::now() + timeout;
+    do {
+        if (auto w = m_.fprd(station_, at, Bytes(b, 2));
+            w && *w == 1 && ((b[1] & sm::PdiRepeatAck) != 0) == want)
+            return true;
+        std::this_thread::sleep_for(std::chrono::microseconds(100));
+    } while (Clock::now() < deadline);
+    return false;
+}
+
 bool CoeClient::send(MailboxType type, ConstBytes payload, std::uint8_t counter) {
     if (!sm0_len_ || payload.size() + kMailboxHeaderSize > sm0_len_) return false;
     std::vector<std::uint8_t> buf(sm0_len_, 0);

@@ -59,6 +59,11 @@ class CoeClient {
     std::optional<MailboxMessage> request(protocol::MailboxType type, ConstBytes payload,
                                           std::chrono::milliseconds timeout = std::chrono::milliseconds(700));
     std::uint8_t next_counter();
+    // The mailbox repeat (ETG.1000.4 5.6.3; ESC datasheet section II 0x0806/0x0807): a reply lost on its way
+    // to the master is asked for again. Toggles the repeat request bit of SM1's activate register and waits
+    // until the slave acknowledges it in SM1's PDI control register, having written its last reply into
+    // SM1 again; receive() then reads it. False when no acknowledge came within timeout.
+    bool repeat(std::chrono::milliseconds timeout = std::chrono::milliseconds(100));
 
     SdoResult upload(std::uint16_t index, std::uint8_t sub, bool complete = false);
     // Chooses expedited (<= 4 bytes), normal or segmented transfer by size unless forced.

@@ -66,13 +66,41 @@ void patch(std::vector<std::uint8_t>& img, const DeviceEntry& e) {
     }
 }
 
+// The CoE details byte of the dump's General category (ETG.2010) as the description has it after its
+// quirks: a master that reads the SII learns that the device lacks SDO information or complete access.
+void patch_coe_details(std::vector<std::uint8_t>& img, std::uint8_t coe_details) {
+    namespace sii = protocol::sii;
+    std::size_t at = 2 * sii::FirstCategory;
+    while (at + sii::kCategoryHeaderSize <= img.size()) {
+        const std::uint16_t id = ld_le16(img.data() + at);
+        const std::size_t len = 2u * ld_le16(img.data() + at + 2);
+        if (id == sii::kEndMarker) return;
+        const std::size_t data = at + sii::kCategoryHeaderSize;
+        if ((id & sii::kCategoryIdMask) == static_cast<std::uint16_t>(sii::Category::General)) {
+            if (data + sii::general::CoeDetails < img.size() && len > sii::general::CoeDetails)
+                img[data + sii::general::CoeDetails] = coe_details;
+            return;
+        }
+        at = data + len;
+    }
+}
+
+// The device's quirks (quirks:) on its description; a device that cannot have them is refused, naming the
+// line of quirks: (at).
+void apply_quirks(device::DeviceDescription& d, const DeviceEntry& e, const std::string& at) {
+    if (!e.quirks.any()) return;
+    if (const std::string why = device::apply_quirks(d, e.quirks); !why.empty())
+        throw NetworkFileError(at + "quirks: " + why);
+}
+
 std::unique_ptr<esc::Application> process_image(const device::DeviceDescription& d) {
     return std::make_unique<esc::ProcessImageApplication>(d.output_bytes(), d.input_bytes());
 }
 
 using Made = DeviceParts;
 
-Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::string>& notes) {
+Made make_device(const DeviceEntry& e, const std::string& at, const std::string& quirks_at,
+                 std::vector<std::string>& notes) {
     Made m;
     device::DeviceDescription d;
     bool drive = false;
@@ -119,11 +147,23 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
                 }
             }
             std::vector<std::string> n;
+            std::string quirk_error;
+            std::uint8_t coe_details = 0;
+            const auto adjust = [&](device::DeviceDescription& dd) {
+                apply(dd, e);
+                if (e.quirks.any()) quirk_error = device::apply_quirks(dd, e.quirks);
+                coe_details = dd.coe_details;
+            };
             try {
-                m = device_from_sii(
-                    std::move(img), n, [&](device::DeviceDescription& dd) { apply(dd, e); }, dict);
+                m = device_from_sii(std::move(img), n, adjust, dict);
             } catch (const NetworkFileError& x) {
                 throw NetworkFileError(at + e.path + ": " + x.what());
+            }
+            if (!quirk_error.empty()) throw NetworkFileError(quirks_at + "quirks: " + quirk_error);
+            if (e.quirks.any()) {
+                auto patched = *m.model.sii_image;
+                patch_coe_details(patched, coe_details);
+                m.model.sii_image = std::make_shared<const std::vector<std::uint8_t>>(std::move(patched));
             }
             for (const auto& x : n)
                 notes.push_back(at + e.path + ": " + x);
@@ -149,6 +189,7 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
             break;
     }
     apply(d, e);
+    apply_quirks(d, e, quirks_at);
     m.model = esc::DeviceModel::of(d);
     m.esc.port_descriptor = descriptor(
         default_ports(e.source), e.source == Source::Drive || e.source == Source::Esi ? kPortMii : kPortEbus);
@@ -195,7 +236,7 @@ DeviceParts device_from_sii(std::vector<std::uint8_t> img, std::vector<std::stri
                 if (coe::Entry* e = app->dictionary().find(at.first, at.second))
                     e->assign(ConstBytes(bytes.data(), bytes.size()));
             app->process_data().rebuild();
-            app->sdo_server().set_information_served(dictionary->sdo_information);
+            if (!dictionary->sdo_information) app->sdo_server().set_information_served(false);
             return std::unique_ptr<esc::Application>(std::move(app));
         };
     } else if (coe)
@@ -266,7 +307,8 @@ BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
     std::vector<std::uint8_t> ports;
     for (const DeviceEntry& e : f.devices) {
         const std::string at = file + ":" + std::to_string(e.line) + ": " + e.name + ": ";
-        Made m = make_device(e, at, b.notes);
+        const std::string quirks_at = file + ":" + std::to_string(e.quirks_line) + ": " + e.name + ": ";
+        Made m = make_device(e, at, quirks_at, b.notes);
         attach_io(e, m, b);
         apply_esc(m.esc, e.esc);
         if (e.esc.ram_kib && *e.esc.ram_kib < 8)

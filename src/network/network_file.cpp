@@ -219,6 +219,23 @@ void parse_esc(const Reader& r, const YAML::Node& n, EscOverride& esc) {
     }
 }
 
+// quirks: a list of quirks (device::parse_quirk), or one of them; each refusal names its line.
+void parse_quirks(const Reader& r, const YAML::Node& n, DeviceEntry& d) {
+    d.quirks_line = Reader::line(n);
+    const auto one = [&](const YAML::Node& q) {
+        const std::string why = device::parse_quirk(r.scalar(q, "quirks"), d.quirks);
+        if (!why.empty()) r.fail(q, "quirks: " + why);
+    };
+    if (n.IsSequence()) {
+        for (const auto& q : n)
+            one(q);
+    } else if (n.IsScalar()) {
+        one(n);
+    } else {
+        r.fail(n, "quirks: a list of quirks (" + std::string(device::kQuirkNames) + ")");
+    }
+}
+
 DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string& folder) {
     if (!n.IsMap()) r.fail(n, "a device is a map (name:, and device:, esi: or sii:)");
     DeviceEntry d;
@@ -281,14 +298,17 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
             parse_esc(r, v, d.esc);
         } else if (key == "inputs") {
             parse_inputs(r, v, d, folder);
+        } else if (key == "quirks") {
+            parse_quirks(r, v, d);
         } else if (key == "hot_connect") {
             d.hot_connect = r.scalar(v, key);
             d.hot_connect_line = Reader::line(v);
             if (d.hot_connect.empty()) r.fail(v, "hot_connect: the name of the group");
         } else {
-            r.fail(item.first, "unknown key " + key +
-                                   " (name, device, esi, sii, type, product, revision, channels, upstream, "
-                                   "cable_delay_ns, alias, identity, dictionary, esc, hot_connect, inputs)");
+            r.fail(item.first,
+                   "unknown key " + key +
+                       " (name, device, esi, sii, type, product, revision, channels, upstream, "
+                       "cable_delay_ns, alias, identity, dictionary, esc, hot_connect, inputs, quirks)");
         }
     }
     if (d.name.empty()) r.fail(d.line, "a device without name:");
@@ -297,6 +317,8 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
         r.fail(*esi_keys_line, d.name + ": type:, product: and revision: select a device of an esi: file");
     if (d.dictionary_line && d.source != Source::Sii)
         r.fail(d.dictionary_line, d.name + ": dictionary: is for an sii: device");
+    if (d.quirks.sii_without && d.source == Source::Sii)
+        r.fail(d.quirks_line, d.name + ": quirks: sii_without: an sii: device serves its dump as it is");
     if (channels_line && !is_io(d.source))
         r.fail(*channels_line, d.name + ": channels: is for the built-in I/O terminals");
     if (d.inputs_line && d.source != Source::DigitalIn && d.source != Source::AnalogIn)

@@ -16,6 +16,7 @@
 //       sii: copy.sii.bin
 //       dictionary: copy.dictionary.yaml
 //       esc: {type: 0x11, port_descriptor: 0x0f}
+//       quirks: [no_sdo_info, max_pdo_entries=8]   # device/quirks.hpp
 //   redundancy: axis:1               # optional: this port cabled back to the master's second port
 //
 // Every problem is reported with the line of the file it is on; nothing half-checked is returned.
@@ -29,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "device/quirks.hpp"
 #include "io/signal.hpp"
 
 namespace vecat::network {
@@ -102,6 +104,9 @@ struct DeviceEntry {
     };
     std::vector<Input> inputs;
     unsigned inputs_line = 0;
+    // What the device does less completely (quirks:, device/quirks.hpp); applied when it is made.
+    device::Quirks quirks;
+    unsigned quirks_line = 0;
     // An sii: device whose image is given here instead of a file (a device made from an ENI alone,
     // network/eni_network.hpp); path is then only its name in messages.
     std::shared_ptr<const std::vector<std::uint8_t>> sii_image;
