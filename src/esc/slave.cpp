@@ -566,6 +566,9 @@ std::uint64_t Slave::next_event_ns(std::uint64_t poll_ns) const {
     if (op_pending_) t = std::min(t, poll_ns);
     if (esc_.al_events() & al_event::AlControl)
         t = std::min(t, esc_.al_control_written_ns() + al_control_latency_ns_);
+    // A reply held back by the quirk mailbox_delay_ms goes into SM1 at its time, frames or not.
+    if (q_count_ > 0 && !lost_reply_waiting_ && queue_due_[q_head_] > now_ns_)
+        t = std::min(t, queue_due_[q_head_]);
     return t;
 }
 

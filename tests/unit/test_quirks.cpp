@@ -237,6 +237,8 @@ TEST(Quirks, MailboxRepliesAfterADelay) {
     };
     ASSERT_TRUE(p.c->send(MailboxType::CoE, upload_request(0x1018, 2), p.c->next_counter()));
     EXPECT_FALSE(p.c->receive(20ms)) << "the reply came before its delay";
+    // The held reply is a deadline of the firmware: a serve loop without frames wakes up for it.
+    EXPECT_EQ(p.b.seg->next_firmware_ns(), p.b.now + 5'000'000);
     p.b.advance(4'900'000);
     EXPECT_FALSE(sm1_full());
     EXPECT_FALSE(p.c->receive(5ms));
