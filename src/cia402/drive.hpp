@@ -19,6 +19,8 @@
 
 namespace vecat::cia402 {
 
+class VariantObjects;  // drive_variant.hpp
+
 // Mode, supported(), fault:: codes and sw:: bits: drive_io.hpp.
 
 class Drive : public coe::CoeApplication, public twinsync::StatusSource {
@@ -73,6 +75,7 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     void write_feedback();
     twinsync::LocalState twinsync_local() const;
 
+    std::unique_ptr<VariantObjects> variant_;  // before o_: which manufacturer objects it binds
     std::unique_ptr<Objects> o_;
     std::unique_ptr<DriveCore> core_;
     DriveIo io_;

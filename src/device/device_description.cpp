@@ -1,5 +1,6 @@
 #include "device/device_description.hpp"
 
+#include "device/hiwin_d2.hpp"
 #include "protocol/cia402_objects.hpp"
 
 namespace vecat::device {
@@ -159,6 +160,16 @@ DeviceDescription default_drive() {
     for (auto& o : twinsync_objects())
         d.objects.push_back(std::move(o));
     return d;
+}
+
+std::optional<DeviceDescription> builtin_drive(std::string_view name) {
+    if (name == "drive") return default_drive();
+    if (name == "hiwin-d2") return hiwin_d2();
+    return std::nullopt;
+}
+
+std::vector<std::string_view> builtin_drive_names() {
+    return {"drive", "hiwin-d2"};
 }
 
 }  // namespace vecat::device
