@@ -278,6 +278,24 @@ TEST(HiwinD2Device, Hiwin_9_1_2_BadInput_InterpolationPeriodFormats) {
     EXPECT_TRUE(v.coe.download_value<std::uint8_t>(0x60C2, 1, 1).ok());
 }
 
+// 9.1.2 II (2): "After switching on the distributed clock, the drive will automatically set up the content
+// of interpolation time period (0x60C2:1) in accordance with the synchronization signal cycle ... 500us,
+// then the drive will set up the interpolation time period to (0.5/0.0625=8)". Here 1 ms: 16.
+TEST(HiwinD2Device, Hiwin_9_1_2_DcSetsTheInterpolationPeriodFromSync0) {
+    D2 d(AlState::Init);
+    auto& o = d.vs.master().options();
+    o.dc.enable = true;
+    o.dc.sync0_cycle_ns = 1'000'000;
+    o.dc.static_drift_frames = 100;
+    std::string why;
+    ASSERT_TRUE(d.vs.master().startup(AlState::SafeOp, &why)) << why;  // SYNC0 set up, checked by the slave
+    master::CoeClient c(d.vs.master(), d.vs.station(0));               // (the mailbox is configured now)
+    d.vs.cycles(200);  // (the default is 8: Hiwin_3_5_And_3_6_ObjectsAsTheTablesGiveThem)
+    const auto u = c.upload(0x60C2, 1);
+    ASSERT_TRUE(u.ok()) << std::hex << abort_of(u);
+    EXPECT_EQ(value_of(u, false), 16);
+}
+
 // 9.4: the D2 takes 0, 1-6, 33 and 34 in its UINT16 0x6098; other methods are out of range. The vecat
 // drive's 0x6098 is CiA 402's INT8.
 TEST(HiwinD2Device, Hiwin_9_4_BadInput_HomingMethods) {
@@ -302,6 +320,20 @@ TEST(HiwinD2Device, Hiwin_9_3_BadInput_TargetTorqueRange) {
     EXPECT_EQ(abort_of(d.coe.download_value<std::int8_t>(0x2020, 0, 1)), 0x06010002u);
     D2 v(AlState::PreOp, device::default_drive());
     EXPECT_TRUE(v.coe.download_value<std::int16_t>(0x6071, 0, 1500).ok());
+}
+
+// 3.6: the manufacturer areas differ. The vecat drive's simulated machine (0x2100:1-7) and fault injection
+// (0x2101) written to the D2 meet its read-only error events; the D2's limit protection 0x2041 does not
+// exist on the vecat drive.
+TEST(HiwinD2Device, Hiwin_3_6_BadInput_ManufacturerObjectsOfTheOtherDevice) {
+    D2 d(AlState::PreOp);
+    EXPECT_EQ(abort_of(d.coe.download_value<std::int32_t>(0x2100, 1, -1000)), 0x06090011u);
+    EXPECT_EQ(abort_of(d.coe.download_value<std::uint32_t>(0x2101, 0, 0x7305)), 0x06010002u);
+    EXPECT_EQ(abort_of(d.coe.download_value<std::uint16_t>(0x2041, 0, 2)), 0x06090031u) << "0 or 1";
+    EXPECT_TRUE(d.coe.download_value<std::uint16_t>(0x2041, 0, 0).ok());
+    D2 v(AlState::PreOp, device::default_drive());
+    EXPECT_EQ(abort_of(v.coe.download_value<std::uint16_t>(0x2041, 0, 0)), 0x06020000u);
+    EXPECT_TRUE(v.coe.download_value<std::int32_t>(0x2100, 1, -1000).ok());
 }
 
 // ---- Through a master in OP with the guide's layout: homing with each method, moves in every mode.
