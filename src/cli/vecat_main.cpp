@@ -77,9 +77,14 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
         auto r = vecat::esi::import_esi_file(esi_path, sel);
         for (const auto& n : r.notes)
             fmt::print(stderr, "vecat: {}: {}\n", esi_path, n);
-        if (for_emulation)
+        if (for_emulation) {
             for (const auto& n : vecat::esi::complete_for_emulation(r.desc))
                 fmt::print(stderr, "vecat: {}: {}\n", esi_path, n);
+            if (auto b = vecat::device::adopt_builtin_rules(r.desc))
+                fmt::print(stderr,
+                           "vecat: {}: the built-in {} by its identity: its behaviour and PDO rules\n",
+                           esi_path, *b);
+        }
         return r.desc;
     } catch (const std::exception& e) {
         fmt::print(stderr, "vecat: {}: {}\n", esi_path, e.what());

@@ -199,5 +199,10 @@ DeviceDescription default_drive();
 std::optional<DeviceDescription> builtin_drive(std::string_view name);
 // Their names, for messages.
 std::vector<std::string_view> builtin_drive_names();
+// A description read from a file (an ESI) of a device that is also built in, by vendor ID and product code
+// (the HIWIN D2's D2COE.xml): takes over what the file cannot say, the built-in's DriveVariant, PDO
+// remapping rule, assignment slots and mapping limits. Returns the built-in's name, or nullopt (then d is
+// unchanged).
+std::optional<std::string_view> adopt_builtin_rules(DeviceDescription& d);
 
 }  // namespace vecat::device

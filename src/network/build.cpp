@@ -97,6 +97,9 @@ Made make_device(const DeviceEntry& e, const std::string& at, std::vector<std::s
                     notes.push_back(at + e.path + ": " + n);
                 for (const auto& n : esi::complete_for_emulation(r.desc))
                     notes.push_back(at + e.path + ": " + n);
+                if (auto b = device::adopt_builtin_rules(r.desc))
+                    notes.push_back(at + e.path + ": the built-in " + std::string(*b) +
+                                    " by its identity: its behaviour and PDO rules");
                 d = std::move(r.desc);
             } catch (const std::exception& x) {
                 throw NetworkFileError(at + e.path + ": " + x.what());

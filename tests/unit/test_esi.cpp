@@ -70,9 +70,16 @@ TEST(EsiWriter, HiwinD2FromTheSameDescription) {
     EXPECT_EQ(imported.desc.identity.vendor_id, 0x0000AAAAu);
     EXPECT_EQ(imported.desc.identity.product_code, 3u);
     EXPECT_EQ(imported.desc.order_code, "D2COE");
-    // (Read back, the file gives the same SII and application objects; the reader does not take over the
-    // one-slot 0x1C12/0x1C13 and the five-object limit of the mapping objects, which it regenerates.)
+    // Read back, the file gives the same SII and application objects. What it cannot say (the one-slot
+    // 0x1C12/0x1C13, the five-object limit of the mapping objects, the D2's behaviour) comes from the
+    // built-in D2 by its identity, as vecat run --esi and network files do; then the file is the same.
     EXPECT_EQ(esc::build_sii_image(imported.desc), esc::build_sii_image(d));
+    auto adopted = imported.desc;
+    EXPECT_EQ(device::adopt_builtin_rules(adopted).value_or(""), "hiwin-d2");
+    EXPECT_EQ(adopted.drive_variant, device::DriveVariant::HiwinD2);
+    EXPECT_EQ(esi::write_esi(adopted), xml);
+    auto vecat = esi::import_esi_text(esi::write_esi(device::default_drive())).desc;
+    EXPECT_FALSE(device::adopt_builtin_rules(vecat));
     ASSERT_EQ(imported.desc.objects.size(), d.objects.size());
     for (std::size_t i = 0; i < d.objects.size(); ++i) {
         EXPECT_EQ(imported.desc.objects[i].index, d.objects[i].index);
