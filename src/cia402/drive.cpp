@@ -254,6 +254,15 @@ Drive::~Drive() {
     if (twin_partner_) twin_partner_->twin_partner_ = nullptr;
 }
 
+bool Drive::simulates_faults() {
+    return o_->simulated_fault.bound() || !o_->vecat_objects;
+}
+
+void Drive::simulate_fault(std::uint16_t code) {
+    if (o_->simulated_fault.bound()) return CoeApplication::simulate_fault(code);
+    if (!o_->vecat_objects && (code == 0 || fault::injectable(code))) io_.parameters.simulated_fault = code;
+}
+
 void Drive::tick(std::uint64_t now_ns) {
     advance(now_ns);
 }

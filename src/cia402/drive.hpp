@@ -53,6 +53,10 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
 
     // esc::Application
     void tick(std::uint64_t now_ns) override;
+    // coe::CoeApplication: the drive simulates faults, through 0x2101 where that is the vecat drive's
+    // object, directly on a device whose manufacturer objects are its own (the HIWIN D2).
+    bool simulates_faults() override;
+    void simulate_fault(std::uint16_t code) override;
 
     // The dictionary entries of the DriveIo, bound once (drive.cpp).
     struct Objects;

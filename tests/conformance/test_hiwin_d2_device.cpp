@@ -290,7 +290,10 @@ TEST(HiwinD2Device, Hiwin_9_1_2_DcSetsTheInterpolationPeriodFromSync0) {
     std::string why;
     ASSERT_TRUE(d.vs.master().startup(AlState::SafeOp, &why)) << why;  // SYNC0 set up, checked by the slave
     master::CoeClient c(d.vs.master(), d.vs.station(0));               // (the mailbox is configured now)
-    d.vs.cycles(200);  // (the default is 8: Hiwin_3_5_And_3_6_ObjectsAsTheTablesGiveThem)
+    // Never in CiA 402's format (1 x 10^-3 s would read as 1, 62.5 us): still the default 8 (500 us) or 16.
+    const auto before = value_of(c.upload(0x60C2, 1), false);
+    EXPECT_TRUE(before == 8 || before == 16) << before;
+    d.vs.cycles(200);
     const auto u = c.upload(0x60C2, 1);
     ASSERT_TRUE(u.ok()) << std::hex << abort_of(u);
     EXPECT_EQ(value_of(u, false), 16);
@@ -489,6 +492,23 @@ TEST_F(D2InOp, Hiwin_9_MovesInEveryMode) {
     d.vs.cycles(100);
     EXPECT_EQ(mode_display(), 10);
     EXPECT_LT(velocity(), v_pt);
+}
+
+// 3.7 0x2100 "Bit 1: Encoder error": an encoder fault injected (`vecat fault inject encoder`) faults the
+// D2 and shows in its error events 1; its own read-only 0x2101 (error events 2) is left alone. 0x2010 bit 1
+// "Reset the drive" resets the fault once it is gone and clears the events.
+TEST_F(D2InOp, Hiwin_3_7_ErrorEventsOfAnInjectedFault) {
+    const auto r = d.vs.fault("inject encoder slave=0");
+    ASSERT_EQ(r.substr(0, 2), "ok") << r;
+    ASSERT_TRUE(until([&] { return (statusword() & 0x4F) == 0x08; }, 3000)) << "FAULT";
+    EXPECT_EQ(value_of(d.coe.upload(0x2100, 0), false), 0x2);
+    EXPECT_EQ(value_of(d.coe.upload(0x2101, 0), false), 0);
+    ASSERT_EQ(d.vs.fault("clear all").substr(0, 2), "ok");
+    set_cw(0);
+    d.vs.cycles(5);
+    ASSERT_TRUE(d.coe.download_value<std::uint16_t>(0x2010, 0, 2).ok());
+    EXPECT_TRUE(until([&] { return (statusword() & 0x4F) == 0x40; }, 100)) << "SWITCH ON DISABLED";
+    EXPECT_EQ(value_of(d.coe.upload(0x2100, 0), false), 0);
 }
 
 // 10 through a master: 0x60B8 = 0x0011, the value in 0x60BA (mapped) at the next Z phase.
