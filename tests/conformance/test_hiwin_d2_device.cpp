@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <optional>
 
 #include "common/bytes.hpp"
@@ -430,6 +431,18 @@ TEST_F(D2InOp, Hiwin_9_4_HomesWithEachMethod) {
         }
         ASSERT_TRUE(home(method));
         EXPECT_LT(std::abs(position()), kRev / 50);
+        // Where the home is on the machine (0x6063, the encoder, which homing does not move; the D2's
+        // machine: limit switches at -/+20 revolutions, the home switch dog from 3 to 4, the index at k +
+        // 1/4).
+        const auto home_at =
+            value_of(d.coe.upload(0x6063, 0), true) - value_of(d.coe.upload(0x6064, 0), true);
+        const std::map<int, std::int64_t> expected = {{1, -20 * kRev + kRev / 4}, {2, 19 * kRev + kRev / 4},
+                                                      {3, 2 * kRev + kRev / 4},   {4, 4 * kRev + kRev / 4},
+                                                      {5, 4 * kRev + kRev / 4},   {6, 2 * kRev + kRev / 4}};
+        if (expected.count(method))
+            EXPECT_NEAR(home_at, expected.at(method), 2);
+        else
+            EXPECT_EQ(((home_at - kRev / 4) % kRev + kRev) % kRev, 0) << "33/34: on an index";
         EXPECT_EQ(value_of(d.coe.upload(0x2020, 0), true), 1) << "3.7: index touched";
     }
     // 0: no homing, nothing moves, no error.
