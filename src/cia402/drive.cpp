@@ -4,6 +4,8 @@
 // emergencies. The motion itself is drive_core.cpp and the modes; the segment factories drive_segment.cpp.
 #include "cia402/drive.hpp"
 
+#include "cia402/drive_variant.hpp"
+
 #include "device/drive_objects.hpp"
 #include "protocol/cia402_objects.hpp"
 #include "twinsync/parameters.hpp"
@@ -24,7 +26,8 @@ namespace mfr = device::mfr;
 struct Drive::Objects {
     template <class T>
     using V = coe::Value<T>;
-    explicit Objects(coe::ObjectDictionary& d) : od(d) {}
+    // vecat: the vecat drive's manufacturer objects are the device's (VariantObjects::vecat_objects).
+    Objects(coe::ObjectDictionary& d, bool vecat) : od(d), vecat_objects(vecat) {}
     // The drive also runs on vendors' dictionaries (ESI files), some of which declare a profile object
     // with another integer type (DINT digital inputs, USINT for a UDINT): such an entry is converted as
     // Entry::get/set do (coe::Match::Convert). Reals and strings must match.
@@ -33,7 +36,14 @@ struct Drive::Objects {
         return coe::bind(od, id, coe::Match::Convert);
     }
 
+    // A manufacturer object of the vecat drive: unbound on a device whose 0x2000-0x2FFF are its own.
+    template <protocol::DataType T>
+    V<protocol::value_type_t<T>> mfr_bind(protocol::ObjectId<T> id) {
+        return vecat_objects ? bind(id) : V<protocol::value_type_t<T>>{};
+    }
+
     coe::ObjectDictionary& od;
+    const bool vecat_objects;
     V<std::uint16_t> controlword = bind(obj::controlword);
     V<std::uint16_t> statusword = bind(obj::statusword);
     V<std::int16_t> quick_stop_option = bind(obj::quick_stop_option_code);
@@ -95,7 +105,10 @@ struct Drive::Objects {
     V<std::int32_t> probe1_negative = bind(obj::touch_probe_1_negative_value);
     V<std::int32_t> probe2_positive = bind(obj::touch_probe_2_positive_value);
     V<std::int32_t> probe2_negative = bind(obj::touch_probe_2_negative_value);
-    V<std::uint8_t> interpolation_value = bind(obj::interpolation_time_period::value);
+    // 0x60C2:1 is a UINT8 in CiA 402 and a UINT16 on the HIWIN D2 (DriveStrategy::interpolation).
+    V<std::uint16_t> interpolation_value =
+        coe::bind<std::uint16_t>(od, obj::interpolation_time_period::index,
+                                 obj::interpolation_time_period::value.subindex, coe::Match::Convert);
     V<std::int8_t> interpolation_index = bind(obj::interpolation_time_period::time_index);
     V<std::uint32_t> max_acceleration = bind(obj::max_acceleration);
     V<std::uint32_t> max_deceleration = bind(obj::max_deceleration);
@@ -106,29 +119,29 @@ struct Drive::Objects {
     V<std::uint32_t> digital_inputs = bind(obj::digital_inputs);
     V<std::int32_t> target_velocity = bind(obj::target_velocity);
     // The manufacturer objects of the vecat drive.
-    V<std::int16_t> temperature = bind(mfr::drive_temperature);
-    V<std::uint16_t> simulated_fault = bind(mfr::simulated_fault);
-    V<std::uint32_t> velocity_override = bind(mfr::velocity_override);
-    V<std::int32_t> compensation_distance = bind(mfr::position_compensation::distance);
-    V<std::uint32_t> compensation_length = bind(mfr::position_compensation::length);
-    V<std::uint8_t> compensation_start = bind(mfr::position_compensation::start);
-    V<std::uint32_t> motor_rotor_inertia = bind(mfr::motor::rotor_inertia);
-    V<std::uint32_t> motor_torque_constant = bind(mfr::motor::torque_constant);
-    V<std::uint32_t> motor_load_inertia = bind(mfr::motor::load_inertia);
-    V<std::uint32_t> motor_viscous_friction = bind(mfr::motor::viscous_friction);
-    V<std::uint32_t> motor_coulomb_friction = bind(mfr::motor::coulomb_friction);
-    V<std::uint32_t> motor_peak_current = bind(mfr::motor::peak_current);
-    V<std::uint32_t> gain_position_kp = bind(mfr::gains::position_kp);
-    V<std::uint32_t> gain_velocity_kp = bind(mfr::gains::velocity_kp);
-    V<std::uint32_t> gain_velocity_ti = bind(mfr::gains::velocity_ti);
-    V<std::uint32_t> gain_current_bandwidth = bind(mfr::gains::current_bandwidth);
-    V<std::int32_t> negative_limit_switch = bind(mfr::machine::negative_limit_switch);
-    V<std::int32_t> positive_limit_switch = bind(mfr::machine::positive_limit_switch);
-    V<std::int32_t> home_switch = bind(mfr::machine::home_switch);
-    V<std::int32_t> index_pulse_offset = bind(mfr::machine::index_pulse_offset);
-    V<std::int16_t> load_torque = bind(mfr::machine::load_torque);
-    V<std::uint8_t> probe_inputs = bind(mfr::machine::touch_probe_inputs);
-    V<std::uint8_t> limit_switch_reaction = bind(mfr::machine::limit_switch_reaction);
+    V<std::int16_t> temperature = mfr_bind(mfr::drive_temperature);
+    V<std::uint16_t> simulated_fault = mfr_bind(mfr::simulated_fault);
+    V<std::uint32_t> velocity_override = mfr_bind(mfr::velocity_override);
+    V<std::int32_t> compensation_distance = mfr_bind(mfr::position_compensation::distance);
+    V<std::uint32_t> compensation_length = mfr_bind(mfr::position_compensation::length);
+    V<std::uint8_t> compensation_start = mfr_bind(mfr::position_compensation::start);
+    V<std::uint32_t> motor_rotor_inertia = mfr_bind(mfr::motor::rotor_inertia);
+    V<std::uint32_t> motor_torque_constant = mfr_bind(mfr::motor::torque_constant);
+    V<std::uint32_t> motor_load_inertia = mfr_bind(mfr::motor::load_inertia);
+    V<std::uint32_t> motor_viscous_friction = mfr_bind(mfr::motor::viscous_friction);
+    V<std::uint32_t> motor_coulomb_friction = mfr_bind(mfr::motor::coulomb_friction);
+    V<std::uint32_t> motor_peak_current = mfr_bind(mfr::motor::peak_current);
+    V<std::uint32_t> gain_position_kp = mfr_bind(mfr::gains::position_kp);
+    V<std::uint32_t> gain_velocity_kp = mfr_bind(mfr::gains::velocity_kp);
+    V<std::uint32_t> gain_velocity_ti = mfr_bind(mfr::gains::velocity_ti);
+    V<std::uint32_t> gain_current_bandwidth = mfr_bind(mfr::gains::current_bandwidth);
+    V<std::int32_t> negative_limit_switch = mfr_bind(mfr::machine::negative_limit_switch);
+    V<std::int32_t> positive_limit_switch = mfr_bind(mfr::machine::positive_limit_switch);
+    V<std::int32_t> home_switch = mfr_bind(mfr::machine::home_switch);
+    V<std::int32_t> index_pulse_offset = mfr_bind(mfr::machine::index_pulse_offset);
+    V<std::int16_t> load_torque = mfr_bind(mfr::machine::load_torque);
+    V<std::uint8_t> probe_inputs = mfr_bind(mfr::machine::touch_probe_inputs);
+    V<std::uint8_t> limit_switch_reaction = mfr_bind(mfr::machine::limit_switch_reaction);
     // TWINsync: the local values the drive provides and the remote values it uses (MSD parameters
     // Pnnnn as objects 0x2000 + nnnn, twinsync/parameters.hpp).
     template <class T>
@@ -197,13 +210,22 @@ MotorParameters motor_from(const Drive::Objects& o) {
 
 Drive::Drive(const device::DeviceDescription& d,
              std::shared_ptr<const std::vector<device::ObjectDescription>> objects)
-    : CoeApplication(d, std::move(objects)), o_(std::make_unique<Objects>(dictionary())) {
+    : CoeApplication(d, std::move(objects)),
+      variant_(VariantObjects::make(d.drive_variant, dictionary())),
+      o_(std::make_unique<Objects>(dictionary(), variant_->vecat_objects())) {
+    io_.parameters.strategy = drive_strategy(d.drive_variant);
+    simulated_machine(d.drive_variant, io_.parameters);
     for_each_parameter([this](auto& v, auto&) {
         if (v.entry()) v.entry()->hooks().writes = &parameter_writes_;
     });
     for_each_command([this](auto& v, auto&) {
         if (v.entry()) v.entry()->hooks().writes = &command_writes_;
     });
+    for (coe::Entry* e : variant_->parameter_entries())
+        if (e) e->hooks().writes = &parameter_writes_;
+    for (coe::Entry* e : variant_->command_entries())
+        if (e) e->hooks().writes = &command_writes_;
+    variant_->install([this] { core_->zero_position(); });
     core_ = std::make_unique<DriveCore>(motor_from(*o_));
     configure();
     twin_ = std::make_unique<twinsync::Port>(dictionary(), kServoPeriodNs);
@@ -230,6 +252,15 @@ Drive::~Drive() {
     // A drive that goes (a slave powered off and rebuilt) leaves its partner with a dead cable, not with a
     // dangling partner.
     if (twin_partner_) twin_partner_->twin_partner_ = nullptr;
+}
+
+bool Drive::simulates_faults() {
+    return o_->simulated_fault.bound() || !o_->vecat_objects;
+}
+
+void Drive::simulate_fault(std::uint16_t code) {
+    if (o_->simulated_fault.bound()) return CoeApplication::simulate_fault(code);
+    if (!o_->vecat_objects && (code == 0 || fault::injectable(code))) io_.parameters.simulated_fault = code;
 }
 
 void Drive::tick(std::uint64_t now_ns) {
@@ -379,6 +410,7 @@ void Drive::read_parameters() {
             field = v.get_or(field);
         }
     });
+    variant_->read_parameters(io_.parameters);
 }
 
 void Drive::configure() {
@@ -397,10 +429,12 @@ void Drive::configure() {
         ++command_writes_;
         if (maps_parameters_) ++parameter_writes_;
     }
+    const bool dc = sync_mode() == coe::SyncMode::DcSync0 || sync_mode() == coe::SyncMode::DcSync1;
+    // A device that takes its interpolation period from SYNC0 (HIWIN 9.1.2) writes it now.
+    if (variant_->synchronised(dc ? static_cast<std::uint32_t>(cycle_time_ns()) : 0)) ++parameter_writes_;
     // The parameters only when one was written since they were read.
     if (parameter_writes_ != parameters_read_) read_parameters();
-    io_.parameters.fieldbus_synchronised =
-        sync_mode() == coe::SyncMode::DcSync0 || sync_mode() == coe::SyncMode::DcSync1;
+    io_.parameters.fieldbus_synchronised = dc;
     core_->configure(io_);
 }
 
@@ -423,6 +457,7 @@ void Drive::read_command() {
     command_read_ = command_writes_;
     // An absent object leaves the field at its default.
     for_each_command([](const auto& v, auto& field) { field = v.get_or(field); });
+    variant_->read_command(io_.command);
 }
 
 void Drive::read_twinsync() {
@@ -473,7 +508,12 @@ void Drive::write_feedback() {
                                                   {&o.probe2_positive, &o.probe2_negative}};
         for (int n = 0; n < 2; ++n)
             for (int edge = 0; edge < 2; ++edge)
-                if (f.probe_latched.set[n][edge]) values[n][edge]->set(f.probe_latched.value[n][edge]);
+                if (f.probe_latched.set[n][edge]) {
+                    // Without an object of its own (HIWIN 10: "Latch Position is always stored to the Touch
+                    // Probe Position Value (0x60BA)") the negative edge's value goes to the positive's.
+                    auto* to = values[n][edge]->bound() ? values[n][edge] : values[n][0];
+                    to->set(f.probe_latched.value[n][edge]);
+                }
         o.probe_status.set(f.probe_status);
     }
     o.statusword.set(f.statusword);
@@ -489,6 +529,7 @@ void Drive::write_feedback() {
     o.torque_actual.set(f.torque_actual);
     o.current_actual.set(f.current_actual);
     o.temperature.set(f.temperature);
+    variant_->write_feedback(io_);
     if (f.twinsync) {
         const TwinsyncValues& v = f.twinsync_values;
         o.tw_local_ref_torque.set(v.ref_torque);

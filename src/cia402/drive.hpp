@@ -19,6 +19,8 @@
 
 namespace vecat::cia402 {
 
+class VariantObjects;  // drive_variant.hpp
+
 // Mode, supported(), fault:: codes and sw:: bits: drive_io.hpp.
 
 class Drive : public coe::CoeApplication, public twinsync::StatusSource {
@@ -51,6 +53,10 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
 
     // esc::Application
     void tick(std::uint64_t now_ns) override;
+    // coe::CoeApplication: the drive simulates faults, through 0x2101 where that is the vecat drive's
+    // object, directly on a device whose manufacturer objects are its own (the HIWIN D2).
+    bool simulates_faults() override;
+    void simulate_fault(std::uint16_t code) override;
 
     // The dictionary entries of the DriveIo, bound once (drive.cpp).
     struct Objects;
@@ -75,6 +81,7 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     void write_feedback();
     twinsync::LocalState twinsync_local() const;
 
+    std::unique_ptr<VariantObjects> variant_;  // before o_: which manufacturer objects it binds
     std::unique_ptr<Objects> o_;
     std::unique_ptr<DriveCore> core_;
     DriveIo io_;

@@ -118,6 +118,14 @@ void DriveCore::compensate(double distance, double length) {
     if (axis_.profile.compensate(distance, length) && pp_.moving()) pp_.set_target(axis_.profile.target());
 }
 
+void DriveCore::zero_position() {
+    const double shift = -axis_.actual;
+    axis_.home_shift += shift;
+    axis_.actual = 0;
+    axis_.demand.p += shift;
+    axis_.profile.reset(axis_.demand);
+}
+
 twinsync::LocalState DriveCore::twinsync_local(std::uint16_t own_controlword, bool synchronised) const {
     return coupling_.local(sm_.state(), sm_.stop(), own_controlword, mode_ == Mode::Homing, synchronised,
                            axis_, mech_);
@@ -133,7 +141,8 @@ void DriveCore::update_inputs(DriveIo& io) {
     const double inc = machine_increments();
     axis_.negative_limit = inc <= c.negative_limit_switch;
     axis_.positive_limit = inc >= c.positive_limit_switch;
-    axis_.home_switch = inc >= c.home_switch;
+    const std::int32_t dog = c.strategy.home_switch_length;
+    axis_.home_switch = inc >= c.home_switch && (dog <= 0 || inc < static_cast<double>(c.home_switch) + dog);
     probe_inputs_ = c.probe_inputs;
     // 0x60FD: negative and positive limit switch, home switch (CiA 402 6.3.8); bits 16/17 manufacturer:
     // touch probe inputs 1 and 2.
@@ -379,7 +388,16 @@ void DriveCore::run_touch_probe(DriveIo& io, double previous_inc, double machine
     p.previous_inc = previous_inc;
     p.machine_inc = machine_inc;
     p.index_offset = io.parameters.index_pulse_offset;
+    p.on_index_only = io.parameters.strategy.probe_on_index;
     io.feedback.probe_latched = probe_.step(p, axis_.ratios, axis_.home_shift);
+    // The index pulse itself (HIWIN 0x2020/0x2021): where the last one was crossed, as 0x6064 reads it.
+    if (const auto at = TouchProbe::index_crossing(previous_inc, machine_inc, axis_.ratios.per_revolution,
+                                                   p.index_offset)) {
+        const double user =
+            static_cast<double>(axis_.ratios.increments_to_user(floor64(*at))) + axis_.home_shift;
+        io.feedback.index_touched = true;
+        io.feedback.index_position = wrap32(floor64(user));
+    }
     io.feedback.probe_status = probe_.status();
     io.feedback.probe = true;
 }
@@ -412,6 +430,8 @@ void DriveCore::write_feedback(DriveIo& io) {
     if (ms.target_reached) status |= sw::TargetReached;
     if (ms.bit12) status |= sw::Bit12;
     if (ms.bit13) status |= sw::Bit13;
+    // HIWIN 9.4: "accuracy compensation initiated" after homing (bit 15, manufacturer specific).
+    if (mode_ == Mode::Homing && hm_.compensated()) status |= kAccuracyCompensation;
     const bool limit_switch = axis_.positive_limit || axis_.negative_limit;
     if (axis_.internal_limit || limit_switch) status |= sw::InternalLimit;
     if (limit_switch || (enabled && mech_.torque_limited())) status |= sw::Warning;

@@ -47,6 +47,8 @@ class DriveCore {
     // Position compensation 0x2111 (TwinCAT NC PTP online change): the move ends at its target plus the
     // achievable part of `distance`, spread over `length`.
     void compensate(double distance, double length);
+    // The actual position reads 0 from now on (HIWIN 0x2060 0->1, multi-turn position to zero).
+    void zero_position();
 
     State state() const { return sm_.state(); }
     Mode mode() const { return mode_; }

@@ -45,8 +45,30 @@ bool injectable(std::uint16_t code) noexcept;
 // Statusword bits (CiA 402 6.3.3), protocol/cia402.hpp.
 namespace sw = protocol::cia402::sw;
 
+// The small strategies in which the drives behind different devices differ. The CoE adapter sets them
+// once from the device's DriveVariant (drive_variant.hpp); the defaults are the vecat drive's.
+enum class HomingConvention : std::uint8_t {
+    Cia402,  // 0x6098 names the methods of homing.hpp as CiA 402 numbers them
+    Hiwin,   // HIWIN guide 9.4: 0 no homing, 1-6 and 33/34 with a home switch the axis passes through
+             // (a dog), and the accuracy compensation of 0x2010 bit 0 (statusword bit 15)
+};
+enum class InterpolationFormat : std::uint8_t {
+    ValueIndex,   // CiA 402: 0x60C2:1 (UINT8) x 10^0x60C2:2 s
+    Ticks62_5us,  // HIWIN guide 9.1.2: 0x60C2:1 (UINT16) in 62.5 us
+};
+struct DriveStrategy {
+    HomingConvention homing = HomingConvention::Cia402;
+    InterpolationFormat interpolation = InterpolationFormat::ValueIndex;
+    // HIWIN guide 10: touch probe 1 only, triggered by the encoder's zero signal (Z phase) whatever its
+    // trigger selection (0x60B8 0x0011 latches on the index).
+    bool probe_on_index = false;
+    // The home switch is a dog of this many increments from 0x2100:3 (0: active from 0x2100:3 upwards).
+    std::int32_t home_switch_length = 0;
+};
+
 // Parameters: the profile objects and the manufacturer objects, read again after a write.
 struct DriveParameters {
+    DriveStrategy strategy;                              // set once by the adapter
     OptionCodes options;                                 // 0x605A-0x605E
     FactorGroup factors;                                 // 0x608F, 0x6091, 0x6092 (applied only when valid)
     std::uint32_t rated_current = 3000;                  // 0x6075, mA
@@ -82,7 +104,7 @@ struct DriveParameters {
     std::uint32_t homing_speed_switch = 0;  // 0x6099:1
     std::uint32_t homing_speed_zero = 0;    // 0x6099:2
     std::uint32_t homing_acceleration = 0;  // 0x609A
-    std::uint8_t interpolation_value = 1;   // 0x60C2:1
+    std::uint16_t interpolation_value = 1;  // 0x60C2:1 (strategy.interpolation says its unit)
     std::int8_t interpolation_index = -3;   // 0x60C2:2
     // The manufacturer objects of the vecat drive (src/cia402/README.md).
     std::uint32_t gain_position_kp = 0;        // 0x2003:1 (0: tuned from the motor)
@@ -112,6 +134,7 @@ struct DriveCommand {
     std::int32_t velocity_offset = 0;  // 0x60B1
     std::int16_t torque_offset = 0;    // 0x60B2
     std::uint16_t probe_function = 0;  // 0x60B8
+    std::uint16_t input_function = 0;  // HIWIN 0x2010 (bit 0: accuracy compensation after homing)
 };
 
 // The TWINsync option card this period (what the port found on receive) and the TWINsync parameters
@@ -188,6 +211,10 @@ struct DriveFeedback {
     std::int32_t position_demand_internal = 0;  // 0x60FC
     std::uint32_t digital_inputs = 0;           // 0x60FD
     std::int16_t temperature = 0;               // 0x2001, 0.1 C
+    // The encoder's index (Z phase): seen since power-up (HIWIN 0x2020), and the position of the last one
+    // (HIWIN 0x2021), in user units as 0x6064.
+    bool index_touched = false;
+    std::int32_t index_position = 0;
     // The touch probe (0x60B9, and 0x60BA-0x60BD where latched), set by a servo period only.
     bool probe = false;
     std::uint16_t probe_status = 0;

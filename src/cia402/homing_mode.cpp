@@ -8,9 +8,36 @@ namespace vecat::cia402 {
 
 namespace cw = protocol::cia402::cw;
 
+namespace {
+bool has_accuracy_compensation(const Axis& a) {
+    return a.par().strategy.homing == HomingConvention::Hiwin;
+}
+}  // namespace
+
+std::optional<int> homing_method_of(HomingConvention c, int value) {
+    if (c == HomingConvention::Cia402) return value;
+    switch (value) {
+        case 1:
+        case 2:
+        case 33:
+        case 34:
+            return value;
+        case 3:
+            return 7;
+        case 4:
+            return 10;
+        case 5:
+            return 11;
+        case 6:
+            return 14;
+        default:
+            return std::nullopt;
+    }
+}
+
 void HomingMode::reset() {
     bits_ = 0;
-    active_ = error_ = false;
+    active_ = error_ = compensated_ = false;
     velocity_ = 0;
     homing_.abort();
 }
@@ -28,8 +55,12 @@ void HomingMode::step(Axis& a, double dt) {
         hp.index_period = a.ratios.per_revolution / ipu;
         hp.index_phase = p.index_pulse_offset / ipu + a.home_shift;
         hp.standstill_velocity = a.standstill_velocity;
-        active_ = homing_.start(p.homing_method, hp, a.actual);
-        error_ = !active_;
+        const auto method = homing_method_of(p.strategy.homing, p.homing_method);
+        const bool no_homing = p.strategy.homing == HomingConvention::Hiwin && p.homing_method == 0;
+        if (no_homing) homing_ = Homing{};  // HIWIN 0, "No homing mode": nothing starts, nothing fails
+        active_ = method && homing_.start(*method, hp, a.actual);
+        error_ = !active_ && !no_homing;
+        compensated_ = false;
         velocity_ = 0;
     }
     if (active_ && (!(a.controlword & cw::HomingStart) || a.halted)) {
@@ -50,6 +81,19 @@ void HomingMode::step(Axis& a, double dt) {
         }
         if (out.status == HomingStatus::Attained && out.target_reached) active_ = false;
         if (out.status == HomingStatus::Error && out.target_reached) active_ = false;
+    }
+    // HIWIN 9.4, "Initiate accuracy compensation": once homing is completed (bits 10 and 12), 0x2010 bit 0
+    // makes the drive clear the feedback position to 0 and set bit 15. The master then takes the actual
+    // position as its command position (step VIII).
+    if (has_accuracy_compensation(a) && !active_ && !compensated_ && attained() &&
+        (bits_ & sw::TargetReached) && (a.cmd().input_function & 1u)) {
+        const double shift = -a.actual;
+        a.home_shift += shift;
+        a.actual = 0;
+        a.demand.p += shift;
+        a.profile.reset(a.demand);
+        velocity_ = std::numeric_limits<double>::quiet_NaN();
+        compensated_ = true;
     }
     if (a.halted && !active_) {
         a.stop(stop_for(StopOption::Halt, a.par().options), dt);

@@ -73,7 +73,9 @@ ProfileLimits Axis::profile_limits() const {
 
 double Axis::interpolation_period() const {
     const double value = par().interpolation_value;
-    const double t = value * pow10_of(par().interpolation_index);
+    const double t = par().strategy.interpolation == InterpolationFormat::Ticks62_5us
+                         ? value * 62.5e-6
+                         : value * pow10_of(par().interpolation_index);
     return t > 0 ? std::max(t, kPeriod) : 1e-3;
 }
 

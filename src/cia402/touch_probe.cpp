@@ -21,9 +21,18 @@ constexpr std::uint16_t kEnabled = 0x01, kPositiveStored = 0x02, kNegativeStored
 
 }  // namespace
 
+std::optional<double> TouchProbe::index_crossing(double from, double to, double period, double offset) {
+    const double lo = std::min(from, to), hi = std::max(from, to);
+    if (!(period > 0) || !(hi > lo)) return std::nullopt;
+    const double crossing = std::ceil((lo - offset) / period) * period + offset;
+    if (crossing <= hi && crossing > lo) return crossing;
+    return std::nullopt;
+}
+
 TouchProbe::Latched TouchProbe::step(const Period& p, const FactorRatios& ratios, double home_shift) {
     Latched out;
-    const std::uint16_t fn = p.function;
+    // HIWIN: probe 2 does not exist (its function bits are ignored, its status stays 0).
+    const std::uint16_t fn = p.on_index_only ? static_cast<std::uint16_t>(p.function & 0x00FF) : p.function;
     for (int n = 0; n < 2; ++n) {
         const unsigned shift = 8u * static_cast<unsigned>(n);
         const std::uint16_t f = static_cast<std::uint16_t>(fn >> shift);
@@ -40,7 +49,8 @@ TouchProbe::Latched TouchProbe::step(const Period& p, const FactorRatios& ratios
             if ((f & kNegativeEdge) && !(pf & kNegativeEdge))
                 st &= static_cast<std::uint16_t>(~kNegativeStored);
             const bool continuous = f & kContinuous;
-            const unsigned source = (f >> 2) & 0x03;  // 0: touch probe input, 1: zero impulse (index)
+            // 0: touch probe input, 1: zero impulse (index); HIWIN's one trigger is the index.
+            const unsigned source = p.on_index_only ? 1u : (f >> 2) & 0x03u;
             bool rise = false, fall = false;
             double at_inc = p.machine_inc;
             if (source == 0) {
@@ -50,15 +60,10 @@ TouchProbe::Latched TouchProbe::step(const Period& p, const FactorRatios& ratios
                 fall = !now && before;
             } else if (source == 1) {
                 // Index pulse once per motor revolution at the configured offset: the exact crossing.
-                const double period = ratios.per_revolution;
-                const double offset = p.index_offset;
-                const double lo = std::min(p.previous_inc, p.machine_inc),
-                             hi = std::max(p.previous_inc, p.machine_inc);
-                const double k = std::ceil((lo - offset) / period);
-                const double crossing = k * period + offset;
-                if (crossing <= hi && hi > lo && crossing > lo) {
+                if (const auto crossing = index_crossing(p.previous_inc, p.machine_inc, ratios.per_revolution,
+                                                         p.index_offset)) {
                     rise = fall = true;
-                    at_inc = crossing;
+                    at_inc = *crossing;
                 }
             }
             const double user = static_cast<double>(ratios.increments_to_user(floor64(at_inc))) + home_shift;

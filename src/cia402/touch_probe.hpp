@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 #include "cia402/factor_group.hpp"
 
@@ -18,6 +19,8 @@ class TouchProbe {
         double previous_inc = 0;     // machine position in increments at the start of the period
         double machine_inc = 0;      // ... and at its end
         double index_offset = 0;     // increments of the index pulse within a motor revolution
+        // HIWIN guide 10: one probe, whose trigger is always the encoder's zero signal (Z phase).
+        bool on_index_only = false;
     };
     // A value latched this period for 0x60BA-0x60BD: [probe][0 positive edge, 1 negative edge].
     struct Latched {
@@ -28,6 +31,9 @@ class TouchProbe {
     // One servo period; ratios and home_shift convert increments to the user position (as 0x6064).
     Latched step(const Period& p, const FactorRatios& ratios, double home_shift);
     std::uint16_t status() const { return status_; }  // 0x60B9
+    // The first index pulse (one per revolution of `period` increments, at `offset`) crossed moving from
+    // `from` to `to` (increments), if any.
+    static std::optional<double> index_crossing(double from, double to, double period, double offset);
 
   private:
     std::uint8_t previous_inputs_ = 0;

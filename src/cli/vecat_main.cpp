@@ -58,18 +58,33 @@ void install_signals() {
     sigaction(SIGTERM, &sa, nullptr);
 }
 
-// The device to emulate: the built-in drive, or one device of a vendor ESI file.
+// The device to emulate: a built-in drive (--device NAME, the vecat drive without it), or one device of
+// a vendor ESI file.
 std::optional<vecat::device::DeviceDescription> load_device(const std::string& esi_path,
                                                             const vecat::esi::DeviceSelector& sel,
                                                             bool for_emulation = false) {
-    if (esi_path.empty()) return vecat::device::default_drive();
+    if (esi_path.empty()) {
+        if (!sel.type) return vecat::device::default_drive();
+        if (auto d = vecat::device::builtin_drive(*sel.type)) return d;
+        std::string names;
+        for (auto n : vecat::device::builtin_drive_names())
+            names += (names.empty() ? "" : ", ") + std::string(n);
+        fmt::print(stderr, "vecat: --device {}: no such built-in device (without --esi: {})\n", *sel.type,
+                   names);
+        return std::nullopt;
+    }
     try {
         auto r = vecat::esi::import_esi_file(esi_path, sel);
         for (const auto& n : r.notes)
             fmt::print(stderr, "vecat: {}: {}\n", esi_path, n);
-        if (for_emulation)
+        if (for_emulation) {
             for (const auto& n : vecat::esi::complete_for_emulation(r.desc))
                 fmt::print(stderr, "vecat: {}: {}\n", esi_path, n);
+            if (auto b = vecat::device::adopt_builtin_rules(r.desc))
+                fmt::print(stderr,
+                           "vecat: {}: the built-in {} by its identity: its behaviour and PDO rules\n",
+                           esi_path, *b);
+        }
         return r.desc;
     } catch (const std::exception& e) {
         fmt::print(stderr, "vecat: {}: {}\n", esi_path, e.what());
@@ -464,7 +479,9 @@ int main(int argc, char** argv) {
     std::optional<std::uint32_t> revision;
     auto add_esi_options = [&](CLI::App* c, bool esi_option) {
         if (esi_option) c->add_option("--esi", esi_path, "Emulate a device described by this ESI file");
-        c->add_option("--device", device_type, "Device of the ESI file by its Type name");
+        c->add_option("--device", device_type,
+                      "Device of the ESI file by its Type name; without --esi a built-in drive: drive (the "
+                      "vecat drive, the default) or hiwin-d2 (the HIWIN D2 CoE drive)");
         c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
         c->add_option("--revision", revision,
                       "Revision of that device (0x... accepted); without it the file's first one. An error "
@@ -579,15 +596,16 @@ int main(int argc, char** argv) {
 
     auto* sii = app.add_subcommand("sii", "SII EEPROM tools");
     sii->require_subcommand(1);
-    auto* sii_gen = sii->add_subcommand("generate", "Write the SII EEPROM image of the default drive");
+    auto* sii_gen = sii->add_subcommand(
+        "generate", "Write the SII EEPROM image of the default drive (or of --device, --esi)");
     std::string sii_out;
     sii_gen->add_option("-o,--output", sii_out, "Output file (standard output when omitted)");
     add_esi_options(sii_gen, true);
 
     auto* esi = app.add_subcommand("esi", "ESI (EtherCAT Slave Information) tools");
     esi->require_subcommand(1);
-    auto* esi_gen =
-        esi->add_subcommand("generate", "Write the ESI XML file of the default drive (or of --esi)");
+    auto* esi_gen = esi->add_subcommand(
+        "generate", "Write the ESI XML file of the default drive (or of --device, --esi)");
     std::string esi_out;
     esi_gen->add_option("-o,--output", esi_out, "Output file (standard output when omitted)");
     add_esi_options(esi_gen, true);

@@ -183,4 +183,17 @@ std::unique_ptr<esc::Segment> make_coe_segment(const esc::DeviceModel& m, std::s
         });
 }
 
+namespace {
+constexpr std::uint16_t kSimulatedFault = 0x2101;  // the vecat drive's fault injection object
+}  // namespace
+
+bool CoeApplication::simulates_faults() {
+    const Entry* e = od_.find(kSimulatedFault, 0);
+    return e && e->type() == protocol::DataType::Unsigned16;
+}
+
+void CoeApplication::simulate_fault(std::uint16_t code) {
+    if (simulates_faults()) od_.find(kSimulatedFault, 0)->set(code);
+}
+
 }  // namespace vecat::coe

@@ -52,6 +52,13 @@ class CoeApplication : public esc::Application {
     // Clears 0x1001/0x603F and sends the "error reset" emergency.
     void clear_faults();
 
+    // Fault injection (`vecat fault` encoder, over_current, following_error): whether the application
+    // simulates device faults, and the 0x603F code of the one to simulate (0: none). By default through the
+    // vecat drive's object 0x2101 (UNSIGNED16), when the dictionary has it; a device whose 0x2101 is its
+    // own (the HIWIN D2's error events) overrides both.
+    virtual bool simulates_faults();
+    virtual void simulate_fault(std::uint16_t code);
+
     // esc::Application
     unsigned output_bytes() const override { return map_->output_bytes(); }
     unsigned input_bytes() const override { return map_->input_bytes(); }

@@ -36,7 +36,8 @@ std::uint32_t u32_of(ConstBytes b) {
 
 }  // namespace
 
-ProcessDataMap::ProcessDataMap(ObjectDictionary& od, const device::DeviceDescription& desc) : od_(od) {
+ProcessDataMap::ProcessDataMap(ObjectDictionary& od, const device::DeviceDescription& desc)
+    : od_(od), remapping_(desc.pdo_remapping) {
     if (auto sm = desc.sm_index_of_type(device::SmType::Outputs))
         rx_ = {static_cast<std::uint16_t>(0x1C10 + *sm), 0x1600, true,
                max_sm_bytes(desc, device::SmType::Outputs)};
@@ -94,6 +95,17 @@ bool ProcessDataMap::assigned_bits(const Direction& d, std::uint16_t changed_pdo
         bits += b;
     }
     return true;
+}
+
+// Whether pdo is one of the PDOs the assignment of d now lists (0x1C1x:1..n, n = 0x1C1x:0).
+bool ProcessDataMap::is_assigned(const Direction& d, std::uint16_t pdo) const {
+    const Object* a = od_.find(d.assign_index);
+    if (!a) return false;
+    const auto n = a->entry(0)->as_uint64();
+    for (std::uint64_t i = 1; i <= n; ++i)
+        if (const Entry* e = a->entry(static_cast<std::uint8_t>(i)); e && e->get<std::uint16_t>() == pdo)
+            return true;
+    return false;
 }
 
 void ProcessDataMap::install(const Direction& d) {
@@ -155,8 +167,10 @@ void ProcessDataMap::install(const Direction& d) {
                     return SdoAbort::None;
                 };
             } else {
-                e.hooks().on_download = [this, d, po](const Entry&, ConstBytes v) {
-                    if (po->entry(0)->as_uint64() != 0) return SdoAbort::Subindex0NotZero;
+                e.hooks().on_download = [this, d, po, pdo](const Entry&, ConstBytes v) {
+                    if (remapping_ == device::PdoRemapping::Subindex0Zero ? po->entry(0)->as_uint64() != 0
+                                                                          : is_assigned(d, pdo))
+                        return SdoAbort::Subindex0NotZero;
                     const std::uint32_t value = u32_of(v);
                     if (value == 0) return SdoAbort::None;  // clearing an unused entry
                     return check_mapping_entry(d, value);

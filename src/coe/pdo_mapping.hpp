@@ -72,6 +72,7 @@ class ProcessDataMap {
         unsigned max_bytes = 0;
     };
     void install(const Direction& d);
+    bool is_assigned(const Direction& d, std::uint16_t pdo) const;
     SdoAbort check_mapping_entry(const Direction& d, std::uint32_t value) const;
     // Bits of the PDO mapping object `pdo` with count entries (or its current count), or nullopt if invalid.
     bool pdo_bits(const Direction& d, std::uint16_t pdo, int count, unsigned& bits) const;
@@ -108,6 +109,8 @@ class ProcessDataMap {
     unsigned out_bytes_ = 0, in_bytes_ = 0;
     unsigned max_out_ = 0, max_in_ = 0;
     bool out_valid_ = true, in_valid_ = true;
+    // When a mapping object's entries may be written (device_description.hpp).
+    device::PdoRemapping remapping_ = device::PdoRemapping::Subindex0Zero;
 };
 
 }  // namespace vecat::coe

@@ -195,10 +195,14 @@ void SyncParameters::publish() {
             put<std::uint32_t>(idx, sub::ShiftTime, shift);
         }
         slave_cycle_value_ = app_cycle_ns_;
-        // The interpolation period follows SYNC: 0x60C2:01 x 10^0x60C2:02 s = the cycle time.
+        // The interpolation period follows SYNC: 0x60C2:01 x 10^0x60C2:02 s = the cycle time, in CiA 402's
+        // format (0x60C2:01 UNSIGNED8); a device with its own format (the HIWIN D2's one UNSIGNED16 in
+        // 62.5 us) sets it itself.
         std::uint8_t value = 0;
         std::int8_t index = 0;
-        if (od_.find(kInterpolationPeriod) && interpolation_period(app_cycle_ns_, value, index)) {
+        const Entry* period = od_.find(kInterpolationPeriod, 1);
+        if (period && period->type() == protocol::DataType::Unsigned8 &&
+            interpolation_period(app_cycle_ns_, value, index)) {
             put<std::uint8_t>(kInterpolationPeriod, 1, value);
             put<std::int8_t>(kInterpolationPeriod, 2, index);
         }

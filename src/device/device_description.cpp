@@ -1,5 +1,6 @@
 #include "device/device_description.hpp"
 
+#include "device/hiwin_d2.hpp"
 #include "protocol/cia402_objects.hpp"
 
 namespace vecat::device {
@@ -159,6 +160,35 @@ DeviceDescription default_drive() {
     for (auto& o : twinsync_objects())
         d.objects.push_back(std::move(o));
     return d;
+}
+
+std::optional<DeviceDescription> builtin_drive(std::string_view name) {
+    if (name == "drive") return default_drive();
+    if (name == "hiwin-d2") return hiwin_d2();
+    return std::nullopt;
+}
+
+std::vector<std::string_view> builtin_drive_names() {
+    return {"drive", "hiwin-d2"};
+}
+
+std::optional<std::string_view> adopt_builtin_rules(DeviceDescription& d) {
+    for (std::string_view name : builtin_drive_names()) {
+        const DeviceDescription b = *builtin_drive(name);
+        // (The vecat drive's rules are every description's defaults.)
+        if (b.drive_variant == DriveVariant::Vecat || b.identity.vendor_id != d.identity.vendor_id ||
+            b.identity.product_code != d.identity.product_code)
+            continue;
+        d.drive_variant = b.drive_variant;
+        d.pdo_remapping = b.pdo_remapping;
+        d.pdo_assign_slots = b.pdo_assign_slots;
+        for (auto* list : {&d.rx_pdos, &d.tx_pdos})
+            for (auto& p : *list)
+                for (const auto& q : list == &d.rx_pdos ? b.rx_pdos : b.tx_pdos)
+                    if (q.index == p.index) p.max_entries = q.max_entries;
+        return name;
+    }
+    return std::nullopt;
 }
 
 }  // namespace vecat::device

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "device/object_description.hpp"
@@ -59,6 +60,7 @@ struct Pdo {
     std::vector<PdoEntry> entries;
     std::uint8_t capacity = 0;            // subindexes of the mapping object; at least entries.size()
     std::vector<std::uint16_t> excludes;  // PDOs that cannot be assigned together with this one (ESI Exclude)
+    std::uint8_t max_entries = 0;         // most entries subindex 0 takes (0: capacity)
 
     unsigned bit_length() const {
         unsigned n = 0;
@@ -106,6 +108,21 @@ inline constexpr std::uint8_t Upload = 0x10;
 inline constexpr std::uint8_t CompleteAccess = 0x20;
 }  // namespace coe_details
 
+// When a master may write the entries of a PDO mapping object (0x16xx/0x1Axx subindex 1-n).
+enum class PdoRemapping : std::uint8_t {
+    Subindex0Zero,      // ETG.1000.6 / CiA 301 7.4.8: while its subindex 0 is 0 (abort 0x06010003 otherwise)
+    AssignmentCleared,  // while the SyncManager's assignment 0x1C1x:0 is 0, whatever its subindex 0 (the
+                        // HIWIN guide, chapter 7: 0x1C12:0 = 0, entries 1-5, 0x1600:0 = n, 0x1C12:1, 0x1C12:0
+                        // = 1)
+};
+
+// Whose behaviour the CiA 402 drive core shows behind this dictionary: the strategies src/cia402 selects
+// (homing methods, 0x60C2 format, touch probe trigger, manufacturer objects).
+enum class DriveVariant : std::uint8_t {
+    Vecat,    // the vecat drive (and a vendor's ESI run on the vecat drive core)
+    HiwinD2,  // the HIWIN D2 (device/hiwin_d2.hpp)
+};
+
 struct DeviceDescription {
     Identity identity;
     std::string vendor_name;
@@ -139,6 +156,10 @@ struct DeviceDescription {
     std::vector<Pdo> rx_pdos;  // outputs (master -> slave)
     std::vector<Pdo> tx_pdos;  // inputs (slave -> master)
     std::vector<DcOpMode> dc_modes;
+    PdoRemapping pdo_remapping = PdoRemapping::Subindex0Zero;
+    // Subindexes of the PDO assignments 0x1C12/0x1C13 (0: one per PDO of the direction).
+    std::uint8_t pdo_assign_slots = 0;
+    DriveVariant drive_variant = DriveVariant::Vecat;
     // Synchronisation capabilities reported in 0x1C32/0x1C33.
     std::uint32_t min_cycle_time_ns = 125'000;
     std::uint32_t calc_copy_time_ns = 20'000;
@@ -177,5 +198,16 @@ std::vector<ObjectDescription> twinsync_objects();
 
 // The built-in default device: a CiA402 servo drive with HIWIN-like SyncManager layout.
 DeviceDescription default_drive();
+
+// The built-in drives by the name `vecat run --device` and a network file's `device:` give them: "drive"
+// (default_drive()) and "hiwin-d2" (device/hiwin_d2.hpp). nullopt for another name.
+std::optional<DeviceDescription> builtin_drive(std::string_view name);
+// Their names, for messages.
+std::vector<std::string_view> builtin_drive_names();
+// A description read from a file (an ESI) of a device that is also built in, by vendor ID and product code
+// (the HIWIN D2's D2COE.xml): takes over what the file cannot say, the built-in's DriveVariant, PDO
+// remapping rule, assignment slots and mapping limits. Returns the built-in's name, or nullopt (then d is
+// unchanged).
+std::optional<std::string_view> adopt_builtin_rules(DeviceDescription& d);
 
 }  // namespace vecat::device

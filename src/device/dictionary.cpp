@@ -25,7 +25,9 @@ ObjectDescription pdo_mapping_object(const Pdo& p, bool rx) {
     o.entries.push_back(make_entry(0, "Number of entries", DataType::Unsigned8, acc,
                                    static_cast<std::int64_t>(p.entries.size())));
     auto& sub0 = o.entries.back();
-    set_range(sub0, 0, static_cast<std::int64_t>(capacity));
+    set_range(
+        sub0, 0,
+        static_cast<std::int64_t>(p.max_entries ? std::min<std::size_t>(p.max_entries, capacity) : capacity));
     for (std::size_t i = 0; i < capacity; ++i) {
         const std::uint32_t v = i < p.entries.size() ? mapping_value(p.entries[i]) : 0;
         o.entries.push_back(make_entry(static_cast<std::uint8_t>(i + 1),
@@ -35,7 +37,9 @@ ObjectDescription pdo_mapping_object(const Pdo& p, bool rx) {
     return o;
 }
 
-ObjectDescription pdo_assign_object(std::uint16_t index, const std::vector<Pdo>& pdos, const char* name) {
+// slots: its subindexes (0: one per PDO).
+ObjectDescription pdo_assign_object(std::uint16_t index, const std::vector<Pdo>& pdos, const char* name,
+                                    std::size_t slots) {
     ObjectDescription o;
     o.index = index;
     o.name = name;
@@ -50,8 +54,9 @@ ObjectDescription pdo_assign_object(std::uint16_t index, const std::vector<Pdo>&
     const std::uint16_t acc = any_free ? access::RWPreop : access::RO;
     o.entries.push_back(make_entry(0, "Number of assigned PDOs", DataType::Unsigned8, acc,
                                    static_cast<std::int64_t>(assigned.size())));
-    set_range(o.entries.back(), 0, static_cast<std::int64_t>(pdos.size()));
-    for (std::size_t i = 0; i < pdos.size(); ++i) {
+    const std::size_t n = slots ? std::max(slots, assigned.size()) : pdos.size();
+    set_range(o.entries.back(), 0, static_cast<std::int64_t>(n));
+    for (std::size_t i = 0; i < n; ++i) {
         const std::uint16_t v = i < assigned.size() ? assigned[i] : 0;
         o.entries.push_back(make_entry(static_cast<std::uint8_t>(i + 1),
                                        subindex_name(static_cast<unsigned>(i + 1)), DataType::Unsigned16, acc,
@@ -143,10 +148,10 @@ std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d) {
         make_array(obj::sync_manager_type, "Sync manager type", DT::Unsigned8, access::RO, sm_types));
     if (auto sm = d.sm_index_of_type(SmType::Outputs))
         objs.push_back(pdo_assign_object(static_cast<std::uint16_t>(obj::sm_pdo_assign_first + *sm),
-                                         d.rx_pdos, "RxPDO assign"));
+                                         d.rx_pdos, "RxPDO assign", d.pdo_assign_slots));
     if (auto sm = d.sm_index_of_type(SmType::Inputs))
         objs.push_back(pdo_assign_object(static_cast<std::uint16_t>(obj::sm_pdo_assign_first + *sm),
-                                         d.tx_pdos, "TxPDO assign"));
+                                         d.tx_pdos, "TxPDO assign", d.pdo_assign_slots));
     if (d.sm_index_of_type(SmType::Outputs))
         objs.push_back(sync_parameter_object(obj::sync_parameter::outputs, d, true));
     if (d.sm_index_of_type(SmType::Inputs))

@@ -11,7 +11,6 @@
 namespace vecat::faults {
 namespace {
 
-constexpr std::uint16_t kSimulatedFault = 0x2101;  // the drive's fault injection object
 constexpr std::uint8_t kCoeServiceSdoRequest = 2;
 
 bool line_fault(FaultKind k) {
@@ -143,7 +142,7 @@ std::string FaultInjector::start(FaultSpec f, std::uint64_t now_ns) {
         case FaultKind::OverCurrent:
         case FaultKind::FollowingError: {
             auto* app = dynamic_cast<coe::CoeApplication*>(&seg_.slave(f.slave).app());
-            if (!app || !app->dictionary().find(kSimulatedFault, 0))
+            if (!app || !app->simulates_faults())
                 throw std::invalid_argument(f.name + ": slave " + std::to_string(f.slave) +
                                             " is not a drive (no object 0x2101)");
             break;
@@ -179,7 +178,7 @@ std::string FaultInjector::start(FaultSpec f, std::uint64_t now_ns) {
 void FaultInjector::set_drive_fault(std::size_t slave, std::uint16_t code) {
     auto* app = dynamic_cast<coe::CoeApplication*>(&seg_.slave(slave).app());
     if (!app) return;
-    if (auto* e = app->dictionary().find(kSimulatedFault, 0)) e->set(code);
+    app->simulate_fault(code);
 }
 
 void FaultInjector::end(Active& a, std::uint64_t now_ns, const char* why) {

@@ -7,6 +7,7 @@
 #include "coe/coe_application.hpp"
 #include "common/file.hpp"
 #include "device/from_sii.hpp"
+#include "device/hiwin_d2.hpp"
 #include "device/simple_devices.hpp"
 #include "esi/esi_reader.hpp"
 #include "protocol/sii.hpp"
@@ -109,6 +110,10 @@ Made make_device(const DeviceEntry& e, const std::string& at, const std::string&
             d = device::default_drive();
             drive = true;
             break;
+        case Source::HiwinD2:
+            d = device::hiwin_d2();
+            drive = true;
+            break;
         case Source::Esi: {
             esi::DeviceSelector sel;
             sel.type = e.esi_type;
@@ -120,6 +125,9 @@ Made make_device(const DeviceEntry& e, const std::string& at, const std::string&
                     notes.push_back(at + e.path + ": " + n);
                 for (const auto& n : esi::complete_for_emulation(r.desc))
                     notes.push_back(at + e.path + ": " + n);
+                if (auto b = device::adopt_builtin_rules(r.desc))
+                    notes.push_back(at + e.path + ": the built-in " + std::string(*b) +
+                                    " by its identity: its behaviour and PDO rules");
                 d = std::move(r.desc);
             } catch (const std::exception& x) {
                 throw NetworkFileError(at + e.path + ": " + x.what());
@@ -192,7 +200,9 @@ Made make_device(const DeviceEntry& e, const std::string& at, const std::string&
     apply_quirks(d, e, quirks_at);
     m.model = esc::DeviceModel::of(d);
     m.esc.port_descriptor = descriptor(
-        default_ports(e.source), e.source == Source::Drive || e.source == Source::Esi ? kPortMii : kPortEbus);
+        default_ports(e.source),
+        e.source == Source::Drive || e.source == Source::HiwinD2 || e.source == Source::Esi ? kPortMii
+                                                                                            : kPortEbus);
     if (drive)
         m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
             return std::unique_ptr<esc::Application>(std::make_unique<cia402::Drive>(dd, objects));

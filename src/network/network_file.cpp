@@ -28,7 +28,7 @@ struct Kind {
 constexpr Kind kBuiltIn[] = {
     {"drive", Source::Drive},          {"coupler", Source::Coupler},        {"junction", Source::Junction},
     {"digital-in", Source::DigitalIn}, {"digital-out", Source::DigitalOut}, {"analog-in", Source::AnalogIn},
-    {"analog-out", Source::AnalogOut},
+    {"analog-out", Source::AnalogOut}, {"hiwin-d2", Source::HiwinD2},
 };
 
 bool is_io(Source s) {
@@ -337,6 +337,8 @@ std::string_view to_string(Source s) noexcept {
     switch (s) {
         case Source::Drive:
             return "drive";
+        case Source::HiwinD2:
+            return "hiwin-d2";
         case Source::Esi:
             return "esi";
         case Source::Sii:

@@ -38,6 +38,7 @@ namespace vecat::network {
 // Where a device comes from.
 enum class Source : std::uint8_t {
     Drive,       // the built-in vecat CiA 402 drive
+    HiwinD2,     // built in: the HIWIN D2 CoE drive (device/hiwin_d2.hpp) on the vecat drive core
     Esi,         // a device of a vendor ESI file (type / product / revision)
     Sii,         // a raw SII EEPROM dump, with the process data its categories describe
     Coupler,     // built in: EK1100-like coupler without PDI

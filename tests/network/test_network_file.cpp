@@ -197,6 +197,31 @@ devices:
     EXPECT_EQ(app.outputs()[0], 0xA5);
 }
 
+// A network of mixed drives: the vecat drive and the HIWIN D2 (device: hiwin-d2), each with its own
+// identity and default process data, on the same line to OP.
+TEST(Network, TheHiwinD2BesideTheVecatDrive) {
+    Served s(R"(
+devices:
+  - name: vecat
+    device: drive
+  - name: d2
+    device: hiwin-d2
+)");
+    ASSERT_EQ(s.built.segment->size(), 2u);
+    EXPECT_EQ(parse_network("devices:\n  - name: d2\n    device: hiwin-d2\n", "n.yaml").devices.at(0).source,
+              Source::HiwinD2);
+    std::string why;
+    ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
+    const auto& sl = s.master.slaves();
+    EXPECT_EQ(sl[0].sii.identity.vendor_id, 0x00000A3Cu);
+    EXPECT_EQ(sl[1].sii.identity.vendor_id, 0x0000AAAAu);
+    EXPECT_EQ(sl[1].sii.identity.product_code, 3u);
+    EXPECT_EQ(sl[1].out_bytes, 7u);  // HIWIN guide 7: ControlWord, Target Position, Mode of operation
+    EXPECT_EQ(sl[1].in_bytes, 10u);  // StatusWord, Position Actual Value, Velocity Actual Value
+    for (int i = 0; i < 10; ++i)
+        ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
+}
+
 TEST(Network, ADeviceFromAnSiiDumpServesTheDumpAndItsProcessData) {
     VECAT_REQUIRE_SHARED_DATA("sii");
     const std::string sii = test::shared_data("sii/");
