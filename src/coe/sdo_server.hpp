@@ -42,6 +42,9 @@ class SdoServer final : public esc::MailboxProtocol {
     protocol::MailboxType type() const override { return protocol::MailboxType::CoE; }
     void handle(const protocol::MailboxHeader& h, ConstBytes payload, esc::MailboxReplySink& out) override;
     void poll(esc::MailboxReplySink& out) override;
+    bool has_output() const override {
+        return emcy_count_ > 0 || std::holds_alternative<InfoResponse>(transfer_);
+    }
     void reset() override;
     // The time (ns, the segment's clock): a transfer left alone for kSdoTimeoutNs is dropped.
     void tick(std::uint64_t now_ns);

@@ -32,6 +32,7 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     halted_.push_back(0);
     last_run_ns_.push_back(0);
     deadline_ns_.push_back(0);
+    pulse_ns_.push_back(0);
     latched_.push_back(0);
     // A line: port 0 of the new slave to port 1 of the one before.
     parent_.push_back(static_cast<int>(i) - 1);
@@ -236,6 +237,7 @@ void Segment::set_firmware_halted(std::size_t i, bool halted) {
     if (i >= halted_.size()) return;
     halted_[i] = halted ? 1 : 0;
     deadline_ns_[i] = 0;
+    pulse_ns_[i] = 0;
 }
 
 bool Segment::restart_slave(std::size_t i) {
@@ -249,6 +251,7 @@ bool Segment::restart_slave(std::size_t i) {
     auto fresh = std::make_unique<Slave>(model, cfg, factory(*model.description));
     slaves_[i] = std::move(fresh);
     deadline_ns_[i] = 0;
+    pulse_ns_[i] = 0;
     ++slaves_epoch_;
     slaves_[i]->esc().set_port_change_counter(&port_epoch_);
     ++port_epoch_;
@@ -257,6 +260,7 @@ bool Segment::restart_slave(std::size_t i) {
 }
 
 void Segment::deliver_coupled_pulses(std::uint64_t now_ns) {
+    if (coupled_epoch_ == slaves_epoch_ && coupled_.empty()) return;
     if (coupled_epoch_ != slaves_epoch_) {
         coupled_epoch_ = slaves_epoch_;
         coupled_.clear();
@@ -437,6 +441,7 @@ void Segment::run(std::size_t k, std::uint64_t now_ns) {
     // A halted firmware has no deadlines but the silicon's watchdog.
     deadline_ns_[k] = halted_[k] ? slaves_[k]->esc().watchdog_deadline_ns()
                                  : slaves_[k]->next_event_ns(now_ns + local_cycle_ns_);
+    pulse_ns_[k] = slaves_[k]->esc().dc().next_pulse_host_ns();
 }
 
 void Segment::tick(std::uint64_t now_ns) {
@@ -447,8 +452,9 @@ void Segment::catch_up(std::uint64_t now_ns) {
     deliver_coupled_pulses(now_ns);
     for (std::size_t k = 0; k < slaves_.size(); ++k) {
         const std::uint64_t last = last_run_ns_[k];
+        // (The pulse as of the last run, with a microsecond to spare for the drift of the DC unit since.)
         if (last == 0 || now_ns < last || now_ns - last >= local_cycle_ns_ || deadline_ns_[k] <= now_ns ||
-            slaves_[k]->esc().dc().next_pulse_host_ns() <= now_ns)
+            pulse_ns_[k] <= now_ns + 1'000)
             run(k, now_ns);
     }
 }

@@ -278,6 +278,8 @@ class Segment {
     // frame. A frame that moves a deadline earlier (a shorter watchdog) addresses the slave, which then runs
     // after the frame and looks again.
     std::vector<std::uint64_t> deadline_ns_;
+    // Per slave: its next SYNC pulse as of its last run (a frame that starts or moves SYNC addresses it).
+    std::vector<std::uint64_t> pulse_ns_;
     std::uint64_t local_cycle_ns_ = 250'000;
     // Before a frame: the slaves whose state the frame must find current (see set_local_cycle_ns).
     void catch_up(std::uint64_t now_ns);

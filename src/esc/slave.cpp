@@ -491,11 +491,11 @@ void Slave::service_mailbox() {
 void Slave::post_replies() {
     if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0) return;
     if (state_ != AlState::Boot) {
-        if (auto* coe = app_->mailbox_protocol(MailboxType::CoE)) coe->poll(*sink_);
+        if (auto* coe = app_->mailbox_protocol(MailboxType::CoE); coe && coe->has_output()) coe->poll(*sink_);
         for (auto& p : own_protocols_)
-            p->poll(*sink_);
+            if (p->has_output()) p->poll(*sink_);
     }
-    send_pending_replies();
+    if (q_count_ > 0) send_pending_replies();
 }
 
 void Slave::send_pending_replies() {
