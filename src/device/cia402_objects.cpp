@@ -11,19 +11,6 @@ using DT = DataType;
 
 namespace obj = protocol::obj;
 
-template <DT T>
-ObjectDescription var(protocol::ObjectId<T> id, const char* name, std::uint16_t acc, std::int64_t def = 0) {
-    return make_var(id, name, acc, def);
-}
-
-template <DT T>
-ObjectDescription ranged(protocol::ObjectId<T> id, const char* name, std::uint16_t acc, std::int64_t def,
-                         std::int64_t min, std::int64_t max) {
-    auto o = make_var(id, name, acc, def);
-    set_range(o.entries[0], min, max);
-    return o;
-}
-
 ObjectDescription named_array(std::uint16_t index, const char* name, DT t, std::uint16_t acc,
                               std::vector<std::pair<const char*, std::int64_t>> elems) {
     std::vector<std::int64_t> defs;
@@ -79,15 +66,16 @@ std::vector<ObjectDescription> cia402_drive_objects() {
         o.push_back(r);
     }
     // Fault injection: the error code (0x603F) of a fault condition to simulate (0 = none).
-    o.push_back(var(mfr::simulated_fault, "Simulated fault", RWM, 0));
+    o.push_back(make_var(mfr::simulated_fault, "Simulated fault", RWM, 0));
     // TwinCAT NC PTP online changes as manufacturer functions of the profile modes.
-    o.push_back(ranged(mfr::velocity_override, "Velocity override (ppm)", RWM, 1'000'000, 0, 1'000'000));
+    o.push_back(
+        make_ranged_var(mfr::velocity_override, "Velocity override (ppm)", RWM, 1'000'000, 0, 1'000'000));
     o.push_back(make_record(mfr::position_compensation::index, "Position compensation",
                             {make_entry(mfr::position_compensation::distance, "Compensation distance", RW, 0),
                              make_entry(mfr::position_compensation::length, "Compensation length", RW, 0),
                              make_entry(mfr::position_compensation::start, "Start compensation", RW, 0)}));
-    o.push_back(var(mfr::drive_temperature, "Drive temperature (0.1 C)", ROM, 350));
-    o.push_back(var(mfr::dc_bus_voltage, "DC bus voltage (0.1 V)", ROM, 3250));
+    o.push_back(make_var(mfr::drive_temperature, "Drive temperature (0.1 C)", ROM, 350));
+    o.push_back(make_var(mfr::dc_bus_voltage, "DC bus voltage (0.1 V)", ROM, 3250));
     {
         auto s = make_string_var(mfr::user_label.index, "User label", "axis");
         s.entries[0].bit_length = 8 * 32;
@@ -113,55 +101,56 @@ std::vector<ObjectDescription> cia402_drive_objects() {
     }
 
     // Device control (CiA 402 part 2, section 8).
-    o.push_back(var(obj::error_code, "Error code", ROM));
-    o.push_back(var(obj::controlword, "Controlword", RWM));
-    o.push_back(var(obj::statusword, "Statusword", ROM));
-    o.push_back(ranged(obj::quick_stop_option_code, "Quick stop option code", RW, 2, 0, 8));
-    o.push_back(ranged(obj::shutdown_option_code, "Shutdown option code", RW, 0, -1, 1));
-    o.push_back(ranged(obj::disable_operation_option_code, "Disable operation option code", RW, 1, -1, 1));
-    o.push_back(ranged(obj::halt_option_code, "Halt option code", RW, 1, 1, 4));
-    o.push_back(ranged(obj::fault_reaction_option_code, "Fault reaction option code", RW, 2, 0, 4));
-    o.push_back(ranged(obj::modes_of_operation, "Modes of operation", RWM, 8, -128, 127));
-    o.push_back(var(obj::modes_of_operation_display, "Modes of operation display", ROM));
+    o.push_back(make_var(obj::error_code, "Error code", ROM));
+    o.push_back(make_var(obj::controlword, "Controlword", RWM));
+    o.push_back(make_var(obj::statusword, "Statusword", ROM));
+    o.push_back(make_ranged_var(obj::quick_stop_option_code, "Quick stop option code", RW, 2, 0, 8));
+    o.push_back(make_ranged_var(obj::shutdown_option_code, "Shutdown option code", RW, 0, -1, 1));
+    o.push_back(
+        make_ranged_var(obj::disable_operation_option_code, "Disable operation option code", RW, 1, -1, 1));
+    o.push_back(make_ranged_var(obj::halt_option_code, "Halt option code", RW, 1, 1, 4));
+    o.push_back(make_ranged_var(obj::fault_reaction_option_code, "Fault reaction option code", RW, 2, 0, 4));
+    o.push_back(make_ranged_var(obj::modes_of_operation, "Modes of operation", RWM, 8, -128, 127));
+    o.push_back(make_var(obj::modes_of_operation_display, "Modes of operation display", ROM));
 
     // Position control function and factors.
-    o.push_back(var(obj::position_demand_value, "Position demand value", ROM));
-    o.push_back(var(obj::position_actual_internal_value, "Position actual internal value", ROM));
-    o.push_back(var(obj::position_actual_value, "Position actual value", ROM));
-    o.push_back(var(obj::following_error_window, "Following error window", RWM, 100000));
-    o.push_back(var(obj::following_error_time_out, "Following error time out", RW, 10));
-    o.push_back(var(obj::position_window, "Position window", RWM, 100));
-    o.push_back(var(obj::position_window_time, "Position window time", RW, 10));
-    o.push_back(var(obj::velocity_demand_value, "Velocity demand value", ROM));
-    o.push_back(var(obj::velocity_actual_value, "Velocity actual value", ROM));
-    o.push_back(var(obj::velocity_window, "Velocity window", RW, 100));
-    o.push_back(var(obj::velocity_window_time, "Velocity window time", RW, 10));
-    o.push_back(var(obj::velocity_threshold, "Velocity threshold", RW, 10));
-    o.push_back(var(obj::velocity_threshold_time, "Velocity threshold time", RW, 10));
-    o.push_back(var(obj::target_torque, "Target torque", RWM));
-    o.push_back(var(obj::max_torque, "Max torque", RWM, 3000));
-    o.push_back(var(obj::torque_demand, "Torque demand", ROM));
-    o.push_back(var(obj::motor_rated_current, "Motor rated current", RW, 3000));
-    o.push_back(var(obj::motor_rated_torque, "Motor rated torque", RW, 1270));
-    o.push_back(var(obj::torque_actual_value, "Torque actual value", ROM));
-    o.push_back(var(obj::current_actual_value, "Current actual value", ROM));
-    o.push_back(var(obj::target_position, "Target position", RWM));
+    o.push_back(make_var(obj::position_demand_value, "Position demand value", ROM));
+    o.push_back(make_var(obj::position_actual_internal_value, "Position actual internal value", ROM));
+    o.push_back(make_var(obj::position_actual_value, "Position actual value", ROM));
+    o.push_back(make_var(obj::following_error_window, "Following error window", RWM, 100000));
+    o.push_back(make_var(obj::following_error_time_out, "Following error time out", RW, 10));
+    o.push_back(make_var(obj::position_window, "Position window", RWM, 100));
+    o.push_back(make_var(obj::position_window_time, "Position window time", RW, 10));
+    o.push_back(make_var(obj::velocity_demand_value, "Velocity demand value", ROM));
+    o.push_back(make_var(obj::velocity_actual_value, "Velocity actual value", ROM));
+    o.push_back(make_var(obj::velocity_window, "Velocity window", RW, 100));
+    o.push_back(make_var(obj::velocity_window_time, "Velocity window time", RW, 10));
+    o.push_back(make_var(obj::velocity_threshold, "Velocity threshold", RW, 10));
+    o.push_back(make_var(obj::velocity_threshold_time, "Velocity threshold time", RW, 10));
+    o.push_back(make_var(obj::target_torque, "Target torque", RWM));
+    o.push_back(make_var(obj::max_torque, "Max torque", RWM, 3000));
+    o.push_back(make_var(obj::torque_demand, "Torque demand", ROM));
+    o.push_back(make_var(obj::motor_rated_current, "Motor rated current", RW, 3000));
+    o.push_back(make_var(obj::motor_rated_torque, "Motor rated torque", RW, 1270));
+    o.push_back(make_var(obj::torque_actual_value, "Torque actual value", ROM));
+    o.push_back(make_var(obj::current_actual_value, "Current actual value", ROM));
+    o.push_back(make_var(obj::target_position, "Target position", RWM));
     o.push_back(named_array(obj::position_range_limit::index, "Position range limit", DT::Integer32, RW,
                             {{"Min position range limit", kI32Min}, {"Max position range limit", kI32Max}}));
-    o.push_back(var(obj::home_offset, "Home offset", RWM));
+    o.push_back(make_var(obj::home_offset, "Home offset", RWM));
     o.push_back(named_array(obj::software_position_limit::index, "Software position limit", DT::Integer32, RW,
                             {{"Min position limit", kI32Min}, {"Max position limit", kI32Max}}));
-    o.push_back(var(obj::polarity, "Polarity", RW));
-    o.push_back(var(obj::max_profile_velocity, "Max profile velocity", RWM, 10'000'000));
-    o.push_back(var(obj::max_motor_speed, "Max motor speed", RW, 5000));
-    o.push_back(var(obj::profile_velocity, "Profile velocity", RWM, 1'000'000));
-    o.push_back(var(obj::end_velocity, "End velocity", RWM));
-    o.push_back(var(obj::profile_acceleration, "Profile acceleration", RWM, 10'000'000));
-    o.push_back(var(obj::profile_deceleration, "Profile deceleration", RWM, 10'000'000));
-    o.push_back(var(obj::quick_stop_deceleration, "Quick stop deceleration", RWM, 50'000'000));
-    o.push_back(ranged(obj::motion_profile_type, "Motion profile type", RW, 0, -1, 3));
-    o.push_back(var(obj::torque_slope, "Torque slope", RWM, 10000));
-    o.push_back(var(obj::torque_profile_type, "Torque profile type", RW, 0));
+    o.push_back(make_var(obj::polarity, "Polarity", RW));
+    o.push_back(make_var(obj::max_profile_velocity, "Max profile velocity", RWM, 10'000'000));
+    o.push_back(make_var(obj::max_motor_speed, "Max motor speed", RW, 5000));
+    o.push_back(make_var(obj::profile_velocity, "Profile velocity", RWM, 1'000'000));
+    o.push_back(make_var(obj::end_velocity, "End velocity", RWM));
+    o.push_back(make_var(obj::profile_acceleration, "Profile acceleration", RWM, 10'000'000));
+    o.push_back(make_var(obj::profile_deceleration, "Profile deceleration", RWM, 10'000'000));
+    o.push_back(make_var(obj::quick_stop_deceleration, "Quick stop deceleration", RWM, 50'000'000));
+    o.push_back(make_ranged_var(obj::motion_profile_type, "Motion profile type", RW, 0, -1, 3));
+    o.push_back(make_var(obj::torque_slope, "Torque slope", RWM, 10000));
+    o.push_back(make_var(obj::torque_profile_type, "Torque profile type", RW, 0));
     o.push_back(named_array(obj::position_encoder_resolution::index, "Position encoder resolution",
                             DT::Unsigned32, RW, {{"Encoder increments", 1 << 20}, {"Motor revolutions", 1}}));
     o.push_back(named_array(obj::gear_ratio::index, "Gear ratio", DT::Unsigned32, RW,
@@ -170,24 +159,24 @@ std::vector<ObjectDescription> cia402_drive_objects() {
                             {{"Feed", 1 << 20}, {"Shaft revolutions", 1}}));
 
     // Homing.
-    o.push_back(ranged(obj::homing_method, "Homing method", RWM, 35, -128, 127));
+    o.push_back(make_ranged_var(obj::homing_method, "Homing method", RWM, 35, -128, 127));
     o.push_back(
         named_array(obj::homing_speeds::index, "Homing speeds", DT::Unsigned32, RW,
                     {{"Speed during search for switch", 100000}, {"Speed during search for zero", 10000}}));
-    o.push_back(var(obj::homing_acceleration, "Homing acceleration", RWM, 1'000'000));
+    o.push_back(make_var(obj::homing_acceleration, "Homing acceleration", RWM, 1'000'000));
     o.push_back(named_array(obj::profile_jerk::index, "Profile jerk", DT::Unsigned32, RW,
                             {{"Profile jerk 1", 1'000'000'000}}));
 
     // Cyclic modes: offsets, touch probe, interpolation period.
-    o.push_back(var(obj::position_offset, "Position offset", RWM));
-    o.push_back(var(obj::velocity_offset, "Velocity offset", RWM));
-    o.push_back(var(obj::torque_offset, "Torque offset", RWM));
-    o.push_back(var(obj::touch_probe_function, "Touch probe function", RWM));
-    o.push_back(var(obj::touch_probe_status, "Touch probe status", ROM));
-    o.push_back(var(obj::touch_probe_1_positive_value, "Touch probe 1 positive value", ROM));
-    o.push_back(var(obj::touch_probe_1_negative_value, "Touch probe 1 negative value", ROM));
-    o.push_back(var(obj::touch_probe_2_positive_value, "Touch probe 2 positive value", ROM));
-    o.push_back(var(obj::touch_probe_2_negative_value, "Touch probe 2 negative value", ROM));
+    o.push_back(make_var(obj::position_offset, "Position offset", RWM));
+    o.push_back(make_var(obj::velocity_offset, "Velocity offset", RWM));
+    o.push_back(make_var(obj::torque_offset, "Torque offset", RWM));
+    o.push_back(make_var(obj::touch_probe_function, "Touch probe function", RWM));
+    o.push_back(make_var(obj::touch_probe_status, "Touch probe status", ROM));
+    o.push_back(make_var(obj::touch_probe_1_positive_value, "Touch probe 1 positive value", ROM));
+    o.push_back(make_var(obj::touch_probe_1_negative_value, "Touch probe 1 negative value", ROM));
+    o.push_back(make_var(obj::touch_probe_2_positive_value, "Touch probe 2 positive value", ROM));
+    o.push_back(make_var(obj::touch_probe_2_negative_value, "Touch probe 2 negative value", ROM));
     {
         auto r = make_record(
             obj::interpolation_time_period::index, "Interpolation time period",
@@ -196,18 +185,18 @@ std::vector<ObjectDescription> cia402_drive_objects() {
         set_range(r.entries[2], -6, 63);
         o.push_back(r);
     }
-    o.push_back(var(obj::max_acceleration, "Max acceleration", RW, 100'000'000));
-    o.push_back(var(obj::max_deceleration, "Max deceleration", RW, 100'000'000));
-    o.push_back(var(obj::positive_torque_limit_value, "Positive torque limit value", RWM, 3000));
-    o.push_back(var(obj::negative_torque_limit_value, "Negative torque limit value", RWM, 3000));
-    o.push_back(var(obj::following_error_actual_value, "Following error actual value", ROM));
-    o.push_back(var(obj::position_demand_internal_value, "Position demand internal value", ROM));
-    o.push_back(var(obj::digital_inputs, "Digital inputs", ROM));
+    o.push_back(make_var(obj::max_acceleration, "Max acceleration", RW, 100'000'000));
+    o.push_back(make_var(obj::max_deceleration, "Max deceleration", RW, 100'000'000));
+    o.push_back(make_var(obj::positive_torque_limit_value, "Positive torque limit value", RWM, 3000));
+    o.push_back(make_var(obj::negative_torque_limit_value, "Negative torque limit value", RWM, 3000));
+    o.push_back(make_var(obj::following_error_actual_value, "Following error actual value", ROM));
+    o.push_back(make_var(obj::position_demand_internal_value, "Position demand internal value", ROM));
+    o.push_back(make_var(obj::digital_inputs, "Digital inputs", ROM));
     o.push_back(named_array(obj::digital_outputs::index, "Digital outputs", DT::Unsigned32, RWM,
                             {{"Physical outputs", 0}, {"Bit mask", 0}}));
-    o.push_back(var(obj::target_velocity, "Target velocity", RWM));
+    o.push_back(make_var(obj::target_velocity, "Target velocity", RWM));
     // Supported drive modes: PP (bit 0), PV (2), PT (3), HM (5), CSP (7), CSV (8), CST (9).
-    o.push_back(var(obj::supported_drive_modes, "Supported drive modes", a::RO, 0x000003AD));
+    o.push_back(make_var(obj::supported_drive_modes, "Supported drive modes", a::RO, 0x000003AD));
     return o;
 }
 

@@ -31,19 +31,6 @@ constexpr std::uint16_t ROM = a::TxMap;  // RO, PDO mapping "O"
 constexpr std::int64_t kI32Max = 2147483647;
 constexpr std::int64_t kI32Min = -kI32Max - 1;
 
-template <DT T>
-ObjectDescription var(protocol::ObjectId<T> id, const char* name, std::uint16_t acc, std::int64_t def = 0) {
-    return make_var(id, name, acc, def);
-}
-
-template <DT T>
-ObjectDescription ranged(protocol::ObjectId<T> id, const char* name, std::uint16_t acc, std::int64_t def,
-                         std::int64_t min, std::int64_t max) {
-    auto o = make_var(id, name, acc, def);
-    set_range(o.entries[0], min, max);
-    return o;
-}
-
 ObjectDescription real(protocol::ObjectId<DT::Real32> id, const char* name, std::uint16_t acc, double def,
                        std::optional<std::pair<double, double>> range = std::nullopt) {
     auto o = make_var(id.index, name, DT::Real32, acc);
@@ -68,63 +55,65 @@ ObjectDescription pair_array(std::uint16_t index, const char* name, DT t,
 // 3.6, 3.7: the manufacturer objects.
 void manufacturer_objects(std::vector<ObjectDescription>& o) {
     namespace h = hiwin;
-    o.push_back(ranged(h::motor_type, "Motor type", RO, 2, 0, 2));  // the emulated motor: AC servo motor
-    o.push_back(var(h::velocity_encoder_resolution, "Encoder Resolution of Velocity Loop", RO, 1 << 20));
-    o.push_back(var(h::position_encoder_resolution, "Encoder Resolution of Position Loop", RO, 1 << 20));
-    o.push_back(var(h::screw_pitch, "Screw Pitch", RO, 0));
-    o.push_back(var(h::input_function, "Input Function", RWM, 0));
-    o.push_back(var(h::index_signal, "Index Signal", RO, 0));
-    o.push_back(var(h::latched_index_position, "Latched Index Position", ROM, 0));
-    o.push_back(real(h::motor_actual_current, "Motor actual current", ROM, 0.0));
-    o.push_back(ranged(h::second_encoder, "Use the 2nd linear digital encoder", RO, 0, 0, 1));
     o.push_back(
-        ranged(h::software_limit_protection, "Enable software position limit protection", RW, 1, 0, 1));
-    o.push_back(ranged(h::hardware_limit_protection, "Enable hardware limit protection", RW, 1, 0, 1));
+        make_ranged_var(h::motor_type, "Motor type", RO, 2, 0, 2));  // the emulated motor: AC servo motor
+    o.push_back(make_var(h::velocity_encoder_resolution, "Encoder Resolution of Velocity Loop", RO, 1 << 20));
+    o.push_back(make_var(h::position_encoder_resolution, "Encoder Resolution of Position Loop", RO, 1 << 20));
+    o.push_back(make_var(h::screw_pitch, "Screw Pitch", RO, 0));
+    o.push_back(make_var(h::input_function, "Input Function", RWM, 0));
+    o.push_back(make_var(h::index_signal, "Index Signal", RO, 0));
+    o.push_back(make_var(h::latched_index_position, "Latched Index Position", ROM, 0));
+    o.push_back(real(h::motor_actual_current, "Motor actual current", ROM, 0.0));
+    o.push_back(make_ranged_var(h::second_encoder, "Use the 2nd linear digital encoder", RO, 0, 0, 1));
+    o.push_back(make_ranged_var(h::software_limit_protection, "Enable software position limit protection", RW,
+                                1, 0, 1));
+    o.push_back(
+        make_ranged_var(h::hardware_limit_protection, "Enable hardware limit protection", RW, 1, 0, 1));
     o.push_back(real(h::common_gain, "Common gain (CG:0.01~1.0)", RW, 0.3, std::pair{0.01, 1.0}));
     o.push_back(real(h::velocity_gain, "Velocity proportional gain", RW, 0.001));
-    o.push_back(ranged(h::multi_turn_reset, "Multi turn encoder reset flag", RW, 0, 0, 2));
-    o.push_back(var(h::error_events_1, "Drive Error Events 1", RO, 0));
-    o.push_back(var(h::error_events_2, "Drive Error Events 2", RO, 0));
+    o.push_back(make_ranged_var(h::multi_turn_reset, "Multi turn encoder reset flag", RW, 0, 0, 2));
+    o.push_back(make_var(h::error_events_1, "Drive Error Events 1", RO, 0));
+    o.push_back(make_var(h::error_events_2, "Drive Error Events 2", RO, 0));
 }
 
 // 3.5 (with the defaults of 9.3 and 9.4): the CiA 402 objects in HIWIN's types.
 void cia402_objects(std::vector<ObjectDescription>& o) {
-    o.push_back(var(obj::controlword, "ControlWord", RWM));
-    o.push_back(var(obj::statusword, "StatusWord", ROM));
-    o.push_back(var(obj::modes_of_operation, "Mode of operation", RWM, 8));
-    o.push_back(var(obj::modes_of_operation_display, "Mode of operation display", ROM));
-    o.push_back(var(obj::position_actual_internal_value, "Position Actual Internal Value", ROM));
-    o.push_back(var(obj::position_actual_value, "Position Actual Value", ROM));
-    o.push_back(var(obj::following_error_window, "Following Error Window", RW, 100000));
-    o.push_back(var(obj::velocity_actual_value, "Velocity Actual Value", ROM));
-    o.push_back(ranged(obj::target_torque, "Target Torque", RWM, 0, -1000, 1000));
-    o.push_back(var(obj::motor_rated_current, "Continuous Current of Motor (mA)", RW, 3000));
-    o.push_back(var(obj::current_actual_value, "Current Feedback of Motor (0.1%)", ROM));
-    o.push_back(var(obj::target_position, "Target Position", RWM));
-    o.push_back(var(obj::home_offset, "Home offset", RW));
+    o.push_back(make_var(obj::controlword, "ControlWord", RWM));
+    o.push_back(make_var(obj::statusword, "StatusWord", ROM));
+    o.push_back(make_var(obj::modes_of_operation, "Mode of operation", RWM, 8));
+    o.push_back(make_var(obj::modes_of_operation_display, "Mode of operation display", ROM));
+    o.push_back(make_var(obj::position_actual_internal_value, "Position Actual Internal Value", ROM));
+    o.push_back(make_var(obj::position_actual_value, "Position Actual Value", ROM));
+    o.push_back(make_var(obj::following_error_window, "Following Error Window", RW, 100000));
+    o.push_back(make_var(obj::velocity_actual_value, "Velocity Actual Value", ROM));
+    o.push_back(make_ranged_var(obj::target_torque, "Target Torque", RWM, 0, -1000, 1000));
+    o.push_back(make_var(obj::motor_rated_current, "Continuous Current of Motor (mA)", RW, 3000));
+    o.push_back(make_var(obj::current_actual_value, "Current Feedback of Motor (0.1%)", ROM));
+    o.push_back(make_var(obj::target_position, "Target Position", RWM));
+    o.push_back(make_var(obj::home_offset, "Home offset", RW));
     o.push_back(pair_array(obj::software_position_limit::index, "Software Position Limit", DT::Integer32,
                            {"Minimum Position Limit", kI32Min}, {"Maximum Position Limit", kI32Max}));
-    o.push_back(var(obj::max_profile_velocity, "Maximum Profile Velocity", RW, 10'000'000));
-    o.push_back(var(obj::profile_velocity, "Profile Velocity", RW, 1'000'000));
-    o.push_back(var(obj::profile_acceleration, "Profile Acceleration", RW, 10'000'000));
-    o.push_back(var(obj::profile_deceleration, "Profile Deceleration", RW, 10'000'000));
-    o.push_back(var(obj::quick_stop_deceleration, "Quick Stop Deceleration", RWM, 50'000'000));
+    o.push_back(make_var(obj::max_profile_velocity, "Maximum Profile Velocity", RW, 10'000'000));
+    o.push_back(make_var(obj::profile_velocity, "Profile Velocity", RW, 1'000'000));
+    o.push_back(make_var(obj::profile_acceleration, "Profile Acceleration", RW, 10'000'000));
+    o.push_back(make_var(obj::profile_deceleration, "Profile Deceleration", RW, 10'000'000));
+    o.push_back(make_var(obj::quick_stop_deceleration, "Quick Stop Deceleration", RWM, 50'000'000));
     // 9.3: "The unit is 0.1%/sec ... and the default value is 1000", range 0~4294967295.
-    o.push_back(var(obj::torque_slope, "Torque Slope", RWM, 1000));
+    o.push_back(make_var(obj::torque_slope, "Torque Slope", RWM, 1000));
     // 9.4: "Drive supports 8 kinds of CiA402 homing methods", value 0.
-    o.push_back(var(hiwin::homing_method, "Homing Method", RW, 0));
+    o.push_back(make_var(hiwin::homing_method, "Homing Method", RW, 0));
     {
         auto h =
             pair_array(obj::homing_speeds::index, "Homing Speeds", DT::Unsigned32,
                        {"Speed during search for switch", 100000}, {"Speed during search for zero", 10000});
         o.push_back(h);
     }
-    o.push_back(var(obj::homing_acceleration, "Homing Acceleration", RW, 1'000'000));
-    o.push_back(ranged(obj::velocity_offset, "Velocity Offset", RWM, 0, -1000, 1000));
-    o.push_back(ranged(obj::torque_offset, "Torque Offset", RWM, 0, -1000, 1000));
-    o.push_back(var(obj::touch_probe_function, "Touch Probe Function", RWM));
-    o.push_back(var(hiwin::touch_probe_status, "Touch Probe Status", ROM));
-    o.push_back(var(obj::touch_probe_1_positive_value, "Touch Probe 1 Position Value", ROM));
+    o.push_back(make_var(obj::homing_acceleration, "Homing Acceleration", RW, 1'000'000));
+    o.push_back(make_ranged_var(obj::velocity_offset, "Velocity Offset", RWM, 0, -1000, 1000));
+    o.push_back(make_ranged_var(obj::torque_offset, "Torque Offset", RWM, 0, -1000, 1000));
+    o.push_back(make_var(obj::touch_probe_function, "Touch Probe Function", RWM));
+    o.push_back(make_var(hiwin::touch_probe_status, "Touch Probe Status", ROM));
+    o.push_back(make_var(obj::touch_probe_1_positive_value, "Touch Probe 1 Position Value", ROM));
     {
         // "Highest sub-index supported INT8 RO 1", "Interpolation time period UINT16 RW 8" (62.5 us units,
         // 9.1.2: 1 ms is 16, 500 us is 8).
@@ -134,12 +123,12 @@ void cia402_objects(std::vector<ObjectDescription>& o) {
         r.entries[0] = make_entry(0, "Highest sub-index supported", DT::Integer8, RO, 1);
         o.push_back(r);
     }
-    o.push_back(var(obj::following_error_actual_value, "Following Error Actual Value", ROM));
-    o.push_back(var(obj::position_demand_internal_value, "Position Demand Internal Value", ROM));
-    o.push_back(var(obj::digital_inputs, "Digital Inputs", ROM));
-    o.push_back(var(hiwin::target_velocity, "Target Velocity", RWM));
+    o.push_back(make_var(obj::following_error_actual_value, "Following Error Actual Value", ROM));
+    o.push_back(make_var(obj::position_demand_internal_value, "Position Demand Internal Value", ROM));
+    o.push_back(make_var(obj::digital_inputs, "Digital Inputs", ROM));
+    o.push_back(make_var(hiwin::target_velocity, "Target Velocity", RWM));
     // "Supported Drive Mode UINT32 RO 0x3AF".
-    o.push_back(var(obj::supported_drive_modes, "Supported Drive Mode", RO, 0x3AF));
+    o.push_back(make_var(obj::supported_drive_modes, "Supported Drive Mode", RO, 0x3AF));
 }
 
 }  // namespace

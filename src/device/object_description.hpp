@@ -125,5 +125,13 @@ std::string subindex_name(unsigned sub);
 
 // Sets minimum and maximum of an entry from integers (encoded in the entry's type).
 void set_range(EntryDescription& e, std::int64_t min, std::int64_t max);
+// A VAR of a catalogue object with its value range.
+template <DataType T>
+ObjectDescription make_ranged_var(protocol::ObjectId<T> id, std::string name, std::uint16_t access,
+                                  std::int64_t default_value, std::int64_t min, std::int64_t max) {
+    auto o = make_var(id, std::move(name), access, default_value);
+    set_range(o.entries[0], min, max);
+    return o;
+}
 
 }  // namespace vecat::device
