@@ -93,7 +93,7 @@ class Segment {
     // ago runs, as do the slaves with a SYNC pulse or a deadline due, so that the frame reads what a timer
     // at the local cycle would have left (a SYNC pulse is taken at its own time, whenever the run is). Only
     // deadlines need a run on time: next_firmware_ns() is the earliest, and tick() runs them. A server then
-    // wakes up for frames and deadlines, not for every period of every drive (issue: performance).
+    // wakes up for frames and deadlines, not for every period of every drive.
     void set_local_cycle_ns(std::uint64_t ns) { local_cycle_ns_ = ns ? ns : 1; }
     std::uint64_t local_cycle_ns() const { return local_cycle_ns_; }
     // Host time of the earliest deadline of any slave's firmware (DistributedClock::kNever if none).

@@ -1,9 +1,10 @@
-// Firmware when it is needed (Segment::set_local_cycle_ns, Segment::next_firmware_ns; the performance
-// issue): a line whose firmware runs only when a frame comes and at its deadlines gives the master the same
-// bytes, frame by frame, as a line whose firmware also runs at every servo period between frames (what the
-// serve loop did before), for the same frame times. Two drives, in DC-synchronous mode and in free run,
-// through start-up, enabling, motion, SDO traffic, a drive fault with its emergency, and a process data
-// watchdog that expires while the master is silent. Time is driven by hand, so each run is repeatable.
+// Firmware when it is needed (Segment::set_local_cycle_ns, Segment::next_firmware_ns): a line whose firmware
+// runs only when a frame comes and at its deadlines gives the master the same bytes, frame by frame, as a
+// line whose firmware also runs at every servo period between frames (what the serve loop did before), for
+// the same frame times. Two drives coupled by TWINsync, in DC-synchronous mode and in free run, through
+// start-up, enabling, motion, SDO traffic, a drive fault with its emergency, and the master falling silent
+// (the SyncManager watchdog in free run, the sync error in DC mode). Time is driven by hand, so each run is
+// repeatable.
 #include <gtest/gtest.h>
 
 #include <algorithm>
