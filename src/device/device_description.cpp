@@ -72,12 +72,7 @@ DeviceDescription default_drive() {
 
     // SyncManager layout of the HIWIN D2 (drive guide, section 4): mailbox at 0x1800/0x18F6, process
     // data at 0x1000/0x1100.
-    d.sync_managers = {
-        {0x1800, 0x00F6, 0x26, 0x01, SmType::MailboxOut},
-        {0x18F6, 0x00F6, 0x22, 0x01, SmType::MailboxIn},
-        {0x1000, 0x0000, 0x64, 0x01, SmType::Outputs},
-        {0x1100, 0x0000, 0x20, 0x01, SmType::Inputs},
-    };
+    d.sync_managers = hiwin::sync_managers();
     d.fmmus = {FmmuUsage::Outputs, FmmuUsage::Inputs, FmmuUsage::MailboxState};
 
     using DT = DataType;

@@ -146,13 +146,7 @@ DeviceDescription hiwin_d2() {
     // 1: "Mailbox (CoE): SDO Request", "Dynamic PDO mapping".
     d.mailbox_protocols = mbx_proto::CoE;
     d.coe_details = coe_details::Sdo | coe_details::SdoInfo | coe_details::PdoAssign | coe_details::PdoConfig;
-    // 4: SM0 mailbox out 0x1800, SM1 mailbox in 0x18F6, SM2 RxPDO 0x1000, SM3 TxPDO 0x1100.
-    d.sync_managers = {
-        {0x1800, 0x00F6, 0x26, 0x01, SmType::MailboxOut},
-        {0x18F6, 0x00F6, 0x22, 0x01, SmType::MailboxIn},
-        {0x1000, 0x0000, 0x64, 0x01, SmType::Outputs},
-        {0x1100, 0x0000, 0x20, 0x01, SmType::Inputs},
-    };
+    d.sync_managers = hiwin::sync_managers();
     d.fmmus = {FmmuUsage::Outputs, FmmuUsage::Inputs, FmmuUsage::MailboxState};
     // 7: RxPDO mapping objects 0x1600-0x1602 and TxPDO mapping objects 0x1A00-0x1A03, six subindexes each
     // (3.3), of which "the maximum numbers of data object ... are 5"; one PDO per SyncManager (3.4).
@@ -195,6 +189,15 @@ DeviceDescription hiwin_d2() {
     manufacturer_objects(d.objects);
     cia402_objects(d.objects);
     return d;
+}
+
+std::vector<SyncManagerConfig> hiwin::sync_managers() {
+    return {
+        {0x1800, 0x00F6, 0x26, 0x01, SmType::MailboxOut},
+        {0x18F6, 0x00F6, 0x22, 0x01, SmType::MailboxIn},
+        {0x1000, 0x0000, 0x64, 0x01, SmType::Outputs},
+        {0x1100, 0x0000, 0x20, 0x01, SmType::Inputs},
+    };
 }
 
 }  // namespace vecat::device

@@ -20,6 +20,10 @@ inline constexpr std::uint32_t kProductD2 = 0x00000003;
 using protocol::ObjectId;
 using HDT = protocol::DataType;
 
+// 4: SM0 mailbox out 0x1800, SM1 mailbox in 0x18F6, SM2 RxPDO 0x1000, SM3 TxPDO 0x1100 (the process data
+// lengths follow the PDO assignment). The vecat drive keeps the same layout.
+std::vector<SyncManagerConfig> sync_managers();
+
 // 3.5: the CiA 402 objects whose type in HIWIN's table differs from IEC 61800-7-201's.
 inline constexpr ObjectId<HDT::Unsigned16> homing_method{0x6098};            // INT8 in CiA 402
 inline constexpr ObjectId<HDT::Integer32> touch_probe_status{0x60B9};        // UINT16 in CiA 402

@@ -1,6 +1,6 @@
 // ESI toolchain: the generated ESI validates against the ETG schema, a second XML parser (tinyxml2) sees
 // the description in it, generate -> import -> generate is stable, every vendor ESI imports and runs to OP.
-// Long (about 780 lines): the ESI writer, reader and checks share the XML fixtures at the top.
+// Long (about 810 lines): the ESI writer, reader and checks share the XML fixtures at the top.
 #include <gtest/gtest.h>
 #include <tinyxml2.h>
 
