@@ -13,11 +13,13 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <span>
 #include <thread>
 #include <vector>
 
 #include "cia402/drive.hpp"
 #include "cia402/profile_generator.hpp"
+#include "cli/demo_process_data.hpp"
 #include "cli/telemetry_commands.hpp"
 #include "common/bytes.hpp"
 #include "device/device_description.hpp"
@@ -29,6 +31,8 @@
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
+#include "network/build.hpp"
+#include "network/network_file.hpp"
 #include "net/pcapng_writer.hpp"
 #include "net/raw_socket.hpp"
 #include "net/realtime.hpp"
@@ -103,11 +107,6 @@ constexpr std::uint16_t kSwFault = cia::sw::Fault, kSwTargetReached = cia::sw::T
 
 using DriveState = cia::State;
 
-// The state a statusword shows; a pattern CiA 402 does not give reads as a fault.
-DriveState drive_state(std::uint16_t sw) {
-    return cia::decode_state(sw).value_or(DriveState::Fault);
-}
-
 // The demo's short names, in the order of the states.
 const char* short_name(DriveState s) {
     static const char* const kNames[] = {"not ready", "disabled",  "ready",          "switched on",
@@ -115,17 +114,21 @@ const char* short_name(DriveState s) {
     return kNames[static_cast<int>(s)];
 }
 
-// One drive as the master sees it: its outputs and the inputs of the last cycle.
-struct Axis {
-    std::uint16_t controlword = 0;
-    std::int8_t mode = kCsp;
-    std::int32_t target = 0;
-    std::uint16_t statusword = 0;
-    std::int8_t mode_display = 0;
-    std::int32_t position = 0, velocity = 0, following_error = 0;
-    std::uint16_t error_code = 0;
-    DriveState state() const { return drive_state(statusword); }
-};
+// Where the mapping the demo writes to its own drives (kRxPdo, kTxPdo) puts each object.
+DriveLayout fixed_layout(std::size_t slave) {
+    DriveLayout l;
+    l.slave = slave;
+    l.controlword = rx::kControlword;
+    l.mode = rx::kMode;
+    l.target = rx::kTarget;
+    l.statusword = tx::kStatusword;
+    l.mode_display = tx::kMode;
+    l.position = tx::kPosition;
+    l.velocity = tx::kVelocity;
+    l.following_error = tx::kFollowingError;
+    l.error_code = tx::kErrorCode;
+    return l;
+}
 
 // Cycle statistics of the master's loop.
 struct CycleStats {
@@ -144,12 +147,17 @@ struct CycleStats {
 
 class Demo {
   public:
-    explicit Demo(const DemoOptions& o)
+    // network: the network file's devices (--network); empty: a line of o.slaves vecat drives.
+    Demo(const DemoOptions& o, network::BuiltNetwork network)
         : opt_(o),
           dev_(device::default_drive()),
-          gantry_(o.slaves >= 2),
-          seg_(cia402::make_drive_segment(
-              dev_, o.slaves, {}, gantry_ ? cia402::TwinsyncPreset::Gantry : cia402::TwinsyncPreset::None)),
+          on_network_(network.segment != nullptr),
+          gantry_(!on_network_ && o.slaves >= 2),
+          io_bus_(std::move(network.io)),
+          seg_(on_network_ ? std::move(network.segment)
+                           : cia402::make_drive_segment(dev_, o.slaves, {},
+                                                        gantry_ ? cia402::TwinsyncPreset::Gantry
+                                                                : cia402::TwinsyncPreset::None)),
           slave_sock_("vecat-s"),
           master_sock_("vecat-m"),
           pcap_(o.outdir + "/demo.pcapng", "vecat-s"),
@@ -175,10 +183,15 @@ class Demo {
         bool (Demo::*run)();
     };
     static const Phase kPhases[];
+    // On a network file: the drives found are moved, the I/O terminals' outputs written and inputs read back.
+    static const Phase kNetworkPhases[];
+    std::span<const Phase> phases() const;
 
     bool scan();
     bool preop();
     bool map_pdos();
+    bool process_data();  // on a network: the mapping the devices have, the drives among them
+    bool io();
     bool dc();
     bool safeop();
     bool op();
@@ -219,7 +232,9 @@ class Demo {
 
     DemoOptions opt_;
     device::DeviceDescription dev_;
+    bool on_network_;
     bool gantry_;
+    std::shared_ptr<io::IoBus> io_bus_;  // a network's I/O terminals (wires) live as long as its segment
     std::unique_ptr<esc::Segment> seg_;
     net::RawSocket slave_sock_;
     net::RawSocket master_sock_;
@@ -233,6 +248,9 @@ class Demo {
     bool tty_;
 
     std::vector<Axis> axes_;
+    IoExercise io_;
+    bool io_running_ = false;  // the io phase writes the terminals' outputs each cycle
+    unsigned io_step_ = 0;
     AlState al_ = AlState::Init;
     const char* phase_ = "";
     std::string why_;
@@ -263,6 +281,25 @@ const Demo::Phase Demo::kPhases[] = {
     {"init", "SYNC0 off, back to INIT", &Demo::init},
 };
 
+const Demo::Phase Demo::kNetworkPhases[] = {
+    {"scan", "count the slaves, give them station addresses, read their SII, work out the topology",
+     &Demo::scan},
+    {"preop", "mailboxes, INIT -> PREOP", &Demo::preop},
+    {"process-data", "the mapping each device has; the CiA 402 drives among them", &Demo::process_data},
+    {"dc", "distributed clocks: delays, offsets, drift compensation, SYNC0 at 1 ms on the drives", &Demo::dc},
+    {"safeop", "PREOP -> SAFEOP, cyclic frames phase-locked to SYNC0", &Demo::safeop},
+    {"op", "SAFEOP -> OP", &Demo::op},
+    {"enable", "CiA 402: controlword 6, 7, 15 in CSP", &Demo::enable},
+    {"csp-move", "jerk-limited CSP move of every drive, one revolution out and back", &Demo::csp_move},
+    {"io", "a walking bit on the output terminals, the inputs read back", &Demo::io},
+    {"disable", "controlword 6, then 0", &Demo::disable},
+    {"init", "SYNC0 off, back to INIT", &Demo::init},
+};
+
+std::span<const Demo::Phase> Demo::phases() const {
+    return on_network_ ? std::span<const Phase>(kNetworkPhases) : std::span<const Phase>(kPhases);
+}
+
 template <class... Args>
 void Demo::note(fmt::format_string<Args...> f, Args&&... args) {
     if (tty_ && status_shown_) fmt::print("\r\033[2K");
@@ -281,6 +318,7 @@ void Demo::status_line(bool force) {
     for (std::size_t i = 0; i < axes_.size() && i < 2; ++i)
         s += fmt::format(" | d{} {} {}", i + 1, short_name(axes_[i].state()), axes_[i].position);
     if (axes_.size() > 2) s += fmt::format(" | +{} drives", axes_.size() - 2);
+    if (!io_.empty()) s += fmt::format(" | io {} input changes", io_.input_changes());
     s += fmt::format(" | {} cycles, {} misses | rtt {:.0f}/{:.0f} us", stats_.cycles, stats_.misses,
                      stats_.rtt_mean_us(), stats_.rtt_max_us);
     if (stats_.phase_samples)
@@ -308,13 +346,9 @@ bool Demo::cycle() {
     }
     std::this_thread::sleep_until(next_);
 
-    for (std::size_t i = 0; i < axes_.size(); ++i) {
-        auto o = master_.outputs(i);
-        if (o.size() < rx::kSize) continue;
-        st_le16(o.data() + rx::kControlword, axes_[i].controlword);
-        o[rx::kMode] = static_cast<std::uint8_t>(axes_[i].mode);
-        st_le32(o.data() + rx::kTarget, static_cast<std::uint32_t>(axes_[i].target));
-    }
+    for (const auto& a : axes_)
+        a.write_outputs(master_.outputs(a.layout.slave));
+    if (io_running_) io_.write_outputs(master_, io_step_++);
     const auto t0 = Clock::now();
     const auto wkc = master_.exchange_process_data();
     const double rtt = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
@@ -323,16 +357,10 @@ bool Demo::cycle() {
     stats_.rtt_max_us = std::max(stats_.rtt_max_us, rtt);
     const bool ok = wkc && *wkc == master_.expected_wkc();
     if (!ok && al_ == AlState::Op) ++stats_.misses;
-    for (std::size_t i = 0; i < axes_.size(); ++i) {
-        const auto in = master_.inputs(i);
-        if (in.size() < tx::kSize) continue;
-        auto& a = axes_[i];
-        a.statusword = ld_le16(in.data() + tx::kStatusword);
-        a.mode_display = static_cast<std::int8_t>(in[tx::kMode]);
-        a.position = static_cast<std::int32_t>(ld_le32(in.data() + tx::kPosition));
-        a.velocity = static_cast<std::int32_t>(ld_le32(in.data() + tx::kVelocity));
-        a.following_error = static_cast<std::int32_t>(ld_le32(in.data() + tx::kFollowingError));
-        a.error_code = ld_le16(in.data() + tx::kErrorCode);
+    if (wkc) {
+        for (auto& a : axes_)
+            a.read_inputs(master_.inputs(a.layout.slave));
+        io_.read_inputs(master_);
     }
     if (dc_running_ && wkc) {
         // Phase-locked loop on the reference clock's time, read by the FRMW in this frame.
@@ -382,14 +410,23 @@ bool Demo::scan() {
     if (n <= 0) return fail("no slave answered the BRD");
     if (!master_.reset_slaves() || !master_.assign_station_addresses() || !master_.read_slave_information())
         return fail("station addresses or SII could not be read");
-    for (const auto& s : master_.slaves())
+    for (const auto& s : master_.slaves()) {
         note(
             "       slave {} @0x{:04X} \"{}\": vendor 0x{:08X} product 0x{:08X} revision 0x{:08X}, {} FMMUs, "
             "{} SMs, DC {}",
             s.position, s.station, s.sii.device_name(), s.sii.identity.vendor_id, s.sii.identity.product_code,
             s.sii.identity.revision, s.fmmu_count, s.sm_count,
             (s.features & protocol::feature::DcAvailable) ? "yes" : "no");
-    axes_.assign(master_.slaves().size(), Axis{});
+        // A tree: the parent each slave hangs on (from the DL status of every slave, as SOEM computes it).
+        if (on_network_)
+            note("         {}", s.parent < 0 ? std::string("on the master")
+                                             : fmt::format("on slave {} port {}", s.parent, s.parent_port));
+    }
+    if (!on_network_) {
+        axes_.clear();
+        for (std::size_t i = 0; i < master_.slaves().size(); ++i)
+            axes_.push_back(Axis{fixed_layout(i)});
+    }
     return true;
 }
 
@@ -397,6 +434,7 @@ bool Demo::preop() {
     if (!master_.configure_mailboxes()) return fail("mailbox SyncManagers could not be written");
     if (!master_.request_state(AlState::PreOp)) return fail("the slaves refused PREOP");
     set_al(AlState::PreOp);
+    if (on_network_) return true;
     // Drive 1's machine has its home switch at kHomeSwitch; the homing phase searches it.
     if (!sdo(0, mfr::machine::home_switch.index, mfr::machine::home_switch.subindex,
              static_cast<std::uint32_t>(kHomeSwitch), 4) ||
@@ -448,13 +486,50 @@ bool Demo::map_pdos() {
     return true;
 }
 
+bool Demo::process_data() {
+    // The master reads each CoE device's PDO assignment and mapping (0x1C12/0x1C13, 0x16xx/0x1Axx) and the
+    // others' from their SII, and sets SM2/SM3 and the FMMUs.
+    if (!master_.configure_process_data()) return fail("SM2/SM3 and FMMUs could not be configured");
+    std::vector<std::string> lines;
+    axes_ = find_drives(master_, lines);
+    io_ = IoExercise(master_, axes_);
+    for (const auto& l : lines)
+        note("       {}", l);
+    note("       {} drive(s) to move, {} I/O device(s) with process data", axes_.size(), io_.size());
+    note("       process image: {} bytes in {} LRW frame(s), expected working counter {}",
+         master_.process_image_size(), master_.process_data_frames(), master_.expected_wkc());
+    return true;
+}
+
+bool Demo::io() {
+    if (io_.empty()) {
+        note("       no I/O device with process data");
+        return true;
+    }
+    io_running_ = true;
+    const std::uint64_t before = io_.input_changes();
+    cycle_until([] { return false; }, std::max(opt_.cycles / 3, 800u));
+    io_running_ = false;
+    if (interrupted()) return fail("interrupted");
+    for (const auto& l : io_.report(master_))
+        note("       {}", l);
+    note("       inputs changed {} times in the phase", io_.input_changes() - before);
+    return true;
+}
+
 bool Demo::dc() {
     // Sync mode DC SYNC0. The sync error limit 0x10F1:02 goes from 4 to kSyncErrorLimit (no limit): this
     // master runs on an ordinary (not real-time) host, where a wake-up a millisecond late now and then, or a
     // stall of several milliseconds under load (a limit of 100 was exceeded in CI), would otherwise stop the
     // line with 0x002C. The init phase reports what was missed (0x1C32:0B).
-    for (std::size_t s = 0; s < master_.slaves().size(); ++s)
-        if (!sdo(s, 0x1C32, 1, 2, 2) || !sdo(s, 0x10F1, 2, kSyncErrorLimit, 2)) return false;
+    // On a network only the drives get SYNC0; a device that refuses these objects keeps its own settings.
+    for (const auto& a : axes_) {
+        const std::size_t s = a.layout.slave;
+        if (!sdo(s, 0x1C32, 1, 2, 2) || !sdo(s, 0x10F1, 2, kSyncErrorLimit, 2)) {
+            if (!on_network_) return false;
+            note("       slave {}: {}; its sync mode stays as it is", s, why_);
+        }
+    }
     if (!master_.configure_dc() || master_.dc_reference() == 0)
         return fail("propagation delays / system time offsets could not be set");
     for (const auto& s : master_.slaves())
@@ -474,9 +549,11 @@ bool Demo::dc() {
     }
     if (!diff) return fail("interrupted");
     dc_difference_ns_ = *diff;
-    for (const auto& s : master_.slaves())
+    for (const auto& a : axes_) {
+        const auto& s = master_.slaves()[a.layout.slave];
         if ((s.features & protocol::feature::DcAvailable) && !master_.start_sync(s.station, kCycleNs, 0))
             return fail(fmt::format("slave {}: SYNC0 could not be started", s.position));
+    }
     note(
         "       {} FRMW frames; largest system time difference 0x092C: {} ns; SYNC0 every {} us from 100 ms "
         "on",
@@ -540,6 +617,10 @@ bool Demo::enable_drives() {
 }
 
 bool Demo::enable() {
+    if (axes_.empty()) {
+        note("       no drive to enable");
+        return true;
+    }
     if (!enable_drives()) return false;
     note("       all drives enabled{}", gantry_ ? " (drive 2 by drive 1's controlword over TWINsync)" : "");
     return true;
@@ -569,6 +650,10 @@ bool Demo::move_to(std::int32_t target, double limit_rev_s) {
 }
 
 bool Demo::csp_move() {
+    if (axes_.empty()) {
+        note("       no drive to move");
+        return true;
+    }
     constexpr double kOut = kRev;
     const cia402::ProfileLimits limits{kRev, 10 * kRev, 10 * kRev, 100 * kRev};
     std::vector<cia402::ProfileGenerator> gen(axes_.size());
@@ -750,13 +835,14 @@ bool Demo::disable() {
 bool Demo::init() {
     // The drives' own count of SYNC0 events without new outputs (0x1C32:0B), read while still in OP.
     std::string missed;
-    for (std::size_t i = 0; i < master_.slaves().size(); ++i) {
+    for (const auto& a : axes_) {
+        const std::size_t i = a.layout.slave;
         master::CoeClient c(master_, master_.slaves()[i].station);
         const auto r = c.upload(0x1C32, 0x0B);
-        missed += fmt::format("{}slave {}: {}", i ? ", " : "", i,
+        missed += fmt::format("{}slave {}: {}", missed.empty() ? "" : ", ", i,
                               r.ok() && r.data.size() >= 2 ? std::to_string(ld_le16(r.data.data())) : "?");
     }
-    note("       SYNC0 events without new outputs (0x1C32:0B): {}", missed);
+    if (!axes_.empty()) note("       SYNC0 events without new outputs (0x1C32:0B): {}", missed);
     for (const auto& s : master_.slaves())
         if (s.has_dc) master_.stop_sync(s.station);
     dc_running_ = false;
@@ -789,14 +875,16 @@ void Demo::stop_server() {
 void Demo::write_files() {
     const std::string& dir = opt_.outdir;
     pcap_.flush();
-    const std::string esi = dir + "/vecat-drive.xml", sii = dir + "/vecat-drive.sii";
-    std::ofstream(esi) << esi::write_esi(dev_);
-    const auto img = esc::build_sii_image(dev_);
-    std::ofstream(sii, std::ios::binary)
-        .write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));
     note("files in {}/:", dir);
-    note("  ESI file     {}", esi);
-    note("  SII image    {} ({} bytes)", sii, img.size());
+    if (!on_network_) {
+        const std::string esi = dir + "/vecat-drive.xml", sii = dir + "/vecat-drive.sii";
+        std::ofstream(esi) << esi::write_esi(dev_);
+        const auto img = esc::build_sii_image(dev_);
+        std::ofstream(sii, std::ios::binary)
+            .write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));
+        note("  ESI file     {}", esi);
+        note("  SII image    {} ({} bytes)", sii, img.size());
+    }
     note("  capture      {}/demo.pcapng ({} frames; wireshark reads it)", dir, pcap_.frames());
     const auto scope =
         scope_.write(dir,
@@ -810,7 +898,7 @@ void Demo::write_files() {
 
 void Demo::summary(double seconds, std::size_t phases_done) {
     note("summary: {} of {} phases in {:.1f} s; {} cycles in OP, {} working-counter misses, {} late wake-ups",
-         phases_done, std::size(kPhases), seconds, stats_.cycles, stats_.misses, stats_.late);
+         phases_done, phases().size(), seconds, stats_.cycles, stats_.misses, stats_.late);
     note(
         "  round trip mean {:.0f} us, max {:.0f} us; frame phase against SYNC0: rms {:.1f} us, max {:.1f} us",
         stats_.rtt_mean_us(), stats_.rtt_max_us, stats_.phase_rms_us(), stats_.phase_max_us);
@@ -825,15 +913,19 @@ void Demo::summary(double seconds, std::size_t phases_done) {
 }
 
 int Demo::run() {
-    note("vecat demo: {} virtual drive(s) on veth pair vecat-m <-> vecat-s in a private network namespace{}",
-         opt_.slaves, gantry_ ? "; drives 1 and 2 are a TWINsync gantry (drive 2 follows drive 1)" : "");
+    if (on_network_)
+        note("vecat demo: network {} ({} devices) on veth pair vecat-m <-> vecat-s in a private network namespace",
+             opt_.network, seg_->size());
+    else
+        note("vecat demo: {} virtual drive(s) on veth pair vecat-m <-> vecat-s in a private network namespace{}",
+             opt_.slaves, gantry_ ? "; drives 1 and 2 are a TWINsync gantry (drive 2 follows drive 1)" : "");
     const auto t0 = Clock::now();
     std::size_t done = 0;
     bool failed = false;
-    for (const auto& p : kPhases) {
+    for (const auto& p : phases()) {
         if (interrupted()) break;
         phase_ = p.name;
-        note("[{:2}/{}] {}: {}", done + 1, std::size(kPhases), p.name, p.what);
+        note("[{:2}/{}] {}: {}", done + 1, phases().size(), p.name, p.what);
         const auto t = Clock::now();
         if (!(this->*p.run)()) {
             if (!interrupted()) {
@@ -871,6 +963,18 @@ int run_demo(const DemoOptions& o) {
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    // A network file is read and built before anything else: a bad one is refused with its line.
+    network::BuiltNetwork network;
+    if (!o.network.empty()) {
+        try {
+            network = network::build_network(network::read_network_file(o.network), o.network);
+        } catch (const network::NetworkFileError& e) {
+            fmt::print(stderr, "vecat demo: {}\n", e.what());
+            return kDemoBadNetwork;
+        }
+        for (const auto& n : network.notes)
+            fmt::print(stderr, "vecat demo: {}\n", n);
+    }
     std::string why;
     if (!net::enter_private_netns(&why) || !net::create_veth_pair("vecat-m", "vecat-s", &why)) {
         fmt::print(stderr, "vecat demo: cannot create its network namespace and veth pair: {}\n", why);
@@ -883,7 +987,7 @@ int run_demo(const DemoOptions& o) {
         return kDemoFailed;
     }
     try {
-        Demo d(o);
+        Demo d(o, std::move(network));
         return d.run();
     } catch (const std::exception& e) {
         fmt::print(stderr, "vecat demo: {}\n", e.what());

@@ -589,10 +589,16 @@ int main(int argc, char** argv) {
     demo->add_option("-o,--output", demo_opt.outdir,
                      "Directory for the ESI file, SII image, capture and scope plot")
         ->capture_default_str();
+    demo->add_option("--network", demo_opt.network,
+                     "Run on the devices of a network file (docs/network-file.md) instead of a line of drives: "
+                     "the CiA 402 drives found are moved, the I/O devices' outputs written and inputs read back")
+        ->excludes("--slaves");
     demo->footer(
         "Phases: scan, preop, pdo-mapping, dc, safeop, op, enable, csp-move, homing, fault, disable, init.\n"
-        "Exit code 0 when every phase is done, 1 when one failed, 130 after Ctrl-C (128 + the signal); the "
-        "files are written in every case.");
+        "With --network: scan (with the topology), preop, process-data, dc, safeop, op, enable, csp-move, io,\n"
+        "disable, init.\n"
+        "Exit code 0 when every phase is done, 1 when one failed, 2 for a network file it refused, 130 after\n"
+        "Ctrl-C (128 + the signal); the files are written in every case.");
 
     auto* sii = app.add_subcommand("sii", "SII EEPROM tools");
     sii->require_subcommand(1);

@@ -258,22 +258,30 @@ bool Master::read_slave_information() {
         if (!img) return false;
         s.sii_image = *img;
         s.sii = protocol::parse_sii(s.sii_image);
-        auto bits = [](const std::vector<protocol::SiiPdo>& pdos, std::uint8_t sm) {
-            unsigned n = 0;
-            for (const auto& p : pdos)
-                if (p.sm == sm)
-                    for (const auto& e : p.entries)
-                        n += e.bit_length;
-            return (n + 7) / 8;
-        };
-        // Process data sizes: the PDOs of the SII assigned to the output / input SyncManagers.
+        // Process data: the PDOs of the SII assigned to the output / input SyncManagers.
+        // Each SyncManager's area starts on a byte; the areas follow each other in SyncManager order.
+        std::uint32_t out_bits = 0, in_bits = 0;
+        s.out_entries.clear();
+        s.in_entries.clear();
+        s.pd_sms.clear();
         for (std::size_t i = 0; i < s.sii.sync_managers.size(); ++i) {
             const auto& sm = s.sii.sync_managers[i];
-            if (sm.type == protocol::sii::SmTypeOutputs)
-                s.out_bytes = bits(s.sii.rx_pdos, static_cast<std::uint8_t>(i));
-            if (sm.type == protocol::sii::SmTypeInputs)
-                s.in_bytes = bits(s.sii.tx_pdos, static_cast<std::uint8_t>(i));
+            const bool outputs = sm.type == protocol::sii::SmTypeOutputs;
+            if (!outputs && sm.type != protocol::sii::SmTypeInputs) continue;
+            auto& bits = outputs ? out_bits : in_bits;
+            const std::uint32_t first = bits;
+            for (const auto& p : outputs ? s.sii.rx_pdos : s.sii.tx_pdos)
+                if (p.sm == i)
+                    for (const auto& e : p.entries) {
+                        (outputs ? s.out_entries : s.in_entries)
+                            .push_back(MappedEntry{e.index, e.subindex, e.bit_length, bits});
+                        bits += e.bit_length;
+                    }
+            bits = (bits + 7) / 8 * 8;
+            s.pd_sms.push_back({static_cast<std::uint8_t>(i), outputs, static_cast<std::uint16_t>((bits - first) / 8)});
         }
+        s.out_bytes = out_bits / 8;
+        s.in_bytes = in_bits / 8;
     }
     compute_topology();
     return true;
@@ -317,10 +325,13 @@ bool Master::read_pdo_sizes_coe(SlaveInfo& s) {
     };
     auto nsm = u(0x1C00, 0);
     if (!nsm || *nsm <= 2) return false;
-    unsigned out_bits = 0, in_bits = 0;
+    std::uint32_t out_bits = 0, in_bits = 0;
+    std::vector<MappedEntry> out_entries, in_entries;
+    std::vector<SlaveInfo::ProcessDataSm> sms;
     for (std::uint32_t sm = 2; sm < *nsm; ++sm) {
         auto type = u(0x1C00, static_cast<std::uint8_t>(sm + 1));
         if (!type || (*type != 3 && *type != 4)) continue;
+        const std::uint32_t first = *type == 3 ? out_bits : in_bits;
         const auto assign = static_cast<std::uint16_t>(0x1C10 + sm);
         auto npdo = u(assign, 0);
         if (!npdo) return false;
@@ -332,13 +343,32 @@ bool Master::read_pdo_sizes_coe(SlaveInfo& s) {
             for (std::uint32_t k = 1; k <= *nent; ++k) {
                 auto m = u(static_cast<std::uint16_t>(*pdo), static_cast<std::uint8_t>(k));
                 if (!m) return false;
-                (*type == 3 ? out_bits : in_bits) += *m & 0xFF;
+                const bool outputs = *type == 3;
+                auto& bits = outputs ? out_bits : in_bits;
+                // The mapping entry (ETG.1000.6 5.6.7.4.7): index << 16 | subindex << 8 | length in bits.
+                (outputs ? out_entries : in_entries)
+                    .push_back(MappedEntry{static_cast<std::uint16_t>(*m >> 16), static_cast<std::uint8_t>(*m >> 8),
+                                           static_cast<std::uint8_t>(*m & 0xFF), bits});
+                bits += *m & 0xFF;
             }
         }
+        auto& bits = *type == 3 ? out_bits : in_bits;
+        bits = (bits + 7) / 8 * 8;  // the next SyncManager's area starts on a byte
+        sms.push_back({static_cast<std::uint8_t>(sm), *type == 3, static_cast<std::uint16_t>((bits - first) / 8)});
     }
-    s.out_bytes = (out_bits + 7) / 8;
-    s.in_bytes = (in_bits + 7) / 8;
+    s.out_bytes = out_bits / 8;
+    s.in_bytes = in_bits / 8;
+    s.out_entries = std::move(out_entries);
+    s.in_entries = std::move(in_entries);
+    s.pd_sms = std::move(sms);
     return true;
+}
+
+const MappedEntry* find_entry(const std::vector<MappedEntry>& entries, std::uint16_t index,
+                              std::uint8_t subindex) {
+    for (const auto& e : entries)
+        if (e.index == index && e.subindex == subindex) return &e;
+    return nullptr;
 }
 
 bool Master::configure_process_data() {
@@ -377,28 +407,34 @@ bool Master::configure_process_data() {
         add_area(s.in_offset, s.in_bytes);
     for (auto& s : slaves_) {
         unsigned fmmu = 0;
-        for (std::size_t i = 0; i < s.sii.sync_managers.size(); ++i) {
-            const auto& sm = s.sii.sync_managers[i];
-            const bool outputs = sm.type == protocol::sii::SmTypeOutputs;
-            if (!outputs && sm.type != protocol::sii::SmTypeInputs) continue;
-            const auto bytes = static_cast<std::uint16_t>(outputs ? s.out_bytes : s.in_bytes);
+        std::uint32_t out_at = 0, in_at = 0;  // where the next SyncManager's area starts in the slave's
+        for (const auto& pd : s.pd_sms) {
+            if (pd.sm >= s.sii.sync_managers.size()) return false;  // a CoE SyncManager the SII lacks
+            const auto& sm = s.sii.sync_managers[pd.sm];
             std::uint8_t b[SmConfig::kSize];
-            auto c = SmConfig::master(sm.start, bytes, sm.control);
+            auto c = SmConfig::master(sm.start, pd.bytes, sm.control);
             // Activated as the SII's enable byte says (as SOEM does): a SyncManager declared not enabled or
-            // virtual stays off, and the FMMU reads or writes the memory (ETG.2010 SyncM).
-            if (!(sm.enable & protocol::sii::sm_enable::Enable)) c.activate = 0;
+            // virtual stays off, and the FMMU reads or writes the memory (ETG.2010 SyncM). One without
+            // process data stays off too.
+            if (!(sm.enable & protocol::sii::sm_enable::Enable) || pd.bytes == 0) c.activate = 0;
             c.pack(b);
-            auto w = fpwr(s.station, protocol::sm_addr(static_cast<unsigned>(i)), b);
+            auto w = fpwr(s.station, protocol::sm_addr(pd.sm), b);
             if (!w || *w != 1) return false;
-            if (!bytes) continue;
+            if (!pd.bytes) continue;
             // Outputs: the master writes the logical range (the FMMU writes into the ESC); inputs: it reads.
+            auto& at = pd.outputs ? out_at : in_at;
             std::uint8_t f[FmmuConfig::kSize];
-            FmmuConfig::bytes(outputs ? s.out_logical : s.in_logical, bytes, sm.start, !outputs, outputs)
+            FmmuConfig::bytes((pd.outputs ? s.out_logical : s.in_logical) + at, pd.bytes, sm.start, !pd.outputs,
+                              pd.outputs)
                 .pack(f);
+            at += pd.bytes;
             w = fpwr(s.station, protocol::fmmu_addr(fmmu++), f);
             if (!w || *w != 1) return false;
-            (outputs ? n_out : n_in)++;
         }
+        // A slave counts once per datagram in which it reads and twice in which it writes, however many
+        // FMMUs take part (ESC datasheet section I, 3.3: working counter).
+        n_out += out_at > 0;
+        n_in += in_at > 0;
     }
     expected_wkc_ = static_cast<std::uint16_t>(2 * n_out + n_in);
     return true;

@@ -27,6 +27,19 @@ struct AlStatusReading {
     bool error() const { return (status & protocol::kAlErrorFlag) != 0; }
 };
 
+// One entry of a slave's process data as the master mapped it: the object, its length, and where it lies in
+// the slave's output or input area (bits from the area's start; PDOs in their SyncManager's order, entries in
+// their PDO's, gaps (index 0) included, as ETG.1000.6 5.6.7.4 lays them out).
+struct MappedEntry {
+    std::uint16_t index = 0;
+    std::uint8_t subindex = 0;
+    std::uint8_t bits = 0;
+    std::uint32_t bit_offset = 0;
+};
+// The entry of object `index` (subindex 0 unless given) in entries, or nullptr.
+const MappedEntry* find_entry(const std::vector<MappedEntry>& entries, std::uint16_t index,
+                              std::uint8_t subindex = 0);
+
 struct SlaveInfo {
     std::uint16_t position = 0;
     std::uint16_t station = 0;
@@ -39,6 +52,18 @@ struct SlaveInfo {
     protocol::SiiInfo sii;
     unsigned out_bytes = 0;
     unsigned in_bytes = 0;
+    // The entries of the outputs (RxPDOs) and inputs (TxPDOs): from the PDO assignment read by SDO for CoE
+    // slaves (configure_process_data), else from the SII's PDO categories.
+    std::vector<MappedEntry> out_entries;
+    std::vector<MappedEntry> in_entries;
+    // The process data SyncManagers and their lengths, in the order their areas follow each other in the
+    // slave's outputs and inputs (a device may have several of each: oversampling terminals).
+    struct ProcessDataSm {
+        std::uint8_t sm = 0;
+        bool outputs = false;
+        std::uint16_t bytes = 0;
+    };
+    std::vector<ProcessDataSm> pd_sms;
     std::uint32_t out_logical = 0;
     std::uint32_t in_logical = 0;
     std::size_t out_offset = 0;  // in the process image

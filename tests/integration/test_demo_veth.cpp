@@ -121,3 +121,69 @@ TEST(Demo, CtrlCStopsItCleanlyAndStillWritesTheFiles) {
     fs::remove_all(dir);
     fs::remove(log);
 }
+
+// `vecat demo --network`: a coupler, an output terminal whose channels are wired to an input terminal, and a
+// drive. The demo finds the drive by its device type and its objects by the mapping it reads, moves it, and
+// writes a walking bit to the outputs, which the wired inputs show.
+TEST(Demo, OnANetworkFileItMovesTheDrivesAndExercisesTheIo) {
+    if (!namespaces_usable())
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for its network namespace";
+    const fs::path dir = fs::temp_directory_path() / ("vecat-demo-net-" + std::to_string(getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path file = dir / "machine.yaml";
+    std::ofstream(file) << R"(devices:
+  - name: coupler
+    device: coupler
+  - name: valves
+    device: digital-out
+    channels: 4
+    upstream: coupler:3
+  - name: sensors
+    device: digital-in
+    channels: 4
+    inputs:
+      0: {wire: valves:0}
+      1: {wire: valves:1}
+      2: {wire: valves:2}
+      3: {wire: valves:3}
+  - name: axis
+    device: drive
+    upstream: coupler:1
+)";
+    const std::string log = dir.string() + ".log";
+    test::ChildProcess demo(
+        {VECAT_BINARY, "demo", "--network", file.string(), "--cycles", "300", "-o", (dir / "out").string()}, log);
+    const auto rc = demo.wait_for(std::chrono::seconds(60));
+    const std::string out = read_text(log);
+    ASSERT_TRUE(rc.has_value()) << "still running after 60 s:\n" << out;
+    EXPECT_EQ(*rc, 0) << out;
+    EXPECT_EQ(out.find("FAILED"), std::string::npos) << out;
+    EXPECT_NE(out.find("11 of 11 phases"), std::string::npos) << out;
+    EXPECT_NE(out.find("on slave 0 port 3"), std::string::npos) << "the topology, from the DL status:\n" << out;
+    EXPECT_NE(out.find("1 drive(s) to move, 2 I/O device(s)"), std::string::npos) << out;
+    EXPECT_NE(out.find("all drives enabled"), std::string::npos) << out;
+    EXPECT_NE(out.find(" 0 working-counter misses"), std::string::npos) << out;
+    // The walking bit over four channels in 800 cycles: the wired inputs change as the outputs do.
+    const auto at = out.find("inputs changed ");
+    ASSERT_NE(at, std::string::npos) << out;
+    EXPECT_GE(std::stoi(out.substr(at + 15)), 4) << out;
+    EXPECT_GT(test::read_pcapng_frames((dir / "out" / "demo.pcapng").string()).size(), 100u);
+    fs::remove_all(dir);
+    fs::remove(log);
+}
+
+// A network file the demo cannot build is refused before anything runs, naming the line.
+TEST(Demo, ABadNetworkFileIsRefusedWithItsLine) {
+    const fs::path file = fs::temp_directory_path() / ("vecat-demo-bad-" + std::to_string(getpid()) + ".yaml");
+    std::ofstream(file) << "devices:\n  - name: a\n    device: drive\n  - name: b\n    device: teapot\n";
+    const std::string log = file.string() + ".log";
+    test::ChildProcess demo({VECAT_BINARY, "demo", "--network", file.string(), "-o", "/nonexistent/x"}, log);
+    const auto rc = demo.wait_for(std::chrono::seconds(20));
+    const std::string out = read_text(log);
+    ASSERT_TRUE(rc.has_value()) << out;
+    EXPECT_EQ(*rc, 2) << out;
+    EXPECT_NE(out.find(":5:"), std::string::npos) << "names line 5:\n" << out;
+    fs::remove(file);
+    fs::remove(log);
+}

@@ -7,10 +7,12 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/bytes.hpp"
 #include "device/simple_devices.hpp"
 #include "master/master.hpp"
 #include "network/build.hpp"
 #include "network/network_file.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "serve/in_process_link.hpp"
 #include "shared_data.hpp"
 
@@ -195,6 +197,86 @@ devices:
     auto& app = dynamic_cast<esc::ProcessImageApplication&>(s.built.segment->slave(3).app());
     s.built.segment->tick(s.link.now_ns());
     EXPECT_EQ(app.outputs()[0], 0xA5);
+}
+
+// The entries the master mapped, from the PDO assignment read by SDO (the drive) and from the SII (the
+// terminals): each object at the bit where the slave's data hold it.
+TEST(Network, TheMasterKnowsWhereEachMappedObjectLies) {
+    Served s(R"(
+devices:
+  - name: drive
+    device: drive
+  - name: do
+    device: digital-out
+    channels: 4
+  - name: ai
+    device: analog-in
+    channels: 2
+)");
+    std::string why;
+    ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
+    const auto& drive = s.master.slaves()[0];
+    const auto* cw = master::find_entry(drive.out_entries, protocol::obj::controlword.index);
+    const auto* target = master::find_entry(drive.out_entries, protocol::obj::target_position.index);
+    const auto* sw = master::find_entry(drive.in_entries, protocol::obj::statusword.index);
+    const auto* pos = master::find_entry(drive.in_entries, protocol::obj::position_actual_value.index);
+    ASSERT_TRUE(cw && target && sw && pos);
+    EXPECT_EQ(cw->bits, 16);
+    EXPECT_EQ(target->bits, 32);
+    // The entries tile the area: each starts where the one before it ends, and the last ends at its size.
+    for (const auto* entries : {&drive.out_entries, &drive.in_entries}) {
+        std::uint32_t bit = 0;
+        for (const auto& e : *entries) {
+            EXPECT_EQ(e.bit_offset, bit);
+            bit += e.bits;
+        }
+        EXPECT_EQ((bit + 7) / 8, entries == &drive.out_entries ? drive.out_bytes : drive.in_bytes);
+    }
+    // The drive's statusword, read where the entry says, is what the drive shows.
+    ASSERT_TRUE(s.master.exchange_process_data());
+    const auto in = s.master.inputs(0);
+    EXPECT_NE(ld_le16(in.data() + sw->bit_offset / 8), 0) << "a CiA 402 drive in OP shows its state";
+    // The output terminal: four 1-bit channels from the SII, bits 0-3, and a 4-bit gap (index 0) to the
+    // byte; the analog inputs two 16-bit values.
+    const auto& out = s.master.slaves()[1].out_entries;
+    ASSERT_EQ(out.size(), 5u);
+    for (std::uint32_t i = 0; i < 4; ++i) {
+        EXPECT_NE(out[i].index, 0);
+        EXPECT_EQ(out[i].bits, 1);
+        EXPECT_EQ(out[i].bit_offset, i);
+    }
+    EXPECT_EQ(out[4].index, 0);
+    EXPECT_EQ(out[4].bit_offset, 4u);
+    EXPECT_EQ(out[4].bits, 4);
+    const auto& ai = s.master.slaves()[2].in_entries;
+    ASSERT_EQ(ai.size(), 2u);
+    EXPECT_EQ(ai[1].bit_offset, 16u);
+    EXPECT_EQ(ai[1].bits, 16);
+}
+
+// A device with two output SyncManagers (the EL2262's oversampling outputs, SM0 and SM1): an FMMU for each
+// area, one after the other, and the slave counted once per datagram (2 for its outputs, 1 for its inputs)
+// however many FMMUs it has. The master counted each SyncManager before, and missed every cycle.
+TEST(Network, ADeviceWithSeveralOutputSyncManagersCountsOncePerDatagram) {
+    VECAT_REQUIRE_SHARED_DATA("sii/beckhoff-el2262.bin");
+    const std::string path = std::string(VECAT_SOURCE_DIR) + "/examples/networks/machine.yaml";
+    auto built = build_network(read_network_file(path), path);
+    net::InProcessLink link(*built.segment);
+    master::Master m(link);
+    std::string why;
+    ASSERT_TRUE(m.startup(protocol::AlState::Op, &why)) << why;
+    const auto& el2262 = m.slaves()[5];
+    ASSERT_EQ(el2262.sii.identity.product_code, 0x08D63052u);
+    unsigned output_sms = 0, out_bytes = 0;
+    for (const auto& pd : el2262.pd_sms)
+        if (pd.outputs) ++output_sms, out_bytes += pd.bytes;
+    EXPECT_EQ(output_sms, 2u);
+    EXPECT_EQ(out_bytes, el2262.out_bytes);
+    // Outputs of EL2004, EL2828, EL2889, EL2262 and three drives (2 each); inputs of the EL2262 and the
+    // three drives (1 each): what SOEM's simple_ng expects on this machine too.
+    EXPECT_EQ(m.expected_wkc(), 7 * 2 + 4);
+    for (int i = 0; i < 50; ++i)
+        ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc()) << "cycle " << i;
 }
 
 // A network of mixed drives: the vecat drive and the HIWIN D2 (device: hiwin-d2), each with its own
