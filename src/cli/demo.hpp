@@ -18,7 +18,7 @@ struct DemoOptions {
 
 // Exit codes of run_demo (and of `vecat demo`).
 inline constexpr int kDemoOk = 0;
-inline constexpr int kDemoFailed = 1;  // a phase failed, or the namespace / veth pair could not be made
+inline constexpr int kDemoFailed = 1;      // a phase failed, or the namespace / veth pair could not be made
 inline constexpr int kDemoBadNetwork = 2;  // the network file was refused (the message names its line)
 // Interrupted by a signal: 128 + its number (130 for Ctrl-C / SIGINT, 143 for SIGTERM). The drives are
 // disabled, the line goes back to INIT and the files are written all the same.

@@ -75,10 +75,11 @@ std::vector<Axis> find_drives(master::Master& m, std::vector<std::string>& notes
         Axis a;
         a.layout = layout_from_entries(s, i);
         if (!a.layout.movable()) {
-            notes.push_back(fmt::format(
-                "slave {} \"{}\": a CiA 402 drive, not moved: its PDOs lack the controlword, target position, "
-                "statusword or position actual value",
-                i, s.sii.device_name()));
+            notes.push_back(
+                fmt::format("slave {} \"{}\": a CiA 402 drive, not moved: its PDOs lack the controlword, "
+                            "target position, "
+                            "statusword or position actual value",
+                            i, s.sii.device_name()));
             continue;
         }
         // Without the mode in the PDOs the mode is set once by SDO (CSP).
@@ -93,11 +94,12 @@ std::vector<Axis> find_drives(master::Master& m, std::vector<std::string>& notes
                 continue;
             }
         }
-        notes.push_back(fmt::format(
-            "slave {} \"{}\": CiA 402 drive; controlword at output byte {}, target at {}, statusword at input "
-            "byte {}, position at {}{}",
-            i, s.sii.device_name(), a.layout.controlword, a.layout.target, a.layout.statusword,
-            a.layout.position, a.layout.mode < 0 ? "; mode CSP set by SDO" : ""));
+        notes.push_back(
+            fmt::format("slave {} \"{}\": CiA 402 drive; controlword at output byte {}, target at {}, "
+                        "statusword at input "
+                        "byte {}, position at {}{}",
+                        i, s.sii.device_name(), a.layout.controlword, a.layout.target, a.layout.statusword,
+                        a.layout.position, a.layout.mode < 0 ? "; mode CSP set by SDO" : ""));
         drives.push_back(a);
     }
     return drives;
@@ -109,7 +111,8 @@ IoExercise::IoExercise(master::Master& m, const std::vector<Axis>& drives) {
         bool drive = false;
         for (const auto& d : drives)
             drive = drive || d.layout.slave == i;
-        if (!drive && (slaves[i].out_bytes || slaves[i].in_bytes)) slaves_.push_back(Terminal{i, {}, 0, false});
+        if (!drive && (slaves[i].out_bytes || slaves[i].in_bytes))
+            slaves_.push_back(Terminal{i, {}, 0, false});
     }
 }
 
@@ -138,7 +141,8 @@ void IoExercise::write_outputs(master::Master& m, unsigned step) const {
 void IoExercise::read_inputs(master::Master& m) {
     for (auto& t : slaves_) {
         const auto in = m.inputs(t.slave);
-        if (t.seen && !std::equal(in.begin(), in.end(), t.last_inputs.begin(), t.last_inputs.end())) ++t.changes;
+        if (t.seen && !std::equal(in.begin(), in.end(), t.last_inputs.begin(), t.last_inputs.end()))
+            ++t.changes;
         t.last_inputs.assign(in.begin(), in.end());
         t.seen = true;
     }
@@ -162,10 +166,11 @@ std::vector<std::string> IoExercise::report(master::Master& m) const {
     for (const auto& t : slaves_) {
         const auto& s = m.slaves()[t.slave];
         std::string line = fmt::format("slave {} \"{}\":", t.slave, s.sii.device_name());
-        if (s.out_bytes) line += fmt::format(" outputs {} ({} bytes written)", hex(m.outputs(t.slave)), s.out_bytes);
+        if (s.out_bytes)
+            line += fmt::format(" outputs {} ({} bytes written)", hex(m.outputs(t.slave)), s.out_bytes);
         if (s.in_bytes)
-            line += fmt::format(" inputs {} ({} bytes), changed in {} cycles", hex(m.inputs(t.slave)), s.in_bytes,
-                                t.changes);
+            line += fmt::format(" inputs {} ({} bytes), changed in {} cycles", hex(m.inputs(t.slave)),
+                                s.in_bytes, t.changes);
         lines.push_back(std::move(line));
     }
     return lines;

@@ -1,6 +1,6 @@
 // The process data of `vecat demo` as the master sees it: each drive's objects at the places its PDO mapping
-// puts them (the fixed mapping the demo writes to its own drives, or whatever a device of a network file maps),
-// and the I/O terminals whose outputs the demo writes and whose inputs it reads back.
+// puts them (the fixed mapping the demo writes to its own drives, or whatever a device of a network file
+// maps), and the I/O terminals whose outputs the demo writes and whose inputs it reads back.
 #pragma once
 
 #include <cstdint>

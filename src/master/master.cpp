@@ -278,7 +278,8 @@ bool Master::read_slave_information() {
                         bits += e.bit_length;
                     }
             bits = (bits + 7) / 8 * 8;
-            s.pd_sms.push_back({static_cast<std::uint8_t>(i), outputs, static_cast<std::uint16_t>((bits - first) / 8)});
+            s.pd_sms.push_back(
+                {static_cast<std::uint8_t>(i), outputs, static_cast<std::uint16_t>((bits - first) / 8)});
         }
         s.out_bytes = out_bits / 8;
         s.in_bytes = in_bits / 8;
@@ -347,14 +348,16 @@ bool Master::read_pdo_sizes_coe(SlaveInfo& s) {
                 auto& bits = outputs ? out_bits : in_bits;
                 // The mapping entry (ETG.1000.6 5.6.7.4.7): index << 16 | subindex << 8 | length in bits.
                 (outputs ? out_entries : in_entries)
-                    .push_back(MappedEntry{static_cast<std::uint16_t>(*m >> 16), static_cast<std::uint8_t>(*m >> 8),
+                    .push_back(MappedEntry{static_cast<std::uint16_t>(*m >> 16),
+                                           static_cast<std::uint8_t>(*m >> 8),
                                            static_cast<std::uint8_t>(*m & 0xFF), bits});
                 bits += *m & 0xFF;
             }
         }
         auto& bits = *type == 3 ? out_bits : in_bits;
         bits = (bits + 7) / 8 * 8;  // the next SyncManager's area starts on a byte
-        sms.push_back({static_cast<std::uint8_t>(sm), *type == 3, static_cast<std::uint16_t>((bits - first) / 8)});
+        sms.push_back(
+            {static_cast<std::uint8_t>(sm), *type == 3, static_cast<std::uint16_t>((bits - first) / 8)});
     }
     s.out_bytes = out_bits / 8;
     s.in_bytes = in_bits / 8;
@@ -424,8 +427,8 @@ bool Master::configure_process_data() {
             // Outputs: the master writes the logical range (the FMMU writes into the ESC); inputs: it reads.
             auto& at = pd.outputs ? out_at : in_at;
             std::uint8_t f[FmmuConfig::kSize];
-            FmmuConfig::bytes((pd.outputs ? s.out_logical : s.in_logical) + at, pd.bytes, sm.start, !pd.outputs,
-                              pd.outputs)
+            FmmuConfig::bytes((pd.outputs ? s.out_logical : s.in_logical) + at, pd.bytes, sm.start,
+                              !pd.outputs, pd.outputs)
                 .pack(f);
             at += pd.bytes;
             w = fpwr(s.station, protocol::fmmu_addr(fmmu++), f);

@@ -153,14 +153,16 @@ TEST(Demo, OnANetworkFileItMovesTheDrivesAndExercisesTheIo) {
 )";
     const std::string log = dir.string() + ".log";
     test::ChildProcess demo(
-        {VECAT_BINARY, "demo", "--network", file.string(), "--cycles", "300", "-o", (dir / "out").string()}, log);
+        {VECAT_BINARY, "demo", "--network", file.string(), "--cycles", "300", "-o", (dir / "out").string()},
+        log);
     const auto rc = demo.wait_for(std::chrono::seconds(60));
     const std::string out = read_text(log);
     ASSERT_TRUE(rc.has_value()) << "still running after 60 s:\n" << out;
     EXPECT_EQ(*rc, 0) << out;
     EXPECT_EQ(out.find("FAILED"), std::string::npos) << out;
     EXPECT_NE(out.find("11 of 11 phases"), std::string::npos) << out;
-    EXPECT_NE(out.find("on slave 0 port 3"), std::string::npos) << "the topology, from the DL status:\n" << out;
+    EXPECT_NE(out.find("on slave 0 port 3"), std::string::npos) << "the topology, from the DL status:\n"
+                                                                << out;
     EXPECT_NE(out.find("1 drive(s) to move, 2 I/O device(s)"), std::string::npos) << out;
     EXPECT_NE(out.find("all drives enabled"), std::string::npos) << out;
     EXPECT_NE(out.find(" 0 working-counter misses"), std::string::npos) << out;
@@ -175,7 +177,8 @@ TEST(Demo, OnANetworkFileItMovesTheDrivesAndExercisesTheIo) {
 
 // A network file the demo cannot build is refused before anything runs, naming the line.
 TEST(Demo, ABadNetworkFileIsRefusedWithItsLine) {
-    const fs::path file = fs::temp_directory_path() / ("vecat-demo-bad-" + std::to_string(getpid()) + ".yaml");
+    const fs::path file =
+        fs::temp_directory_path() / ("vecat-demo-bad-" + std::to_string(getpid()) + ".yaml");
     std::ofstream(file) << "devices:\n  - name: a\n    device: drive\n  - name: b\n    device: teapot\n";
     const std::string log = file.string() + ".log";
     test::ChildProcess demo({VECAT_BINARY, "demo", "--network", file.string(), "-o", "/nonexistent/x"}, log);
