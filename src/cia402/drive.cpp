@@ -141,6 +141,8 @@ struct Drive::Objects {
     V<std::int32_t> index_pulse_offset = mfr_bind(mfr::machine::index_pulse_offset);
     V<std::int16_t> load_torque = mfr_bind(mfr::machine::load_torque);
     V<std::uint8_t> probe_inputs = mfr_bind(mfr::machine::touch_probe_inputs);
+    V<std::uint32_t> digital_outputs = bind(obj::digital_outputs::physical_outputs);
+    V<std::uint32_t> digital_output_mask = bind(obj::digital_outputs::bit_mask);
     V<std::uint8_t> limit_switch_reaction = mfr_bind(mfr::machine::limit_switch_reaction);
     // TWINsync: the local values the drive provides and the remote values it uses (MSD parameters
     // Pnnnn as objects 0x2000 + nnnn, twinsync/parameters.hpp).
@@ -318,9 +320,14 @@ void Drive::servo_step() {
     // (A receive mapping may write parameters, the manufacturer objects 0x2000 + P: read again.)
     if (parameter_writes_ != parameters_read_) read_parameters();
     if (command_writes_ != command_read_) read_command();
+    if (const auto wired = wired_probe_inputs(sim_ns_))
+        io_.parameters.probe_inputs = static_cast<std::uint8_t>(probe_inputs_object_ | (*wired & 3u));
     read_twinsync();
     core_->step(io_);
     write_feedback();
+    if (!digital_output_image_.empty())
+        st_le32(digital_output_image_.data(),
+                o_->digital_outputs.get_or(0) & o_->digital_output_mask.get_or(0));
     twin_->set_error(core_->twinsync_error());
     twin_->transmit(sim_ns_, twinsync_local());
 }
@@ -411,6 +418,7 @@ void Drive::read_parameters() {
         }
     });
     variant_->read_parameters(io_.parameters);
+    probe_inputs_object_ = io_.parameters.probe_inputs;
 }
 
 void Drive::configure() {

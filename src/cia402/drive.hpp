@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "cia402/drive_core.hpp"
 #include "cia402/drive_io.hpp"
@@ -51,6 +52,12 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     // The TWINsync error the drive has raised as a fault (40-xx, 39-xx), if any.
     std::optional<twinsync::ErrorId> twinsync_error() const { return core_->twinsync_error(); }
 
+    // The digital outputs 0x60FE:1 masked by 0x60FE:2 (CiA 402 6.3.9: an output is set only where its mask
+    // bit is), 4 bytes little-endian as a wire of a network file shows them: bit N is channel N. Kept up to
+    // date each servo period once publish_digital_outputs() was called (empty before).
+    const std::vector<std::uint8_t>& digital_output_image() const { return digital_output_image_; }
+    void publish_digital_outputs() { digital_output_image_.assign(4, 0); }
+
     // esc::Application
     void tick(std::uint64_t now_ns) override;
     // coe::CoeApplication: the drive simulates faults, through 0x2101 where that is the vecat drive's
@@ -62,6 +69,10 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     struct Objects;
 
   protected:
+    // Touch probe inputs 1 and 2 (bits 0 and 1) driven from outside the drive each servo period (a wire or
+    // signal of a network file), besides 0x2100:6; nullopt: none.
+    virtual std::optional<std::uint8_t> wired_probe_inputs(std::uint64_t /*sim_ns*/) { return std::nullopt; }
+
     void cycle(std::uint64_t now_ns, bool outputs_applied) override;
     void advance_to(std::uint64_t now_ns) override { advance(now_ns); }
     bool coupled() const override { return twin_partner_ != nullptr; }
@@ -94,6 +105,8 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     std::uint32_t parameters_read_ = ~std::uint32_t{0};  // parameter_writes_ when they were last read
     std::uint64_t sim_ns_ = 0;
     bool started_ = false;
+    std::uint8_t probe_inputs_object_ = 0;            // 0x2100:6 as last read
+    std::vector<std::uint8_t> digital_output_image_;  // see digital_output_image()
     // TWINsync: the option card, and the drive at the other end of its cable (they step in lockstep).
     std::unique_ptr<twinsync::Port> twin_;
     Drive* twin_partner_ = nullptr;

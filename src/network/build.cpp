@@ -277,9 +277,63 @@ std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept {
     return ports;
 }
 
+// A vecat drive with wires (network files, inputs: on a drive, or a wire from its digital outputs): its touch
+// probe inputs follow their sources each servo period, and its digital outputs 0x60FE show on the bus.
+class WiredDrive final : public cia402::Drive {
+  public:
+    WiredDrive(const device::DeviceDescription& d,
+               std::shared_ptr<const std::vector<device::ObjectDescription>> objects,
+               std::vector<io::InputSource> probes, std::shared_ptr<io::IoBus> bus, std::size_t output_slot)
+        : Drive(d, std::move(objects)), probes_(std::move(probes)), bus_(std::move(bus)), slot_(output_slot) {
+        if (slot_ != io::IoBus::kNone) {
+            publish_digital_outputs();
+            bus_->publish(slot_, &digital_output_image());
+        }
+    }
+    ~WiredDrive() override {
+        if (slot_ != io::IoBus::kNone) bus_->withdraw(slot_, &digital_output_image());
+    }
+    WiredDrive(const WiredDrive&) = delete;
+    WiredDrive& operator=(const WiredDrive&) = delete;
+
+  protected:
+    std::optional<std::uint8_t> wired_probe_inputs(std::uint64_t sim_ns) override {
+        if (probes_.empty()) return std::nullopt;
+        std::uint8_t bits = 0;
+        for (unsigned c = 0; c < probes_.size(); ++c) {
+            const io::InputSource& s = probes_[c];
+            const double v = s.wire_slot != io::IoBus::kNone ? bus_->output(s.wire_slot, s.signal.channel)
+                                                             : io::value_at(s.signal, sim_ns);
+            if (v > 0.5) bits = static_cast<std::uint8_t>(bits | (1u << c));
+        }
+        return bits;
+    }
+
+  private:
+    std::vector<io::InputSource> probes_;  // touch probe inputs 1 and 2 (empty: not wired)
+    std::shared_ptr<io::IoBus> bus_;
+    std::size_t slot_;  // the output slot of its digital outputs (kNone: no wire takes them)
+};
+
 // The built-in I/O terminals get their behaviour (src/io): output terminals show their outputs on the bus,
-// input terminals read their signals, wires and forced values.
+// input terminals read their signals, wires and forced values. So does a vecat drive that has wires.
 void attach_io(const DeviceEntry& e, Made& m, BuiltNetwork& b) {
+    if (e.source == Source::Drive) {
+        const std::size_t slot = b.io->output_slot(e.name);
+        if (e.inputs.empty() && slot == io::IoBus::kNone) return;
+        std::vector<io::InputSource> probes;
+        if (!e.inputs.empty()) probes.resize(kDriveProbeInputs);
+        for (const auto& in : e.inputs) {
+            probes[in.channel].signal = in.signal;
+            if (in.signal.kind == io::SignalKind::Wire)
+                probes[in.channel].wire_slot = b.io->output_slot(in.signal.device);
+        }
+        m.factory = [objects = m.model.dictionary, probes, bus = b.io,
+                     slot](const device::DeviceDescription& d) -> std::unique_ptr<esc::Application> {
+            return std::make_unique<WiredDrive>(d, objects, probes, bus, slot);
+        };
+        return;
+    }
     const bool digital = e.source == Source::DigitalIn || e.source == Source::DigitalOut;
     const io::ChannelKind kind = digital ? io::ChannelKind::Digital : io::ChannelKind::Analog;
     const unsigned channels = channels_of(e);
@@ -314,6 +368,14 @@ BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
             b.io->add_output(
                 e.name, e.source == Source::DigitalOut ? io::ChannelKind::Digital : io::ChannelKind::Analog,
                 channels_of(e));
+    // A drive's digital outputs are on the bus when a wire takes one of them.
+    for (const DeviceEntry& e : f.devices)
+        if (e.source == Source::Drive && b.io->output_slot(e.name) == io::IoBus::kNone)
+            for (const DeviceEntry& other : f.devices)
+                for (const auto& in : other.inputs)
+                    if (in.signal.kind == io::SignalKind::Wire && in.signal.device == e.name &&
+                        b.io->output_slot(e.name) == io::IoBus::kNone)
+                        b.io->add_output(e.name, io::ChannelKind::Digital, kDriveDigitalOutputs);
     std::vector<std::uint8_t> ports;
     for (const DeviceEntry& e : f.devices) {
         const std::string at = file + ":" + std::to_string(e.line) + ": " + e.name + ": ";

@@ -321,13 +321,16 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
         r.fail(d.quirks_line, d.name + ": quirks: sii_without: an sii: device serves its dump as it is");
     if (channels_line && !is_io(d.source))
         r.fail(*channels_line, d.name + ": channels: is for the built-in I/O terminals");
-    if (d.inputs_line && d.source != Source::DigitalIn && d.source != Source::AnalogIn)
-        r.fail(d.inputs_line,
-               d.name + ": inputs: is for the built-in input terminals (digital-in, analog-in)");
+    if (d.inputs_line && d.source != Source::DigitalIn && d.source != Source::AnalogIn &&
+        d.source != Source::Drive)
+        r.fail(d.inputs_line, d.name +
+                                  ": inputs: is for the built-in input terminals (digital-in, analog-in) and "
+                                  "the touch probe inputs of the vecat drive (device: drive)");
     for (const auto& in : d.inputs)
-        if (in.channel >= channels_of(d))
+        if (in.channel >= input_channels(d))
             r.fail(in.line, d.name + ": inputs: channel " + std::to_string(in.channel) +
-                                ": it has channels 0-" + std::to_string(channels_of(d) - 1));
+                                ": it has channels 0-" + std::to_string(input_channels(d) - 1) +
+                                (d.source == Source::Drive ? " (touch probe inputs 1 and 2)" : ""));
     return d;
 }
 
@@ -414,7 +417,8 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
                                            std::to_string(it->second->hot_connect_line) +
                                            "); a group is a device and everything downstream of it");
     }
-    // Wires: each names an output terminal of the file and one of its channels.
+    // Wires: each names an output terminal of the file, or a vecat drive (its digital outputs), and one of
+    // its channels.
     for (const DeviceEntry& d : f.devices)
         for (const auto& in : d.inputs) {
             if (in.signal.kind != io::SignalKind::Wire) continue;
@@ -422,12 +426,13 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
                                          [&](const DeviceEntry& o) { return o.name == in.signal.device; });
             if (it == f.devices.end())
                 r.fail(in.line, d.name + ": wire: no device named " + in.signal.device);
-            if (it->source != Source::DigitalOut && it->source != Source::AnalogOut)
-                r.fail(in.line,
-                       d.name + ": wire: " + it->name + " is no output terminal (digital-out, analog-out)");
-            if (in.signal.channel >= channels_of(*it))
+            if (output_channels(*it) == 0)
+                r.fail(in.line, d.name + ": wire: " + it->name +
+                                    " is no output terminal (digital-out, analog-out) and no vecat drive "
+                                    "(device: drive, its digital outputs 0x60FE)");
+            if (in.signal.channel >= output_channels(*it))
                 r.fail(in.line, d.name + ": wire: " + it->name + " has channels 0-" +
-                                    std::to_string(channels_of(*it) - 1));
+                                    std::to_string(output_channels(*it) - 1));
         }
     if (has_redundancy) {
         // The same NAME:PORT as upstream:, for the port the redundancy cable leaves the line at.
@@ -523,6 +528,16 @@ NetworkFile arrange_network(std::vector<DeviceEntry> devices, const std::vector<
 unsigned channels_of(const DeviceEntry& d) noexcept {
     if (d.channels) return d.channels;
     return d.source == Source::DigitalIn || d.source == Source::DigitalOut ? 8u : 4u;
+}
+
+unsigned input_channels(const DeviceEntry& d) noexcept {
+    if (d.source == Source::Drive) return kDriveProbeInputs;
+    return d.source == Source::DigitalIn || d.source == Source::AnalogIn ? channels_of(d) : 0;
+}
+
+unsigned output_channels(const DeviceEntry& d) noexcept {
+    if (d.source == Source::Drive) return kDriveDigitalOutputs;
+    return d.source == Source::DigitalOut || d.source == Source::AnalogOut ? channels_of(d) : 0;
 }
 
 NetworkFile read_network_file(const std::string& path) {

@@ -129,6 +129,13 @@ struct NetworkFile {
 
 // The channels of a built-in I/O terminal: channels:, or its kind's default (8 digital, 4 analog).
 unsigned channels_of(const DeviceEntry& d) noexcept;
+// The vecat drive in wires: its touch probe inputs 1 and 2 are its input channels 0 and 1 (inputs:), the 32
+// bits of its digital outputs 0x60FE (CiA 402 6.3.9) its output channels.
+inline constexpr unsigned kDriveProbeInputs = 2;
+inline constexpr unsigned kDriveDigitalOutputs = 32;
+// Channels an inputs: entry may name on the device, and a wire may take from it (0: none).
+unsigned input_channels(const DeviceEntry& d) noexcept;
+unsigned output_channels(const DeviceEntry& d) noexcept;
 
 class NetworkFileError : public std::runtime_error {
   public:

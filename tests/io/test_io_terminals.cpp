@@ -206,14 +206,18 @@ TEST(IoTerminals, TheNetworkFileRefusesBadInputsNamingTheLine) {
     };
     const std::string out = "devices:\n  - name: o\n    device: digital-out\n    channels: 2\n";
     EXPECT_EQ(refused(out + "    inputs: {0: {signal: constant}}\n"),
-              "net.yaml:5: o: inputs: is for the built-in input terminals (digital-in, analog-in)");
+              "net.yaml:5: o: inputs: is for the built-in input terminals (digital-in, analog-in) and the "
+              "touch probe "
+              "inputs of the vecat drive (device: drive)");
     const std::string in = out + "  - name: i\n    device: digital-in\n    channels: 2\n";
     EXPECT_EQ(refused(in + "    inputs: {2: {signal: constant}}\n"),
               "net.yaml:8: i: inputs: channel 2: it has channels 0-1");
     EXPECT_EQ(refused(in + "    inputs: {0: {wire: nobody:0}}\n"),
               "net.yaml:8: i: wire: no device named nobody");
-    EXPECT_EQ(refused(in + "    inputs: {0: {wire: i:0}}\n"),
-              "net.yaml:8: i: wire: i is no output terminal (digital-out, analog-out)");
+    EXPECT_EQ(
+        refused(in + "    inputs: {0: {wire: i:0}}\n"),
+        "net.yaml:8: i: wire: i is no output terminal (digital-out, analog-out) and no vecat drive (device: "
+        "drive, its digital outputs 0x60FE)");
     EXPECT_EQ(refused(in + "    inputs: {0: {wire: o:5}}\n"), "net.yaml:8: i: wire: o has channels 0-1");
     EXPECT_EQ(refused(in + "    inputs: {0: {signal: noise}}\n"),
               "net.yaml:8: signal: unknown signal noise (constant, square, sine, ramp, table)");

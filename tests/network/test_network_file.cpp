@@ -6,9 +6,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "common/bytes.hpp"
 #include "device/simple_devices.hpp"
+#include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "network/build.hpp"
 #include "network/network_file.hpp"
@@ -252,6 +254,104 @@ devices:
     ASSERT_EQ(ai.size(), 2u);
     EXPECT_EQ(ai[1].bit_offset, 16u);
     EXPECT_EQ(ai[1].bits, 16);
+}
+
+// Wires to and from the vecat drive: a terminal's output drives touch probe input 1 of a drive, another
+// drive's digital output (0x60FE, where its mask lets it through) touch probe input 2, and the touch probe
+// latches on the wired edge.
+TEST(Network, WiresDriveTheTouchProbeInputsOfADrive) {
+    Served s(R"(
+devices:
+  - name: axis
+    device: drive
+  - name: valves
+    device: digital-out
+    channels: 2
+  - name: gauge
+    device: drive
+    identity: {serial: 2}
+    inputs:
+      0: {wire: valves:1}
+      1: {wire: axis:16}
+)");
+    std::string why;
+    ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
+    master::CoeClient axis(s.master, s.master.slaves()[0].station),
+        gauge(s.master, s.master.slaves()[2].station);
+    auto download32 = [](master::CoeClient& c, protocol::ObjectId<protocol::DataType::Unsigned32> o,
+                         std::uint32_t v) {
+        std::uint8_t b[4];
+        st_le32(b, v);
+        return c.download(o.index, o.subindex, ConstBytes(b, 4)).ok();
+    };
+    // Touch probe 1: enabled, first event, its input, positive edge (0x60B8 = 0x0011, CiA 402 60B8h).
+    const auto* tp =
+        master::find_entry(s.master.slaves()[2].out_entries, protocol::obj::touch_probe_function.index);
+    ASSERT_NE(tp, nullptr) << "the drive's default RxPDO maps 0x60B8";
+    auto run = [&](int cycles) {
+        for (int i = 0; i < cycles; ++i) {
+            st_le16(s.master.outputs(2).data() + tp->bit_offset / 8, 0x0011);
+            ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
+            std::this_thread::sleep_for(std::chrono::microseconds(500));
+        }
+    };
+    auto digital_inputs = [&] {
+        const auto r = gauge.upload(protocol::obj::digital_inputs.index, 0);
+        EXPECT_TRUE(r.ok());
+        return r.ok() && r.data.size() >= 4 ? ld_le32(r.data.data()) : 0u;
+    };
+    auto probe_status = [&] {
+        const auto r = gauge.upload(protocol::obj::touch_probe_status.index, 0);
+        return r.ok() && r.data.size() >= 2 ? ld_le16(r.data.data()) : 0u;
+    };
+    run(10);
+    EXPECT_EQ(digital_inputs() & (3u << 16), 0u) << "nothing set: both probe inputs low";
+    EXPECT_EQ(probe_status() & 0x2u, 0u);
+    // valves channel 1 on: touch probe input 1 (0x60FD bit 16) and a latched positive edge (0x60B9 bit 1).
+    s.master.outputs(1)[0] = 0x02;
+    run(10);
+    EXPECT_EQ(digital_inputs() & (3u << 16), 1u << 16);
+    EXPECT_EQ(probe_status() & 0x3u, 0x3u) << "probe 1 enabled, its positive edge stored";
+    s.master.outputs(1)[0] = 0x00;
+    run(10);
+    EXPECT_EQ(digital_inputs() & (1u << 16), 0u);
+    // axis: digital output 16 set but masked off: the wire stays low; with its mask bit: high.
+    ASSERT_TRUE(download32(axis, protocol::obj::digital_outputs::physical_outputs, 1u << 16));
+    run(10);
+    EXPECT_EQ(digital_inputs() & (1u << 17), 0u) << "0x60FE:2 masks the output off";
+    ASSERT_TRUE(download32(axis, protocol::obj::digital_outputs::bit_mask, 1u << 16));
+    run(10);
+    EXPECT_EQ(digital_inputs() & (1u << 17), 1u << 17);
+    ASSERT_TRUE(download32(axis, protocol::obj::digital_outputs::physical_outputs, 0));
+    run(10);
+    EXPECT_EQ(digital_inputs() & (1u << 17), 0u);
+}
+
+TEST(NetworkFile, DriveWiresAreCheckedWithTheirLine) {
+    auto refused = [](const std::string& text) {
+        try {
+            parse_network(text, "n.yaml");
+        } catch (const NetworkFileError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    EXPECT_NE(
+        refused(
+            "devices:\n  - name: a\n    device: drive\n    inputs:\n      2: {signal: constant, value: 1}\n")
+            .find("n.yaml:5: a: inputs: channel 2: it has channels 0-1 (touch probe inputs 1 and 2)"),
+        std::string::npos);
+    EXPECT_NE(refused("devices:\n  - name: a\n    device: drive\n  - name: b\n    device: digital-in\n"
+                      "    inputs:\n      0: {wire: a:32}\n")
+                  .find("n.yaml:7: b: wire: a has channels 0-31"),
+              std::string::npos);
+    EXPECT_NE(refused("devices:\n  - name: a\n    device: coupler\n  - name: b\n    device: drive\n"
+                      "    inputs:\n      0: {wire: a:0}\n")
+                  .find("n.yaml:7: b: wire: a is no output terminal"),
+              std::string::npos);
+    EXPECT_NE(refused("devices:\n  - name: a\n    device: hiwin-d2\n    inputs:\n      0: {wire: a:0}\n")
+                  .find("n.yaml:5: a: inputs: is for the built-in input terminals"),
+              std::string::npos);
 }
 
 // A device with two output SyncManagers (the EL2262's oversampling outputs, SM0 and SM1): an FMMU for each
