@@ -11,12 +11,14 @@
 
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <net/if.h>
 #include <netinet/in.h>
 #include <netinet/ip.h>
 #include <netinet/ip_icmp.h>
 #include <poll.h>
 #include <sched.h>
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -24,7 +26,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <algorithm>
 #include <filesystem>
+#include <optional>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -52,7 +56,20 @@ std::string read_text(const std::string& p) {
 }
 
 bool sh(const std::string& cmd) {
-    return std::system((cmd + " >/dev/null 2>&1").c_str()) == 0;
+    return std::system(("{ " + cmd + "; } >/dev/null 2>&1").c_str()) == 0;
+}
+
+// The MAC address of an interface of this namespace (sysfs shows the namespace it was mounted in).
+std::optional<protocol::MacAddress> mac_of(const char* ifname) {
+    const int s = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    ifreq ifr{};
+    std::strncpy(ifr.ifr_name, ifname, IFNAMSIZ - 1);
+    const bool ok = s >= 0 && ::ioctl(s, SIOCGIFHWADDR, &ifr) == 0;
+    if (s >= 0) ::close(s);
+    if (!ok) return std::nullopt;
+    protocol::MacAddress m;
+    std::copy_n(reinterpret_cast<const std::uint8_t*>(ifr.ifr_hwaddr.sa_data), m.size(), m.begin());
+    return m;
 }
 
 // Sends ICMP echo requests to `to` from this namespace (a raw socket, as ping) until one is answered or the
@@ -135,7 +152,7 @@ TEST(EoeVeth, PingAndTcpThroughTheDeviceToTheNetworkBehindIt) {
     const std::string log = (std::filesystem::temp_directory_path() /
                              ("vecat-eoe-veth-" + std::to_string(getpid()) + ".log"))
                                 .string();
-    test::ChildProcess vecat({VECAT_BINARY, "run", "--iface", "eoes", "--eoe-tap", "vdev"}, log);
+    test::ChildProcess vecat({VECAT_BINARY, "run", "--iface", "eoes", "--slaves", "1", "--eoe-tap", "vdev"}, log);
     ASSERT_GT(vecat.pid, 0);
     for (int i = 0; i < 100 && read_text(log).find("Ctrl-C stops") == std::string::npos; ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -170,11 +187,8 @@ TEST(EoeVeth, PingAndTcpThroughTheDeviceToTheNetworkBehindIt) {
     ASSERT_TRUE(set.ok()) << "result " << set.result.value_or(0xFFFF);
     eoe::Tap mtap("mtap");
     ASSERT_TRUE(sh("ip addr add 10.77.0.1/24 dev mtap"));
-    const std::string mac_text = read_text("/sys/class/net/mtap/address");
-    protocol::MacAddress mtap_mac{};
-    ASSERT_EQ(std::sscanf(mac_text.c_str(), "%hhx:%hhx:%hhx:%hhx:%hhx:%hhx", &mtap_mac[0], &mtap_mac[1],
-                          &mtap_mac[2], &mtap_mac[3], &mtap_mac[4], &mtap_mac[5]),
-              6);
+    const auto mtap_mac = mac_of("mtap");
+    ASSERT_TRUE(mtap_mac);
 
     // The listener behind the device: a thread that enters that namespace and echoes what it gets.
     std::atomic<bool> listening{false};
@@ -250,7 +264,7 @@ TEST(EoeVeth, PingAndTcpThroughTheDeviceToTheNetworkBehindIt) {
         Pump pump(client, mtap);
         EXPECT_FALSE(ping("10.77.0.2", 10, std::chrono::milliseconds(1500)));
     }
-    f.macs[0] = mtap_mac;
+    f.macs[0] = *mtap_mac;
     ASSERT_TRUE(client.set_filter(f).ok());
     {
         Pump pump(client, mtap);
