@@ -206,12 +206,17 @@ TEST(EoeVeth, PingAndTcpThroughTheDeviceToTheNetworkBehindIt) {
         pollfd pf{l, POLLIN, 0};
         if (::poll(&pf, 1, 20000) <= 0) return ::close(l), void();
         const int c = ::accept(l, nullptr, nullptr);
-        char buf[256];
-        const ssize_t n = ::recv(c, buf, sizeof buf, 0);
-        if (n > 0) {
-            heard.assign(buf, static_cast<std::size_t>(n));
-            const std::string reply = "echo: " + heard;
-            ::send(c, reply.data(), reply.size(), 0);
+        timeval tv{10, 0};
+        ::setsockopt(c, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+        ::setsockopt(c, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+        char buf[4096];
+        for (ssize_t n; (n = ::recv(c, buf, sizeof buf, 0)) > 0;)  // until the client shuts down its side
+            heard.append(buf, static_cast<std::size_t>(n));
+        const std::string reply = "echo: " + heard;
+        for (std::size_t off = 0; off < reply.size();) {
+            const ssize_t n = ::send(c, reply.data() + off, reply.size() - off, 0);
+            if (n <= 0) break;
+            off += static_cast<std::size_t>(n);
         }
         ::close(c);
         ::close(l);
@@ -228,29 +233,39 @@ TEST(EoeVeth, PingAndTcpThroughTheDeviceToTheNetworkBehindIt) {
         for (std::uint16_t seq = 1; seq <= 3; ++seq)
             EXPECT_TRUE(ping("10.77.0.5", seq)) << "ping 10.77.0.5 (the device) #" << seq;
 
-        // TCP: connect, send, read the echo.
+        // TCP: connect, send 48 KiB (full-size segments: 1514-byte frames in 7 fragments each way), read
+        // the echo.
+        std::string hello = "hello over EoE ";
+        for (int i = 0; i < 48 * 1024; ++i)
+            hello.push_back(static_cast<char>('a' + i % 26));
         const int c = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
         sockaddr_in a{};
         a.sin_family = AF_INET;
         a.sin_port = htons(7777);
         ::inet_pton(AF_INET, "10.77.0.2", &a.sin_addr);
-        timeval tv{5, 0};
+        timeval tv{10, 0};
         ::setsockopt(c, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
         ::setsockopt(c, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
         ASSERT_EQ(::connect(c, reinterpret_cast<sockaddr*>(&a), sizeof a), 0) << std::strerror(errno);
-        const std::string hello = "hello over EoE";
-        ASSERT_EQ(::send(c, hello.data(), hello.size(), 0), static_cast<ssize_t>(hello.size()));
-        char buf[256];
+        for (std::size_t off = 0; off < hello.size();) {
+            const ssize_t n = ::send(c, hello.data() + off, hello.size() - off, 0);
+            ASSERT_GT(n, 0) << std::strerror(errno);
+            off += static_cast<std::size_t>(n);
+        }
+        ::shutdown(c, SHUT_WR);
+        char buf[4096];
         std::string got;
         for (ssize_t n; (n = ::recv(c, buf, sizeof buf, 0)) > 0;)
             got.append(buf, static_cast<std::size_t>(n));
         ::close(c);
-        EXPECT_EQ(got, "echo: hello over EoE");
-        EXPECT_GT(pump.to_device.load(), 6u);
-        EXPECT_GT(pump.from_device.load(), 6u);
+        EXPECT_EQ(got.size(), hello.size() + 6);
+        EXPECT_TRUE(got == "echo: " + hello);
+        EXPECT_GT(pump.to_device.load(), 30u);
+        EXPECT_GT(pump.from_device.load(), 30u);
     }
     server.join();
-    EXPECT_EQ(heard, "hello over EoE");
+    EXPECT_EQ(heard.substr(0, 15), "hello over EoE ");
+    EXPECT_EQ(heard.size(), 15u + 48 * 1024);
 
     // The address filter on the way back: with only another address (and no broadcasts) the answers from
     // behind the device stay there; with the master's TAP address they come again.
