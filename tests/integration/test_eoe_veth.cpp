@@ -3,7 +3,7 @@
 // (the project master over a raw socket) and bridges its own TAP interface to the device through its EoE
 // client, as a master that routes IP through EoE does (IgH's eoeXsY interfaces, SOEM's eoe_test). The
 // device's TAP is moved into a namespace of its own with an address behind the device. Then real ICMP echo
-// (a raw socket, as ping) and a TCP connection go from the master's namespace to the kernel behind the
+// (a raw socket, as ping) and a TCP connection (48 KiB each way) go from the master's namespace to the kernel behind the
 // device, and a ping to the device's own address (set IP parameter) is answered by the device. The address
 // filter, set by the master, is honoured on the way back. Needs root or unprivileged user namespaces
 // (skipped otherwise), and ip, unshare and nsenter.
