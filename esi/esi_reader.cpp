@@ -534,7 +534,10 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
     d.coe_details = 0;
     if (auto mbx = dev.child("Mailbox")) {
         if (mbx.child("AoE")) d.mailbox_protocols |= mp::AoE;
-        if (mbx.child("EoE")) d.mailbox_protocols |= mp::EoE;
+        if (mbx.child("EoE")) {
+            d.mailbox_protocols |= mp::EoE;
+            d.eoe_details = device::eoe_details::Enable;  // ETG.2000: the SII General EoE details of <EoE>
+        }
         if (mbx.child("FoE")) {
             d.mailbox_protocols |= mp::FoE;
             d.foe_details = device::foe_details::Enable;  // ETG.2000: the SII General FoE details of <FoE>

@@ -29,6 +29,8 @@
 #include "esi/esi_check.hpp"
 #include "esi/esi_reader.hpp"
 #include "esi/esi_writer.hpp"
+#include "eoe/eoe_bridge.hpp"
+#include "eoe/eoe_server.hpp"
 #include "foe/foe_server.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
@@ -156,6 +158,7 @@ struct RunOptions {
     vecat::foe::FoeOptions foe;       // --foe-dir, --foe-max-size, --foe-password
     std::string redundant_iface;      // --redundant-iface: the master's second port (cable redundancy)
     std::vector<std::string> quirks;  // --quirk: of every device of the line (device/quirks.hpp)
+    std::string eoe_tap;              // --eoe-tap: the EoE devices' Ethernet sides as TAP PREFIXn
 };
 
 // Several observers of the frames (the report's checks), each called in turn.
@@ -177,7 +180,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
                  sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, network_path,
-                 eni_path, esi_dir, report_path, report_fail, foe_opts, redundant_iface, quirks] = o;
+                 eni_path, esi_dir, report_path, report_fail, foe_opts, redundant_iface, quirks, eoe_tap] = o;
     std::string why;
     for (const std::string& i : {iface, downstream, redundant_iface}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -264,6 +267,20 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     // FoE and the BOOT state's firmware update for every device that declares FoE (src/foe/README.md).
     if (const auto n = vecat::foe::attach_foe(*seg, foe_opts); n > 0 && !foe_opts.dir.empty())
         fmt::print(log, "vecat: FoE files of {} slave(s) in {}/slave-N\n", n, foe_opts.dir);
+    // EoE for every device that declares it; with --eoe-tap its Ethernet side is a TAP (src/eoe/README.md).
+    const std::size_t eoe_devices = vecat::eoe::attach_eoe(*seg);
+    std::unique_ptr<vecat::eoe::EoeBridge> eoe_bridge;
+    if (!eoe_tap.empty()) {
+        try {
+            eoe_bridge = std::make_unique<vecat::eoe::EoeBridge>(*seg, eoe_tap);
+        } catch (const std::exception& e) {
+            fmt::print(stderr, "vecat: --eoe-tap: {}\n", e.what());
+            return 1;
+        }
+        if (eoe_devices == 0) fmt::print(stderr, "vecat: --eoe-tap: no device of the line declares EoE\n");
+        for (std::size_t i = 0; i < eoe_bridge->size(); ++i)
+            fmt::print(log, "vecat: EoE Ethernet side of a device on TAP {}\n", eoe_bridge->tap(i).name());
+    }
     // DC oscillators: +drift, -drift, +drift... against the host clock (neighbours differ by 2 x drift).
     for (std::size_t i = 0; i < seg->size(); ++i)
         seg->slave(i).esc().dc().set_drift_ppm(i % 2 ? -drift_ppm : drift_ppm, vecat::net::monotonic_ns());
@@ -298,6 +315,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     opt.tick_us = tick_us;
     opt.downstream = down.get();
     opt.secondary = second.get();
+    opt.side = eoe_bridge.get();
     if (second)
         fmt::print(log, "vecat: port {} of slave {} cabled back to {} (cable redundancy; {})\n",
                    seg->redundancy_port(), seg->redundancy_slave(), redundant_iface,
@@ -559,6 +577,11 @@ int main(int argc, char** argv) {
         c->add_option("--foe-password", ro.foe.password,
                       "Password every FoE request must carry (0x... accepted; a wrong one: FoE error 0x800A)")
             ->capture_default_str();
+        c->add_option("--eoe-tap", ro.eoe_tap,
+                      "Give each device that declares EoE an Ethernet side: a TAP interface PREFIXn (n: the "
+                      "slave's position from 0) in vecat's network namespace; frames the master sends "
+                      "through EoE to other addresses go out of it, frames from it go to the master")
+            ->option_text("PREFIX");
         c->add_option("--quirk", ro.quirks,
                       "Make every device of the line less complete, as some real devices are (repeatable, or "
                       "a comma-separated list): " +

@@ -59,9 +59,12 @@ DeviceDescription default_drive() {
     d.order_code = "VECAT-SD402";
     d.group_type = "ServoDrives";
     d.group_name = "Servo drives";
-    // CoE, and FoE with the BOOT state (firmware update, src/foe/README.md).
-    d.mailbox_protocols = mbx_proto::CoE | mbx_proto::FoE;
+    // CoE, FoE with the BOOT state (firmware update, src/foe/README.md), and EoE (src/eoe/README.md): servo
+    // drives of this class carry an Ethernet channel for their commissioning tools (the Elmo Gold and
+    // Inovance SV660N ESIs in ../shared/data/esi declare <EoE>).
+    d.mailbox_protocols = mbx_proto::CoE | mbx_proto::FoE | mbx_proto::EoE;
     d.foe_details = foe_details::Enable;
+    d.eoe_details = eoe_details::Enable;
     d.bootstrap_supported = true;
     // The bootstrap mailbox is the standard one (boot_mailbox left 0). A master must disable SM0/SM1 before
     // it can move them (ESC datasheet: the SyncManager configuration is locked while enabled), which SOEM's

@@ -88,6 +88,11 @@ namespace foe_details {
 inline constexpr std::uint8_t Enable = 0x01;
 }  // namespace foe_details
 
+// EoE details byte of the SII General category (ETG.2010 General: bit 0 "EoE enabled").
+namespace eoe_details {
+inline constexpr std::uint8_t Enable = 0x01;
+}  // namespace eoe_details
+
 // The bootstrap mailbox (ETG.2010 SII words 0x0014-0x0017, ETG.2000 Eeprom/BootStrap): where SM0 (master to
 // slave) and SM1 (slave to master) lie in the BOOT state.
 struct BootMailbox {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <vector>
 
 namespace vecat::net {
 
@@ -55,6 +56,21 @@ long receive_either(RawSocket& sock, RawSocket& down, Bytes buf, std::int64_t wa
     return 0;
 }
 
+// Waits for a frame on the socket or for one of the side channel's descriptors to become readable (then
+// services it). p: the socket's pollfd followed by the side channel's, made before the loop.
+long receive_or_side(RawSocket& sock, SideChannel& side, std::vector<pollfd>& p, Bytes buf,
+                     std::int64_t wait_us) {
+    if (long n = sock.try_receive(buf); n != 0) return n;
+    for (auto& x : p)
+        x.revents = 0;
+    const std::int64_t us = wait_us <= 0 ? 0 : wait_us;
+    const timespec ts{static_cast<time_t>(us / 1'000'000), static_cast<long>((us % 1'000'000) * 1000)};
+    if (::ppoll(p.data(), p.size(), &ts, nullptr) <= 0) return 0;
+    if (std::any_of(p.begin() + 1, p.end(), [](const pollfd& x) { return x.revents != 0; }))
+        side.service(monotonic_ns());
+    return (p[0].revents & POLLIN) ? sock.try_receive(buf) : 0;
+}
+
 // A frame counts as of its kernel receive time (on the monotonic clock).
 std::uint64_t frame_time(const RawSocket& sock, std::uint64_t now) {
     const std::uint64_t real = realtime_ns();
@@ -102,6 +118,12 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     if (opt.downstream) seg.set_downstream_link(opt.downstream->carrier());
     if (opt.secondary) seg.set_secondary_link(opt.secondary->carrier());
     RawSocket* const other = opt.downstream ? opt.downstream : opt.secondary;
+    std::vector<pollfd> side_fds;  // the socket, then the side channel's descriptors
+    if (opt.side) {
+        side_fds.push_back({sock.fd(), POLLIN, 0});
+        for (const int fd : opt.side->fds())
+            side_fds.push_back({fd, POLLIN, 0});
+    }
     // The reply goes out before the firmware of the slaves runs (see Segment::set_deferred_firmware).
     const bool was_deferred = seg.deferred_firmware();
     seg.set_deferred_firmware(true);
@@ -121,8 +143,11 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
         const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
         bool from_down = false;
         long n = 0;
+        if (opt.side && (spin || other)) opt.side->service(monotonic_ns());
         if (other)
             n = receive_either(sock, *other, Bytes(buf.data(), buf.size()), wait_us, spin, from_down);
+        else if (opt.side && !spin)
+            n = receive_or_side(sock, *opt.side, side_fds, Bytes(buf.data(), buf.size()), wait_us);
         else
             n = spin ? sock.try_receive(Bytes(buf.data(), buf.size()))
                      : sock.receive(Bytes(buf.data(), buf.size()), wait_us);

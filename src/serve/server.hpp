@@ -11,6 +11,7 @@
 #include "net/frame_observer.hpp"
 #include "net/pcapng_writer.hpp"
 #include "net/raw_socket.hpp"
+#include "net/side_channel.hpp"
 
 namespace vecat::net {
 
@@ -64,6 +65,10 @@ struct ServeOptions {
     // downstream.
     RawSocket* secondary = nullptr;
     ServeCounters* counters = nullptr;  // live counters, if given
+    // Descriptors to wait on beside the socket (the EoE devices' TAP interfaces, src/eoe/eoe_bridge.hpp):
+    // the loop wakes up when one is readable and calls its service() between frames. With busy polling,
+    // downstream or secondary it is serviced on every pass instead (without waking the loop).
+    SideChannel* side = nullptr;
 };
 
 struct ServeStats {
