@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "master/coe_client.hpp"
+#include "master/soe_client.hpp"
 #include "protocol/fmmu.hpp"
 #include "protocol/registers.hpp"
 #include "protocol/sync_manager.hpp"
@@ -341,10 +342,36 @@ bool Master::read_pdo_sizes_coe(SlaveInfo& s) {
     return true;
 }
 
+bool Master::read_pdo_sizes_soe(SlaveInfo& s) {
+    // Like SOEM's ecx_readIDNmap (drive 0): S-0-0024 lists the IDNs of the MDT, S-0-0016 those of the AT; the
+    // attribute of each gives its length; the control and status word (16 bits each) are not listed.
+    SoeClient c(*this, s.station);
+    auto bytes_of = [&](protocol::Idn list, unsigned& bytes) {
+        const auto r = c.read(0, protocol::soe_element::Value, list);
+        if (!r.ok() || r.data.size() < protocol::kSoeListHeaderSize) return false;
+        const std::size_t current = ld_le16(r.data.data());
+        bytes = 2;
+        for (std::size_t i = 0; i + 1 < current && protocol::kSoeListHeaderSize + i + 1 < r.data.size(); i += 2) {
+            const protocol::Idn idn{ld_le16(r.data.data() + protocol::kSoeListHeaderSize + i)};
+            const auto a = c.read(0, protocol::soe_element::Attribute, idn);
+            if (!a.ok() || a.data.size() < 4) return false;
+            const auto attr = protocol::SoeAttribute::unpack(ld_le32(a.data.data()));
+            if (!attr.list) bytes += static_cast<unsigned>(attr.element_size());
+        }
+        return true;
+    };
+    return bytes_of(protocol::s_idn(24), s.out_bytes) && bytes_of(protocol::s_idn(16), s.in_bytes);
+}
+
 bool Master::configure_process_data() {
-    for (auto& s : slaves_)
-        if ((s.sii.mailbox_protocols & protocol::sii::MailboxCoE) && s.sii.std_rx_mbx_size)
+    for (auto& s : slaves_) {
+        if (!s.sii.std_rx_mbx_size) continue;
+        if (s.sii.mailbox_protocols & protocol::sii::MailboxCoE) {
             if (!read_pdo_sizes_coe(s)) return false;
+        } else if (s.sii.mailbox_protocols & protocol::sii::MailboxSoE) {
+            if (!read_pdo_sizes_soe(s)) return false;
+        }
+    }
     std::uint32_t laddr = opt_.logical_base;
     std::size_t off = 0;
     unsigned n_out = 0, n_in = 0;

@@ -28,7 +28,7 @@ struct Kind {
 constexpr Kind kBuiltIn[] = {
     {"drive", Source::Drive},          {"coupler", Source::Coupler},        {"junction", Source::Junction},
     {"digital-in", Source::DigitalIn}, {"digital-out", Source::DigitalOut}, {"analog-in", Source::AnalogIn},
-    {"analog-out", Source::AnalogOut}, {"hiwin-d2", Source::HiwinD2},
+    {"analog-out", Source::AnalogOut}, {"hiwin-d2", Source::HiwinD2},       {"soe-drive", Source::SoeDrive},
 };
 
 bool is_io(Source s) {
@@ -339,6 +339,8 @@ std::string_view to_string(Source s) noexcept {
             return "drive";
         case Source::HiwinD2:
             return "hiwin-d2";
+        case Source::SoeDrive:
+            return "soe-drive";
         case Source::Esi:
             return "esi";
         case Source::Sii:
