@@ -568,11 +568,16 @@ TEST(SoeDriveDevice, MasterMapsTheTelegramAndRunsTheFollower) {
     const auto diag = c.read(0, el::Value, idn::Class1Diagnostic);
     ASSERT_TRUE(diag.ok());
     EXPECT_EQ(ld_le16(diag.data.data()), soe::c1d::ExcessiveDeviation);
+    // The master brings the command back to the feedback first: the reset takes effect with the MDT the
+    // drive has (as a real drive, whose last MDT would shut it down again).
     st_le32(out.data() + 2, 1234);
+    ASSERT_EQ(m.b.master.exchange_process_data(), wkc);
+    EXPECT_EQ(ld_le16(m.b.master.inputs(0).data()) >> soe::status::ReadyShift, soe::status::NotReady);
     ASSERT_TRUE(c.write(0, el::Value, idn::ResetClass1Diagnostic, u16(3)).ok());
     for (int i = 0; i < 3; ++i)
         ASSERT_EQ(m.b.master.exchange_process_data(), wkc);
     EXPECT_EQ(ld_le16(m.b.master.inputs(0).data()) >> soe::status::ReadyShift, soe::status::InOperation);
+    EXPECT_EQ(m.drive().class1_diagnostic(), 0);
 }
 
 TEST(SoeDriveDevice, ApplicationTelegramChangesTheProcessDataLengths) {
