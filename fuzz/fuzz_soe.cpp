@@ -44,7 +44,8 @@ void check_reply(ConstBytes r) {
     VECAT_FUZZ_CHECK(type == protocol::MailboxType::SoE);
     const auto m = protocol::parse_soe(p);
     VECAT_FUZZ_CHECK(m.has_value());
-    VECAT_FUZZ_CHECK(m->op == protocol::SoeOpCode::ReadResponse || m->op == protocol::SoeOpCode::WriteResponse ||
+    VECAT_FUZZ_CHECK(m->op == protocol::SoeOpCode::ReadResponse ||
+                     m->op == protocol::SoeOpCode::WriteResponse ||
                      m->op == protocol::SoeOpCode::Notification);
     if (m->error) {
         VECAT_FUZZ_CHECK(m->data.size() == 2 && !m->incomplete);
@@ -101,8 +102,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                 m.idn_or_fragments = in.u16();
                 m.data = in.chunk(sm0.length);
                 buf.assign(sm0.length, 0);
-                const std::size_t n = protocol::write_soe(
-                    Bytes(buf.data() + protocol::kMailboxHeaderSize, buf.size() - protocol::kMailboxHeaderSize), m);
+                const std::size_t n = protocol::write_soe(Bytes(buf.data() + protocol::kMailboxHeaderSize,
+                                                                buf.size() - protocol::kMailboxHeaderSize),
+                                                          m);
                 protocol::MailboxHeader h;
                 h.length = static_cast<std::uint16_t>(n);
                 h.type = static_cast<std::uint8_t>(protocol::MailboxType::SoE);

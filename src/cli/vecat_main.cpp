@@ -254,7 +254,8 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         }
         const auto& dev = *loaded;
         if (esi_path.empty() && sel.type == kSoeDrive)
-            seg = vecat::esc::make_segment(vecat::esc::DeviceModel::of(dev), slaves, {}, vecat::soe::make_soe_drive);
+            seg = vecat::esc::make_segment(vecat::esc::DeviceModel::of(dev), slaves, {},
+                                           vecat::soe::make_soe_drive);
         else
             seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
         served = fmt::format("{} x \"{}\" (vendor 0x{:08X}, product 0x{:08X})", slaves, dev.name,
@@ -489,10 +490,11 @@ int main(int argc, char** argv) {
     std::optional<std::uint32_t> revision;
     auto add_esi_options = [&](CLI::App* c, bool esi_option) {
         if (esi_option) c->add_option("--esi", esi_path, "Emulate a device described by this ESI file");
-        c->add_option("--device", device_type,
-                      "Device of the ESI file by its Type name; without --esi a built-in drive: drive (the "
-                      "vecat drive, the default), hiwin-d2 (the HIWIN D2 CoE drive) or soe-drive (the AX5000-like SoE "
-                      "drive)");
+        c->add_option(
+            "--device", device_type,
+            "Device of the ESI file by its Type name; without --esi a built-in drive: drive (the "
+            "vecat drive, the default), hiwin-d2 (the HIWIN D2 CoE drive) or soe-drive (the AX5000-like SoE "
+            "drive)");
         c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
         c->add_option("--revision", revision,
                       "Revision of that device (0x... accepted); without it the file's first one. An error "

@@ -351,7 +351,8 @@ bool Master::read_pdo_sizes_soe(SlaveInfo& s) {
         if (!r.ok() || r.data.size() < protocol::kSoeListHeaderSize) return false;
         const std::size_t current = ld_le16(r.data.data());
         bytes = 2;
-        for (std::size_t i = 0; i + 1 < current && protocol::kSoeListHeaderSize + i + 1 < r.data.size(); i += 2) {
+        for (std::size_t i = 0; i + 1 < current && protocol::kSoeListHeaderSize + i + 1 < r.data.size();
+             i += 2) {
             const protocol::Idn idn{ld_le16(r.data.data() + protocol::kSoeListHeaderSize + i)};
             const auto a = c.read(0, protocol::soe_element::Attribute, idn);
             if (!a.ok() || a.data.size() < 4) return false;

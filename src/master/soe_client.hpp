@@ -25,9 +25,9 @@ struct SoeResult {
     bool transport_ok = false;                            // every request got a reply
     std::optional<std::uint16_t> error;                   // the slave answered with this SoE error code
     std::optional<protocol::MailboxError> mailbox_error;  // the slave answered with a mailbox error
-    bool unexpected = false;         // an answer that does not belong to the request
-    std::vector<std::uint8_t> data;  // read: the elements, all fragments together
-    unsigned fragments = 0;          // fragments with the incomplete flag sent (write) or received (read)
+    bool unexpected = false;                              // an answer that does not belong to the request
+    std::vector<std::uint8_t> data;                       // read: the elements, all fragments together
+    unsigned fragments = 0;  // fragments with the incomplete flag sent (write) or received (read)
     bool ok() const { return transport_ok && !error && !mailbox_error && !unexpected; }
 };
 
@@ -36,7 +36,8 @@ class SoeClient {
     // The slave's mailbox as configured now (SM0/SM1 read from the ESC, as CoeClient).
     SoeClient(Master& m, std::uint16_t station);
 
-    SoeResult read(std::uint8_t drive, std::uint8_t elements, protocol::Idn idn, std::size_t max_size = 65536);
+    SoeResult read(std::uint8_t drive, std::uint8_t elements, protocol::Idn idn,
+                   std::size_t max_size = 65536);
     // Fragments (the incomplete flag, fragments still to come) when data does not fit one mailbox.
     SoeResult write(std::uint8_t drive, std::uint8_t elements, protocol::Idn idn, ConstBytes data);
     // Waits for a notification (those collected so far first).

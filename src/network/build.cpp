@@ -204,12 +204,11 @@ Made make_device(const DeviceEntry& e, const std::string& at, const std::string&
     apply(d, e);
     apply_quirks(d, e, quirks_at);
     m.model = esc::DeviceModel::of(d);
-    m.esc.port_descriptor = descriptor(
-        default_ports(e.source),
-        e.source == Source::Drive || e.source == Source::HiwinD2 || e.source == Source::SoeDrive ||
-                e.source == Source::Esi
-            ? kPortMii
-                                                                                            : kPortEbus);
+    m.esc.port_descriptor =
+        descriptor(default_ports(e.source), e.source == Source::Drive || e.source == Source::HiwinD2 ||
+                                                    e.source == Source::SoeDrive || e.source == Source::Esi
+                                                ? kPortMii
+                                                : kPortEbus);
     if (drive)
         m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
             return std::unique_ptr<esc::Application>(std::make_unique<cia402::Drive>(dd, objects));

@@ -158,10 +158,10 @@ struct SoeMessage {
     SoeOpCode op = SoeOpCode::ReadRequest;
     bool incomplete = false;
     bool error = false;
-    std::uint8_t drive = 0;     // 0..7
-    std::uint8_t elements = 0;  // soe_element flags
+    std::uint8_t drive = 0;              // 0..7
+    std::uint8_t elements = 0;           // soe_element flags
     std::uint16_t idn_or_fragments = 0;  // the IDN, or the fragments left when incomplete
-    ConstBytes data;  // what follows the header (a view into the parsed buffer)
+    ConstBytes data;                     // what follows the header (a view into the parsed buffer)
 
     Idn idn() const noexcept { return Idn{idn_or_fragments}; }
     std::uint16_t fragments_left() const noexcept { return idn_or_fragments; }

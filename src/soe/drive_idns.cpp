@@ -23,7 +23,8 @@ SoeAttribute fixed(std::uint8_t length_code, SoeDataType type, bool wp_cyclic_ph
 }
 
 IdnEntry value(Idn idn, std::string name, SoeAttribute a, std::string unit, std::uint64_t v,
-               std::optional<std::uint64_t> min = std::nullopt, std::optional<std::uint64_t> max = std::nullopt) {
+               std::optional<std::uint64_t> min = std::nullopt,
+               std::optional<std::uint64_t> max = std::nullopt) {
     IdnEntry e;
     e.idn = idn;
     e.name = std::move(name);
@@ -57,7 +58,8 @@ IdnEntry text(Idn idn, std::string name, std::string_view s) {
 }
 
 // An IDN list (2-byte elements) of at most max entries.
-IdnEntry idn_list(Idn idn, std::string name, std::vector<std::uint16_t> idns, std::size_t max, bool writable) {
+IdnEntry idn_list(Idn idn, std::string name, std::vector<std::uint16_t> idns, std::size_t max,
+                  bool writable) {
     IdnEntry e;
     e.idn = idn;
     e.name = std::move(name);
@@ -94,8 +96,8 @@ std::vector<IdnEntry> drive_idns() {
     std::vector<IdnEntry> v;
     v.push_back(value(idn::NcCycleTime, "NC cycle time (TNcyc)", fixed(1, T::Unsigned, true), "us", 1000, 125,
                       65000));
-    v.push_back(value(idn::CommunicationCycleTime, "Communication cycle time (tScyc)", fixed(1, T::Unsigned, true),
-                      "us", 1000, 125, 65000));
+    v.push_back(value(idn::CommunicationCycleTime, "Communication cycle time (tScyc)",
+                      fixed(1, T::Unsigned, true), "us", 1000, 125, 65000));
     v.push_back(read_only(value(idn::Class1Diagnostic, "Class 1 diagnostic", fixed(1, T::Binary), "", 0)));
     v.push_back(value(idn::TelegramType, "Telegram type parameter", fixed(1, T::Binary, true), "",
                       kDefaultTelegram, 0, kApplicationTelegram));
@@ -105,15 +107,19 @@ std::vector<IdnEntry> drive_idns() {
     v.push_back(idn_list(idn::MdtConfiguration, "Configuration list of the MDT", {idn::PositionCommand.raw},
                          kMaxMapped, true));
     v.push_back(text(idn::ManufacturerVersion, "Manufacturer version", "vecat SoE drive 0.1"));
-    v.push_back(value(idn::PrimaryOperationMode, "Primary operation mode", fixed(1, T::Binary, true), "", 0x0003));
+    v.push_back(
+        value(idn::PrimaryOperationMode, "Primary operation mode", fixed(1, T::Binary, true), "", 0x0003));
     v.push_back(value(idn::VelocityCommand, "Velocity command value", fixed(2, T::Signed), "rpm", 0));
-    v.push_back(read_only(value(idn::VelocityFeedback, "Velocity feedback value 1", fixed(2, T::Signed), "rpm", 0)));
+    v.push_back(
+        read_only(value(idn::VelocityFeedback, "Velocity feedback value 1", fixed(2, T::Signed), "rpm", 0)));
     v.push_back(value(idn::PositionCommand, "Position command value", fixed(2, T::Signed), "inc", 0));
-    v.push_back(read_only(value(idn::PositionFeedback, "Position feedback value 1", fixed(2, T::Signed), "inc", 0)));
+    v.push_back(
+        read_only(value(idn::PositionFeedback, "Position feedback value 1", fixed(2, T::Signed), "inc", 0)));
     v.push_back(value(idn::TorqueCommand, "Torque command value", fixed(1, T::Signed, false, 1), "%", 0));
-    v.push_back(read_only(value(idn::TorqueFeedback, "Torque feedback value", fixed(1, T::Signed, false, 1), "%", 0)));
-    v.push_back(value(idn::VelocityLimit, "Bipolar velocity limit value", fixed(2, T::Unsigned), "rpm", 6000, 0,
-                      0x7FFFFFFF));
+    v.push_back(read_only(
+        value(idn::TorqueFeedback, "Torque feedback value", fixed(1, T::Signed, false, 1), "%", 0)));
+    v.push_back(value(idn::VelocityLimit, "Bipolar velocity limit value", fixed(2, T::Unsigned), "rpm", 6000,
+                      0, 0x7FFFFFFF));
     v.push_back(text(idn::DiagnosticMessage, "Diagnostic message", "ready"));
     v.push_back(procedure(idn::ResetClass1Diagnostic, "Reset class 1 diagnostic"));
     v.push_back(procedure(idn::Cp3TransitionCheck, "CP3 transition check"));
@@ -124,9 +130,11 @@ std::vector<IdnEntry> drive_idns() {
     v.push_back(value(idn::MonitoringWindow, "Monitoring window", fixed(2, T::Unsigned), "inc", 100000, 0,
                       0x7FFFFFFF));
     v.push_back(idn_list(idn::AtConfigurable, "IDN-list of configurable data in the AT",
-                         {idn::VelocityFeedback.raw, idn::PositionFeedback.raw, idn::TorqueFeedback.raw}, 8, false));
+                         {idn::VelocityFeedback.raw, idn::PositionFeedback.raw, idn::TorqueFeedback.raw}, 8,
+                         false));
     v.push_back(idn_list(idn::MdtConfigurable, "IDN-list of configurable data in the MDT",
-                         {idn::VelocityCommand.raw, idn::PositionCommand.raw, idn::TorqueCommand.raw}, 8, false));
+                         {idn::VelocityCommand.raw, idn::PositionCommand.raw, idn::TorqueCommand.raw}, 8,
+                         false));
     // P-0-0100: a list of up to 256 4-byte values the master may fill and read back, longer than one mailbox
     // (segmented transfers).
     IdnEntry c;

@@ -37,7 +37,8 @@ void IdnEntry::set_words(const std::vector<std::uint16_t>& w) {
 }
 
 IdnTable::IdnTable(std::vector<IdnEntry> entries) : entries_(std::move(entries)) {
-    std::sort(entries_.begin(), entries_.end(), [](const IdnEntry& a, const IdnEntry& b) { return a.idn < b.idn; });
+    std::sort(entries_.begin(), entries_.end(),
+              [](const IdnEntry& a, const IdnEntry& b) { return a.idn < b.idn; });
 }
 
 IdnEntry* IdnTable::find(Idn idn) {
@@ -124,7 +125,8 @@ bool less(const IdnEntry& e, std::uint64_t a, std::uint64_t b) {
 
 }  // namespace
 
-std::optional<SoeError> IdnTable::read(const IdnEntry& e, std::uint8_t elements, std::vector<std::uint8_t>& out) {
+std::optional<SoeError> IdnTable::read(const IdnEntry& e, std::uint8_t elements,
+                                       std::vector<std::uint8_t>& out) {
     if (elements == 0) return SoeError::NoElementAddressed;
     const std::size_t size = e.attribute.element_size();
     if (elements & el::DataState) put_u16(out, e.data_state);

@@ -77,7 +77,8 @@ class IdnTable {
 
     // Appends the requested elements of an IDN in wire order (data state first, default last; ETG.1000.6
     // 5.6.3). Returns the error of the first element the IDN cannot give.
-    static std::optional<SoeError> read(const IdnEntry& e, std::uint8_t elements, std::vector<std::uint8_t>& out);
+    static std::optional<SoeError> read(const IdnEntry& e, std::uint8_t elements,
+                                        std::vector<std::uint8_t>& out);
     // The checks of a write every IDN gets, before the drive's own (SoeDevice::write_value): only the value
     // is written (another element: its "read only" or "no ..." error), read only, write protected in this
     // phase (CP2 = PREOP, CP3 = SAFEOP, CP4 = OP), the length (a list: current length against the data and

@@ -121,7 +121,8 @@ void SoeDrive::exchange(std::uint64_t, ConstBytes outputs, bool apply_outputs, B
         control_ = ld_le16(outputs.data());
         std::size_t off = 2;
         for (IdnEntry* e : mdt_) {
-            std::copy_n(outputs.begin() + static_cast<std::ptrdiff_t>(off), e->value.size(), e->value.begin());
+            std::copy_n(outputs.begin() + static_cast<std::ptrdiff_t>(off), e->value.size(),
+                        e->value.begin());
             off += e->value.size();
         }
     }
@@ -179,8 +180,8 @@ void SoeDrive::refresh(unsigned, IdnEntry& e) {
     if (e.idn == idn::ControlWord) e.set_number(control_);
     if (e.idn == idn::Class1Diagnostic) e.set_number(c1d_);
     if (e.idn == idn::DiagnosticMessage) {
-        const std::string_view m = c1d_ ? "F: excessive deviation (S-0-0011 bit 11)"
-                                        : (enabled_ ? "in operation" : "ready");
+        const std::string_view m =
+            c1d_ ? "F: excessive deviation (S-0-0011 bit 11)" : (enabled_ ? "in operation" : "ready");
         e.value.assign(m.begin(), m.end());
     }
 }
@@ -258,7 +259,8 @@ bool SoeDrive::execute(Idn i) {
 void SoeDrive::notify(Idn i) {
     for (std::size_t k = 0; k < notes_count_; ++k)
         if (notes_[k] == i) return;
-    if (notes_count_ == kMaxNotes) return;  // bounded: the oldest are still there, the master reads them first
+    if (notes_count_ == kMaxNotes)
+        return;  // bounded: the oldest are still there, the master reads them first
     notes_[notes_count_++] = i;
 }
 

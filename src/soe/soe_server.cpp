@@ -35,8 +35,9 @@ void SoeServer::handle(const protocol::MailboxHeader&, ConstBytes payload, esc::
             end_read();
             end_write();
             ++counters_.errors_sent;
-            out.commit(MailboxType::Error, protocol::make_mailbox_error(
-                                               out.reply_buffer(), protocol::MailboxError::ServiceNotSupported));
+            out.commit(MailboxType::Error,
+                       protocol::make_mailbox_error(out.reply_buffer(),
+                                                    protocol::MailboxError::ServiceNotSupported));
             return;
     }
 }
@@ -44,7 +45,8 @@ void SoeServer::handle(const protocol::MailboxHeader&, ConstBytes payload, esc::
 void SoeServer::error(SoeOpCode response, const SoeMessage& m, SoeError e, esc::MailboxReplySink& out,
                       std::uint16_t idn) {
     ++counters_.errors_sent;
-    const std::size_t n = protocol::write_soe_error(out.reply_buffer(), response, m.drive, m.elements, Idn{idn}, e);
+    const std::size_t n =
+        protocol::write_soe_error(out.reply_buffer(), response, m.drive, m.elements, Idn{idn}, e);
     out.commit(MailboxType::SoE, n);
 }
 
@@ -85,8 +87,7 @@ void SoeServer::send_fragment(esc::MailboxReplySink& out) {
     r.incomplete = !last;
     // ETG.1000.6 5.6.3: a fragment with the incomplete flag carries the number of fragments still to come
     // instead of the IDN; the last one carries the IDN.
-    r.idn_or_fragments =
-        last ? read_idn_ : static_cast<std::uint16_t>((remaining - n + cap - 1) / cap);
+    r.idn_or_fragments = last ? read_idn_ : static_cast<std::uint16_t>((remaining - n + cap - 1) / cap);
     r.data = ConstBytes(read_buf_.data() + read_off_, n);
     out.commit(MailboxType::SoE, protocol::write_soe(b, r));
     read_off_ += n;
@@ -102,14 +103,15 @@ void SoeServer::write(const SoeMessage& m, esc::MailboxReplySink& out) {
     auto append = [this](ConstBytes d) {
         const std::size_t room = kMaxTransfer - std::min(kMaxTransfer, write_buf_.size());
         if (d.size() > room) write_overflow_ = true;
-        write_buf_.insert(write_buf_.end(), d.begin(), d.begin() + static_cast<std::ptrdiff_t>(std::min(room, d.size())));
+        write_buf_.insert(write_buf_.end(), d.begin(),
+                          d.begin() + static_cast<std::ptrdiff_t>(std::min(room, d.size())));
     };
     const bool continues = writing_ && m.drive == write_drive_ && m.elements == write_elements_;
     if (writing_ && !continues) end_write();  // another transfer: the one in progress is abandoned
     if (m.incomplete) {
-        // A fragment (ETG.1000.6 5.6.3): held, not answered; its IDN field counts the fragments still to come.
-        // The count is not checked: masters count it differently (SOEM sends the fragments including this
-        // one, IgH those after it); the last fragment, without the flag, names the IDN.
+        // A fragment (ETG.1000.6 5.6.3): held, not answered; its IDN field counts the fragments still to
+        // come. The count is not checked: masters count it differently (SOEM sends the fragments including
+        // this one, IgH those after it); the last fragment, without the flag, names the IDN.
         if (!writing_) {
             writing_ = true;
             write_overflow_ = false;

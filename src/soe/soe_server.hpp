@@ -69,8 +69,8 @@ class SoeServer final : public esc::MailboxProtocol {
     void read(const protocol::SoeMessage& m, esc::MailboxReplySink& out);
     void write(const protocol::SoeMessage& m, esc::MailboxReplySink& out);
     void send_fragment(esc::MailboxReplySink& out);
-    void error(protocol::SoeOpCode response, const protocol::SoeMessage& m, SoeError e, esc::MailboxReplySink& out,
-               std::uint16_t idn);
+    void error(protocol::SoeOpCode response, const protocol::SoeMessage& m, SoeError e,
+               esc::MailboxReplySink& out, std::uint16_t idn);
     void end_read();
     void end_write(bool abandoned = true);  // false: the transfer ended with its last fragment
 

@@ -46,8 +46,8 @@ struct Sink final : esc::MailboxReplySink {
     }
 };
 
-std::vector<std::uint8_t> request(SoeOpCode op, std::uint8_t drive, std::uint8_t elements, std::uint16_t idn_field,
-                                  ConstBytes data = {}, bool incomplete = false) {
+std::vector<std::uint8_t> request(SoeOpCode op, std::uint8_t drive, std::uint8_t elements,
+                                  std::uint16_t idn_field, ConstBytes data = {}, bool incomplete = false) {
     SoeMessage m;
     m.op = op;
     m.drive = drive;
@@ -64,8 +64,8 @@ std::vector<std::uint8_t> u16(std::uint16_t v) {
     return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8)};
 }
 std::vector<std::uint8_t> u32(std::uint32_t v) {
-    return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v >> 16),
-            static_cast<std::uint8_t>(v >> 24)};
+    return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8),
+            static_cast<std::uint8_t>(v >> 16), static_cast<std::uint8_t>(v >> 24)};
 }
 // A list value: current length, maximum length, the bytes.
 std::vector<std::uint8_t> list(const std::vector<std::uint8_t>& bytes, std::uint16_t max = 0) {
@@ -183,7 +183,8 @@ TEST(SoeProtocol, ErrorResponseCarriesTheCodeAfterTheHeader) {
                                              SoeError::DataTooLong);
     ASSERT_EQ(n, 6u);
     // opcode 4 | error (bit 4) | drive 1 (bits 5-7); elements; IDN 47; code 0x7003.
-    EXPECT_EQ(std::vector<std::uint8_t>(b, b + 6), (std::vector<std::uint8_t>{0x34, 0x40, 47, 0, 0x03, 0x70}));
+    EXPECT_EQ(std::vector<std::uint8_t>(b, b + 6),
+              (std::vector<std::uint8_t>{0x34, 0x40, 47, 0, 0x03, 0x70}));
     EXPECT_EQ(protocol::parse_soe(ConstBytes(b, n))->error_code(), 0x7003);
 }
 
@@ -216,7 +217,8 @@ TEST(SoeRead, ElementsComeInWireOrder) {
     const auto m = d.read(el::Name | el::Attribute | el::Unit | el::Value, idn::PositionCommand);
     ASSERT_FALSE(m.error);
     const std::string name = "Position command value";
-    std::vector<std::uint8_t> want = list({name.begin(), name.end()}, static_cast<std::uint16_t>(name.size()));
+    std::vector<std::uint8_t> want =
+        list({name.begin(), name.end()}, static_cast<std::uint16_t>(name.size()));
     const auto a = u32(d.drive.table(0).find(idn::PositionCommand)->attribute.pack());
     want.insert(want.end(), a.begin(), a.end());
     const auto unit = list({'i', 'n', 'c'}, 3);
@@ -231,7 +233,8 @@ TEST(SoeRead, MinMaxDefaultAndDataState) {
     DriveBench d;
     auto m = d.read(el::Min | el::Max | el::Default, idn::TelegramType);
     ASSERT_FALSE(m.error);
-    EXPECT_EQ(std::vector<std::uint8_t>(m.data.begin(), m.data.end()), (std::vector<std::uint8_t>{0, 0, 7, 0, 4, 0}));
+    EXPECT_EQ(std::vector<std::uint8_t>(m.data.begin(), m.data.end()),
+              (std::vector<std::uint8_t>{0, 0, 7, 0, 4, 0}));
     m = d.read(el::DataState, idn::ResetClass1Diagnostic);
     EXPECT_EQ(ld_le16(m.data.data()), soe::command_state::NotSet);
 }
@@ -239,9 +242,11 @@ TEST(SoeRead, MinMaxDefaultAndDataState) {
 TEST(SoeRead, TheMdtAndAtConfigurationAsSoemReadsIt) {
     DriveBench d;
     auto m = d.read(el::Value, idn::MdtConfiguration);
-    EXPECT_EQ(std::vector<std::uint8_t>(m.data.begin(), m.data.end()), (std::vector<std::uint8_t>{2, 0, 16, 0, 47, 0}));
+    EXPECT_EQ(std::vector<std::uint8_t>(m.data.begin(), m.data.end()),
+              (std::vector<std::uint8_t>{2, 0, 16, 0, 47, 0}));
     m = d.read(el::Value, idn::AtConfiguration);
-    EXPECT_EQ(std::vector<std::uint8_t>(m.data.begin(), m.data.end()), (std::vector<std::uint8_t>{2, 0, 16, 0, 51, 0}));
+    EXPECT_EQ(std::vector<std::uint8_t>(m.data.begin(), m.data.end()),
+              (std::vector<std::uint8_t>{2, 0, 16, 0, 51, 0}));
     // The attribute's length (bits 16-17: 2 = 4 bytes), not a list: SOEM adds 8 << 2 bits.
     m = d.read(el::Attribute, idn::PositionFeedback);
     const auto a = protocol::SoeAttribute::unpack(ld_le32(m.data.data()));
@@ -272,7 +277,8 @@ TEST(SoeRead, LongValueGoesInFragmentsOneAtATime) {
     for (std::size_t i = 0; i < n; ++i) {
         const auto m = *protocol::parse_soe(d.sink.sent[i].second);
         EXPECT_EQ(m.incomplete, i + 1 < n);
-        EXPECT_EQ(m.idn_or_fragments, i + 1 < n ? n - 1 - i : idn::DataContainer.raw);  // fragments left, then IDN
+        EXPECT_EQ(m.idn_or_fragments,
+                  i + 1 < n ? n - 1 - i : idn::DataContainer.raw);  // fragments left, then IDN
         got.insert(got.end(), m.data.begin(), m.data.end());
     }
     EXPECT_EQ(got, list(bytes, 1024));
@@ -309,12 +315,15 @@ TEST(SoeWrite, FragmentsAreHeldUnansweredUntilTheLastNamesTheIdn) {
     const auto v = list(bytes, 0);
     // Three fragments of at most 118 bytes; the count of the first two is not checked (masters differ).
     const std::size_t cap = 118;
-    d.server.handle({}, request(SoeOpCode::WriteRequest, 0, el::Value, 2, ConstBytes(v.data(), cap), true), d.sink);
-    d.server.handle({}, request(SoeOpCode::WriteRequest, 0, el::Value, 7, ConstBytes(v.data() + cap, cap), true), d.sink);
+    d.server.handle({}, request(SoeOpCode::WriteRequest, 0, el::Value, 2, ConstBytes(v.data(), cap), true),
+                    d.sink);
+    d.server.handle(
+        {}, request(SoeOpCode::WriteRequest, 0, el::Value, 7, ConstBytes(v.data() + cap, cap), true), d.sink);
     EXPECT_TRUE(d.sink.sent.empty());
     EXPECT_EQ(d.server.buffered(), 2 * cap);
-    d.server.handle({}, request(SoeOpCode::WriteRequest, 0, el::Value, idn::DataContainer.raw,
-                                ConstBytes(v.data() + 2 * cap, v.size() - 2 * cap)),
+    d.server.handle({},
+                    request(SoeOpCode::WriteRequest, 0, el::Value, idn::DataContainer.raw,
+                            ConstBytes(v.data() + 2 * cap, v.size() - 2 * cap)),
                     d.sink);
     ASSERT_EQ(d.sink.sent.size(), 1u);
     EXPECT_FALSE(d.sink.last().error);
@@ -351,7 +360,8 @@ TEST(SoeErrors, InvalidDriveNumber0x800A) {
     const auto m = d.read(el::Value, idn::TelegramType, 1);
     EXPECT_EQ(m.error_code(), code(SoeError::InvalidDriveNumber));
     EXPECT_EQ(m.drive, 1);
-    EXPECT_EQ(d.write(el::Value, idn::TelegramType, u16(4), 7).error_code(), code(SoeError::InvalidDriveNumber));
+    EXPECT_EQ(d.write(el::Value, idn::TelegramType, u16(4), 7).error_code(),
+              code(SoeError::InvalidDriveNumber));
 }
 
 TEST(SoeErrors, NoElementAddressed0x800C) {
@@ -378,7 +388,9 @@ TEST(SoeErrors, MissingElementsOnRead0x2001_0x4001_0x5001_0x6001_0x8001) {
         unsigned drives() const override { return 1; }
         soe::IdnTable& table(unsigned) override { return t; }
         AlState phase() const override { return AlState::PreOp; }
-        std::optional<SoeError> write_value(unsigned, soe::IdnEntry&, ConstBytes) override { return std::nullopt; }
+        std::optional<SoeError> write_value(unsigned, soe::IdnEntry&, ConstBytes) override {
+            return std::nullopt;
+        }
     } bare;
     soe::SoeServer s(bare);
     Sink sink;
@@ -422,7 +434,8 @@ TEST(SoeErrors, DataTooShort0x7002AndTooLong0x7003) {
     EXPECT_EQ(d.write_error(idn::DataContainer, {8, 0, 0, 0, 1, 2, 3, 4}), code(SoeError::DataTooShort));
     EXPECT_EQ(d.write_error(idn::DataContainer, {4, 0, 0, 0, 1, 2, 3, 4, 5}), code(SoeError::DataTooLong));
     EXPECT_EQ(d.write_error(idn::DataContainer, {0x10, 0x04}), code(SoeError::DataTooShort));
-    EXPECT_EQ(d.write_error(idn::DataContainer, list(std::vector<std::uint8_t>(1028, 0))), code(SoeError::DataTooLong));
+    EXPECT_EQ(d.write_error(idn::DataContainer, list(std::vector<std::uint8_t>(1028, 0))),
+              code(SoeError::DataTooLong));
 }
 
 TEST(SoeErrors, DataReadOnly0x7004) {
@@ -434,7 +447,8 @@ TEST(SoeErrors, DataReadOnly0x7004) {
 TEST(SoeErrors, WriteProtectedInThisPhase0x7005) {
     DriveBench d(AlState::SafeOp);
     EXPECT_EQ(d.write_error(idn::TelegramType, u16(4)), code(SoeError::DataWriteProtected));
-    EXPECT_EQ(d.write_error(idn::MdtConfiguration, idns({idn::PositionCommand})), code(SoeError::DataWriteProtected));
+    EXPECT_EQ(d.write_error(idn::MdtConfiguration, idns({idn::PositionCommand})),
+              code(SoeError::DataWriteProtected));
     DriveBench p(AlState::PreOp);
     EXPECT_EQ(p.write_error(idn::TelegramType, u16(4)), std::nullopt);
 }
@@ -450,7 +464,8 @@ TEST(SoeErrors, InvalidData0x7008) {
     DriveBench d;
     ASSERT_EQ(d.write_error(idn::TelegramType, u16(soe::kApplicationTelegram)), std::nullopt);
     // S-0-0051 is configurable in the AT, not in the MDT; a list of 4-byte values takes whole elements.
-    EXPECT_EQ(d.write_error(idn::MdtConfiguration, idns({idn::PositionFeedback})), code(SoeError::DataInvalid));
+    EXPECT_EQ(d.write_error(idn::MdtConfiguration, idns({idn::PositionFeedback})),
+              code(SoeError::DataInvalid));
     EXPECT_EQ(d.write_error(idn::DataContainer, list({1, 2, 3})), code(SoeError::DataInvalid));
     // A procedure command takes 0, 1 or 3.
     EXPECT_EQ(d.write_error(idn::ResetClass1Diagnostic, u16(2)), code(SoeError::DataInvalid));
@@ -491,7 +506,8 @@ TEST(SoeErrors, TruncatedPayloadAndServicesOfTheSlaveGetMailboxErrors) {
     DriveBench d;
     d.server.handle({}, std::vector<std::uint8_t>{0x01, 0x40, 0x18}, d.sink);
     ASSERT_EQ(d.sink.sent.back().first, MailboxType::Error);
-    EXPECT_EQ(ld_le16(d.sink.sent.back().second.data() + 2), static_cast<std::uint16_t>(protocol::MailboxError::SizeTooShort));
+    EXPECT_EQ(ld_le16(d.sink.sent.back().second.data() + 2),
+              static_cast<std::uint16_t>(protocol::MailboxError::SizeTooShort));
     for (SoeOpCode op : {SoeOpCode::ReadResponse, SoeOpCode::WriteResponse, SoeOpCode::Notification,
                          SoeOpCode::SlaveInfo, SoeOpCode::Reserved, static_cast<SoeOpCode>(0)}) {
         d.server.handle({}, request(op, 0, el::Value, 24), d.sink);
@@ -515,7 +531,8 @@ TEST(SoeCommands, ExecutionIsNotifiedWithItsDataState) {
     EXPECT_EQ(ld_le16(n.data.data()), soe::command_state::Executed);
     EXPECT_FALSE(d.server.has_output());
     EXPECT_EQ(d.drive.status_word() & soe::status::CommandChange, soe::status::CommandChange);
-    EXPECT_EQ(ld_le16(d.read(el::DataState, idn::ResetClass1Diagnostic).data.data()), soe::command_state::Executed);
+    EXPECT_EQ(ld_le16(d.read(el::DataState, idn::ResetClass1Diagnostic).data.data()),
+              soe::command_state::Executed);
     // Cleared by the master: not set, the change bit goes.
     ASSERT_EQ(d.write_error(idn::ResetClass1Diagnostic, u16(0)), std::nullopt);
     EXPECT_EQ(d.drive.status_word() & soe::status::CommandChange, 0);
@@ -585,7 +602,8 @@ TEST(SoeDriveDevice, ApplicationTelegramChangesTheProcessDataLengths) {
     m.startup(AlState::PreOp);
     auto c = m.client();
     ASSERT_TRUE(c.write(0, el::Value, idn::TelegramType, u16(soe::kApplicationTelegram)).ok());
-    ASSERT_TRUE(c.write(0, el::Value, idn::MdtConfiguration, idns({idn::PositionCommand, idn::TorqueCommand})).ok());
+    ASSERT_TRUE(
+        c.write(0, el::Value, idn::MdtConfiguration, idns({idn::PositionCommand, idn::TorqueCommand})).ok());
     ASSERT_TRUE(c.write(0, el::Value, idn::AtConfiguration,
                         idns({idn::PositionFeedback, idn::VelocityFeedback, idn::TorqueFeedback}))
                     .ok());
@@ -617,15 +635,18 @@ TEST(SoeDriveDevice, BadRequestsLeaveProcessDataRunning) {
     const auto wkc = m.b.master.expected_wkc();
     auto c = m.client();
     for (std::uint16_t i = 0; i < 40; ++i) {
-        const auto r = c.read(static_cast<std::uint8_t>(i % 9), static_cast<std::uint8_t>(i * 37), Idn{static_cast<std::uint16_t>(i * 977)});
+        const auto r = c.read(static_cast<std::uint8_t>(i % 9), static_cast<std::uint8_t>(i * 37),
+                              Idn{static_cast<std::uint16_t>(i * 977)});
         EXPECT_TRUE(r.transport_ok);
         EXPECT_EQ(m.b.master.exchange_process_data(), wkc);
     }
     // A write whose fragments never end, then a read: answered, the fragments dropped.
     master::CoeClient raw(m.b.master, m.station());
     for (int i = 0; i < 5; ++i)
-        ASSERT_TRUE(raw.send(MailboxType::SoE, request(SoeOpCode::WriteRequest, 0, el::Value, 3, std::vector<std::uint8_t>(100, 1), true),
-                             raw.next_counter()));
+        ASSERT_TRUE(raw.send(
+            MailboxType::SoE,
+            request(SoeOpCode::WriteRequest, 0, el::Value, 3, std::vector<std::uint8_t>(100, 1), true),
+            raw.next_counter()));
     EXPECT_TRUE(c.read(0, el::Value, idn::TelegramType).ok());
     EXPECT_EQ(m.b.master.exchange_process_data(), wkc);
     EXPECT_EQ(m.b.master.read_al_status(m.station()).state(), AlState::Op);
