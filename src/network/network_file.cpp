@@ -256,9 +256,12 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
             const std::string k = r.scalar(v, key);
             const auto* it = std::find_if(std::begin(kBuiltIn), std::end(kBuiltIn),
                                           [&](const Kind& b) { return b.name == k; });
-            if (it == std::end(kBuiltIn))
-                r.fail(v, "device: unknown device " + k +
-                              " (drive, coupler, junction, digital-in, digital-out, analog-in, analog-out)");
+            if (it == std::end(kBuiltIn)) {
+                std::string names;  // every kind of the table (the list once missed hiwin-d2)
+                for (const Kind& b : kBuiltIn)
+                    names += (names.empty() ? "" : ", ") + std::string(b.name);
+                r.fail(v, "device: unknown device " + k + " (" + names + ")");
+            }
             d.source = it->source;
         } else if (key == "esi" || key == "sii") {
             ++sources;

@@ -344,6 +344,24 @@ TEST(SoeWrite, TooManyFragmentsAreAnswered0x7003WithBoundedMemory) {
     EXPECT_EQ(d.server.buffered(), 0u);
 }
 
+TEST(SoeWrite, AnotherRequestOrTheMailboxResetEndsAFragmentedWrite) {
+    DriveBench d;
+    const std::vector<std::uint8_t> chunk(100, 7);
+    d.server.handle({}, request(SoeOpCode::WriteRequest, 0, el::Value, 1, chunk, true), d.sink);
+    EXPECT_EQ(d.server.buffered(), 100u);
+    // A fragment of other elements starts a transfer of its own: the first one is dropped.
+    d.server.handle({}, request(SoeOpCode::WriteRequest, 0, el::Name, 1, chunk, true), d.sink);
+    EXPECT_EQ(d.server.buffered(), 100u);
+    EXPECT_EQ(d.server.counters().transfers_abandoned, 1u);
+    // INIT (esc::MailboxProtocol::reset) drops it too, without an answer.
+    d.server.reset();
+    EXPECT_EQ(d.server.buffered(), 0u);
+    EXPECT_EQ(d.server.counters().transfers_abandoned, 2u);
+    EXPECT_TRUE(d.sink.sent.empty());
+    // Nothing is left of it: the next write is a plain one.
+    EXPECT_EQ(d.write_error(idn::DataContainer, list(std::vector<std::uint8_t>(8, 1))), std::nullopt);
+}
+
 // ---- Every SoE error code the server answers
 
 TEST(SoeErrors, NoIdn0x1001OnReadAndWrite) {
