@@ -147,7 +147,10 @@ void SoeDrive::step(bool apply) {
     enabled_ = enable;
     const bool run = enabled_ && (control_ & control::Run);
     if (run) {
-        if (contains(table_.find(idn::MdtConfiguration), idn::PositionCommand.raw)) {
+        // Looked up in the resolved MDT (no allocation in the cycle).
+        const bool position_mapped = std::any_of(
+            mdt_.begin(), mdt_.end(), [](const IdnEntry* m) { return m->idn == idn::PositionCommand; });
+        if (position_mapped) {
             const std::int64_t cmd = signed_value(idn::PositionCommand);
             const std::int64_t fb = signed_value(idn::PositionFeedback);
             const auto window = static_cast<std::int64_t>(table_.find(idn::MonitoringWindow)->number());
