@@ -21,6 +21,7 @@ set(LAYER_esc protocol device)     # the emulated ESC, the slave, the segment
 set(LAYER_coe esc device)          # object dictionary, SDO server, PDO mapping
 set(LAYER_foe esc)                 # FoE server, its files, the bootloader of the BOOT state
 set(LAYER_eoe esc net)             # EoE server, the device's IP responder, its TAP interface
+set(LAYER_soe esc)                 # SoE server, the IDN model, the SoE drive (an application)
 set(LAYER_motion protocol)         # profile generator, mechanics, homing, CiA 402 state machine, touch probe
 set(LAYER_drive_core motion twinsync)  # the drive core, its operation modes, the TWINsync coupling: no EtherCAT
 set(LAYER_cia402 drive_core coe twinsync)  # the CoE adapter of the drive core, the TWINsync port
@@ -36,10 +37,10 @@ set(LAYER_telemetry_idl "")    # the telemetry IDL types compiled by idlc (with 
 set(LAYER_telemetry_types "")  # ... and idlc's generated sources
 set(LAYER_testing master cia402 faults telemetry serve)
 set(LAYER_esi device esc)
-set(LAYER_network cia402 esi io)   # networks of mixed devices from a file
+set(LAYER_network cia402 esi io soe)   # networks of mixed devices from a file
 set(LAYER_replay network esc)     # replay of real captures against a line built from a file or the capture
 set(LAYER_clone master network)    # vecat clone: a line read with the master, written as a network file
-set(LAYER_cli master telemetry cia402 faults esi serve esc report network replay foe eoe clone io)
+set(LAYER_cli master telemetry cia402 faults esi serve esc report network replay foe eoe soe clone io)
 
 # ---------------------------------------------------------------------------------------------------------
 if(NOT SOURCE_DIR OR NOT LINKS)

@@ -5,7 +5,7 @@
 include(CMakePackageConfigHelpers)
 
 set(VECAT_INSTALL_LIBS vecat_common vecat_protocol vecat_device vecat_esc vecat_coe vecat_twinsync_parameters vecat_twinsync vecat_motion vecat_drive_core vecat_cia402
-                       vecat_net vecat_serve vecat_report vecat_faults vecat_io vecat_master vecat_telemetry vecat_testing vecat_esi vecat_network)
+                       vecat_net vecat_serve vecat_report vecat_faults vecat_io vecat_master vecat_telemetry vecat_testing vecat_esi vecat_soe vecat_network)
 if(VECAT_TELEMETRY)
   list(APPEND VECAT_INSTALL_LIBS vecat_telemetry_idl)
 endif()
@@ -44,7 +44,7 @@ if(VECAT_TELEMETRY)
 else()
   set(VECAT_PC_REQUIRES "fmt yaml-cpp pugixml libcap")
 endif()
-string(APPEND VECAT_PC_LIBS " -lvecat_report -lvecat_cia402 -lvecat_drive_core -lvecat_motion -lvecat_twinsync -lvecat_coe -lvecat_serve -lvecat_net -lvecat_esc"
+string(APPEND VECAT_PC_LIBS " -lvecat_soe -lvecat_report -lvecat_cia402 -lvecat_drive_core -lvecat_motion -lvecat_twinsync -lvecat_coe -lvecat_serve -lvecat_net -lvecat_esc"
                             " -lvecat_device -lvecat_protocol -pthread")
 # The prefix relative to the .pc file, so that the file is right wherever the tree is installed (--prefix).
 file(RELATIVE_PATH VECAT_PC_TO_PREFIX /root/${CMAKE_INSTALL_LIBDIR}/pkgconfig /root)

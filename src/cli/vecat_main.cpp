@@ -24,6 +24,7 @@
 #include "coe/coe_application.hpp"
 #include "common/file.hpp"
 #include "device/device_description.hpp"
+#include "device/soe_drive.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
 #include "esi/esi_check.hpp"
@@ -43,6 +44,7 @@
 #include "report/init_cmd_check.hpp"
 #include "report/master_checks.hpp"
 #include "serve/server.hpp"
+#include "soe/soe_drive.hpp"
 
 namespace {
 
@@ -60,6 +62,9 @@ void install_signals() {
     sigaction(SIGTERM, &sa, nullptr);
 }
 
+// The built-in SoE drive's name for --device (src/soe: not a CiA 402 drive, served by its own application).
+constexpr const char* kSoeDrive = "soe-drive";
+
 // The device to emulate: a built-in drive (--device NAME, the vecat drive without it), or one device of
 // a vendor ESI file.
 std::optional<vecat::device::DeviceDescription> load_device(const std::string& esi_path,
@@ -68,9 +73,11 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
     if (esi_path.empty()) {
         if (!sel.type) return vecat::device::default_drive();
         if (auto d = vecat::device::builtin_drive(*sel.type)) return d;
+        if (*sel.type == kSoeDrive) return vecat::device::soe_drive();
         std::string names;
         for (auto n : vecat::device::builtin_drive_names())
             names += (names.empty() ? "" : ", ") + std::string(n);
+        names += std::string(", ") + kSoeDrive;
         fmt::print(stderr, "vecat: --device {}: no such built-in device (without --esi: {})\n", *sel.type,
                    names);
         return std::nullopt;
@@ -249,7 +256,11 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             }
         }
         const auto& dev = *loaded;
-        seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
+        if (esi_path.empty() && sel.type == kSoeDrive)
+            seg = vecat::esc::make_segment(vecat::esc::DeviceModel::of(dev), slaves, {},
+                                           vecat::soe::make_soe_drive);
+        else
+            seg = vecat::cia402::make_drive_segment(dev, slaves, {}, twinsync);
         served = fmt::format("{} x \"{}\" (vendor 0x{:08X}, product 0x{:08X})", slaves, dev.name,
                              dev.identity.vendor_id, dev.identity.product_code);
         if (dev.quirks.any()) served += fmt::format(" with quirks {}", vecat::device::to_string(dev.quirks));
@@ -497,9 +508,11 @@ int main(int argc, char** argv) {
     std::optional<std::uint32_t> revision;
     auto add_esi_options = [&](CLI::App* c, bool esi_option) {
         if (esi_option) c->add_option("--esi", esi_path, "Emulate a device described by this ESI file");
-        c->add_option("--device", device_type,
-                      "Device of the ESI file by its Type name; without --esi a built-in drive: drive (the "
-                      "vecat drive, the default) or hiwin-d2 (the HIWIN D2 CoE drive)");
+        c->add_option(
+            "--device", device_type,
+            "Device of the ESI file by its Type name; without --esi a built-in drive: drive (the "
+            "vecat drive, the default), hiwin-d2 (the HIWIN D2 CoE drive) or soe-drive (the AX5000-like SoE "
+            "drive)");
         c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
         c->add_option("--revision", revision,
                       "Revision of that device (0x... accepted); without it the file's first one. An error "

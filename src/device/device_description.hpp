@@ -150,6 +150,7 @@ struct DeviceDescription {
     std::uint8_t coe_details = 0;
     std::uint8_t foe_details = 0;
     std::uint8_t eoe_details = 0;
+    std::uint8_t soe_channels = 0;  // SII General category: the SoE drives (channels) of the device
     std::uint8_t general_flags = 0;
     std::int16_t ebus_current_ma = 0;
     bool bootstrap_supported = false;

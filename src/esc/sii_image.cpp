@@ -120,7 +120,7 @@ std::vector<std::uint8_t> build_sii_image(const device::DeviceDescription& d) {
         w.u8((d.mailbox_protocols & device::mbx_proto::CoE) ? d.coe_details : 0);
         w.u8((d.mailbox_protocols & device::mbx_proto::FoE) ? d.foe_details : 0);
         w.u8(d.eoe_details);
-        w.u8(0);  // SoE channels
+        w.u8((d.mailbox_protocols & device::mbx_proto::SoE) ? d.soe_channels : 0);
         w.u8(0);  // DS402 channels
         w.u8(0);  // SysmanClass
         w.u8(d.general_flags);

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "master/coe_client.hpp"
+#include "master/soe_client.hpp"
 #include "protocol/fmmu.hpp"
 #include "protocol/registers.hpp"
 #include "protocol/sync_manager.hpp"
@@ -374,10 +375,54 @@ const MappedEntry* find_entry(const std::vector<MappedEntry>& entries, std::uint
     return nullptr;
 }
 
+bool Master::read_pdo_sizes_soe(SlaveInfo& s) {
+    // Like SOEM's ecx_readIDNmap (drive 0): S-0-0024 lists the IDNs of the MDT, S-0-0016 those of the AT; the
+    // attribute of each gives its length; the control and status word (16 bits each) are not listed.
+    SoeClient c(*this, s.station);
+    auto bytes_of = [&](protocol::Idn list, unsigned& bytes) {
+        const auto r = c.read(0, protocol::soe_element::Value, list);
+        if (!r.ok() || r.data.size() < protocol::kSoeListHeaderSize) return false;
+        const std::size_t current = ld_le16(r.data.data());
+        bytes = 2;
+        for (std::size_t i = 0; i + 1 < current && protocol::kSoeListHeaderSize + i + 1 < r.data.size();
+             i += 2) {
+            const protocol::Idn idn{ld_le16(r.data.data() + protocol::kSoeListHeaderSize + i)};
+            const auto a = c.read(0, protocol::soe_element::Attribute, idn);
+            if (!a.ok() || a.data.size() < 4) return false;
+            const auto attr = protocol::SoeAttribute::unpack(ld_le32(a.data.data()));
+            if (!attr.list) bytes += static_cast<unsigned>(attr.element_size());
+        }
+        return true;
+    };
+    if (!bytes_of(protocol::s_idn(24), s.out_bytes) || !bytes_of(protocol::s_idn(16), s.in_bytes))
+        return false;
+    // The MDT goes through the SII's output SyncManager, the AT through its input one.
+    s.out_entries.clear();
+    s.in_entries.clear();
+    s.pd_sms.clear();
+    bool out_done = false, in_done = false;
+    for (std::size_t i = 0; i < s.sii.sync_managers.size(); ++i) {
+        const auto type = s.sii.sync_managers[i].type;
+        if (type == protocol::sii::SmTypeOutputs && !out_done) {
+            s.pd_sms.push_back({static_cast<std::uint8_t>(i), true, static_cast<std::uint16_t>(s.out_bytes)});
+            out_done = true;
+        } else if (type == protocol::sii::SmTypeInputs && !in_done) {
+            s.pd_sms.push_back({static_cast<std::uint8_t>(i), false, static_cast<std::uint16_t>(s.in_bytes)});
+            in_done = true;
+        }
+    }
+    return true;
+}
+
 bool Master::configure_process_data() {
-    for (auto& s : slaves_)
-        if ((s.sii.mailbox_protocols & protocol::sii::MailboxCoE) && s.sii.std_rx_mbx_size)
+    for (auto& s : slaves_) {
+        if (!s.sii.std_rx_mbx_size) continue;
+        if (s.sii.mailbox_protocols & protocol::sii::MailboxCoE) {
             if (!read_pdo_sizes_coe(s)) return false;
+        } else if (s.sii.mailbox_protocols & protocol::sii::MailboxSoE) {
+            if (!read_pdo_sizes_soe(s)) return false;
+        }
+    }
     std::uint32_t laddr = opt_.logical_base;
     std::size_t off = 0;
     unsigned n_out = 0, n_in = 0;

@@ -158,6 +158,7 @@ class Master {
     // SM2/SM3 and FMMUs; lays out the process image. CoE slaves' sizes are read from their PDO assignment.
     bool configure_process_data();
     bool read_pdo_sizes_coe(SlaveInfo& s);
+    bool read_pdo_sizes_soe(SlaveInfo& s);
     // Requests a state from all slaves (broadcast) and waits until each has it or reports an error.
     bool request_state(protocol::AlState s,
                        std::chrono::milliseconds timeout = std::chrono::milliseconds(2000));

@@ -9,8 +9,10 @@
 #include "device/from_sii.hpp"
 #include "device/hiwin_d2.hpp"
 #include "device/simple_devices.hpp"
+#include "device/soe_drive.hpp"
 #include "esi/esi_reader.hpp"
 #include "protocol/sii.hpp"
+#include "soe/soe_drive.hpp"
 
 namespace vecat::network {
 
@@ -114,6 +116,9 @@ Made make_device(const DeviceEntry& e, const std::string& at, const std::string&
             d = device::hiwin_d2();
             drive = true;
             break;
+        case Source::SoeDrive:
+            d = device::soe_drive();
+            break;
         case Source::Esi: {
             esi::DeviceSelector sel;
             sel.type = e.esi_type;
@@ -199,14 +204,17 @@ Made make_device(const DeviceEntry& e, const std::string& at, const std::string&
     apply(d, e);
     apply_quirks(d, e, quirks_at);
     m.model = esc::DeviceModel::of(d);
-    m.esc.port_descriptor = descriptor(
-        default_ports(e.source),
-        e.source == Source::Drive || e.source == Source::HiwinD2 || e.source == Source::Esi ? kPortMii
-                                                                                            : kPortEbus);
+    m.esc.port_descriptor =
+        descriptor(default_ports(e.source), e.source == Source::Drive || e.source == Source::HiwinD2 ||
+                                                    e.source == Source::SoeDrive || e.source == Source::Esi
+                                                ? kPortMii
+                                                : kPortEbus);
     if (drive)
         m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
             return std::unique_ptr<esc::Application>(std::make_unique<cia402::Drive>(dd, objects));
         };
+    else if (e.source == Source::SoeDrive)
+        m.factory = soe::make_soe_drive;
     else
         m.factory = process_image;
     return m;

@@ -28,7 +28,7 @@ struct Kind {
 constexpr Kind kBuiltIn[] = {
     {"drive", Source::Drive},          {"coupler", Source::Coupler},        {"junction", Source::Junction},
     {"digital-in", Source::DigitalIn}, {"digital-out", Source::DigitalOut}, {"analog-in", Source::AnalogIn},
-    {"analog-out", Source::AnalogOut}, {"hiwin-d2", Source::HiwinD2},
+    {"analog-out", Source::AnalogOut}, {"hiwin-d2", Source::HiwinD2},       {"soe-drive", Source::SoeDrive},
 };
 
 bool is_io(Source s) {
@@ -256,9 +256,12 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
             const std::string k = r.scalar(v, key);
             const auto* it = std::find_if(std::begin(kBuiltIn), std::end(kBuiltIn),
                                           [&](const Kind& b) { return b.name == k; });
-            if (it == std::end(kBuiltIn))
-                r.fail(v, "device: unknown device " + k +
-                              " (drive, coupler, junction, digital-in, digital-out, analog-in, analog-out)");
+            if (it == std::end(kBuiltIn)) {
+                std::string names;  // every kind of the table (the list once missed hiwin-d2)
+                for (const Kind& b : kBuiltIn)
+                    names += (names.empty() ? "" : ", ") + std::string(b.name);
+                r.fail(v, "device: unknown device " + k + " (" + names + ")");
+            }
             d.source = it->source;
         } else if (key == "esi" || key == "sii") {
             ++sources;
@@ -342,6 +345,8 @@ std::string_view to_string(Source s) noexcept {
             return "drive";
         case Source::HiwinD2:
             return "hiwin-d2";
+        case Source::SoeDrive:
+            return "soe-drive";
         case Source::Esi:
             return "esi";
         case Source::Sii:

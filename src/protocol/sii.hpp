@@ -94,6 +94,7 @@ inline constexpr std::uint8_t OpOnly = 0x08;        // enabled in OP only
 
 // Mailbox protocols word (word 0x1C).
 inline constexpr std::uint16_t MailboxCoE = 0x0004;
+inline constexpr std::uint16_t MailboxSoE = 0x0010;
 }  // namespace sii
 
 // CRC-8 of the ESC configuration area (polynomial x^8+x^2+x+1, initial value 0xFF) over words 0..6.

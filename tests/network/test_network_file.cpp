@@ -404,6 +404,29 @@ devices:
         ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
 }
 
+// The SoE drive (device: soe-drive) beside the vecat CoE drive: the master maps one by CoE, the other by
+// SoE (S-0-0024/S-0-0016 and the attributes, as SOEM's ecx_readIDNmap), both reach OP.
+TEST(Network, TheSoeDriveBesideTheVecatDrive) {
+    Served s(R"(
+devices:
+  - name: vecat
+    device: drive
+  - name: ax
+    device: soe-drive
+)");
+    ASSERT_EQ(s.built.segment->size(), 2u);
+    EXPECT_EQ(parse_network("devices:\n  - name: ax\n    device: soe-drive\n", "n.yaml").devices.at(0).source,
+              Source::SoeDrive);
+    std::string why;
+    ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
+    const auto& sl = s.master.slaves();
+    EXPECT_EQ(sl[1].sii.mailbox_protocols, 0x0010);
+    EXPECT_EQ(sl[1].out_bytes, 6u);  // control word + S-0-0047
+    EXPECT_EQ(sl[1].in_bytes, 6u);   // status word + S-0-0051
+    for (int i = 0; i < 10; ++i)
+        ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
+}
+
 TEST(Network, ADeviceFromAnSiiDumpServesTheDumpAndItsProcessData) {
     VECAT_REQUIRE_SHARED_DATA("sii");
     const std::string sii = test::shared_data("sii/");
