@@ -457,7 +457,9 @@ bool Master::configure_process_data() {
         unsigned fmmu = 0;
         std::uint32_t out_at = 0, in_at = 0;  // where the next SyncManager's area starts in the slave's
         for (const auto& pd : s.pd_sms) {
-            if (pd.sm >= s.sii.sync_managers.size()) return false;  // a CoE SyncManager the SII lacks
+            // A SyncManager of 0x1C00 that the SII does not describe has no start address to configure: left
+            // alone, as the SII's own list was walked before.
+            if (pd.sm >= s.sii.sync_managers.size()) continue;
             const auto& sm = s.sii.sync_managers[pd.sm];
             std::uint8_t b[SmConfig::kSize];
             auto c = SmConfig::master(sm.start, pd.bytes, sm.control);
