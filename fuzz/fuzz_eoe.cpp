@@ -101,7 +101,8 @@ void parsers(ConstBytes c) {
     if (a == eoe::Answer::None)
         VECAT_FUZZ_CHECK(len == 0);
     else
-        VECAT_FUZZ_CHECK(len >= 60 && len <= out.size() && std::equal(mac.begin(), mac.end(), out.begin() + 6));
+        VECAT_FUZZ_CHECK(len >= 60 && len <= out.size() &&
+                         std::equal(mac.begin(), mac.end(), out.begin() + 6));
 }
 
 }  // namespace

@@ -25,13 +25,13 @@
 #include "common/file.hpp"
 #include "device/device_description.hpp"
 #include "device/soe_drive.hpp"
+#include "eoe/eoe_bridge.hpp"
+#include "eoe/eoe_server.hpp"
 #include "esc/segment.hpp"
 #include "esc/sii_image.hpp"
 #include "esi/esi_check.hpp"
 #include "esi/esi_reader.hpp"
 #include "esi/esi_writer.hpp"
-#include "eoe/eoe_bridge.hpp"
-#include "eoe/eoe_server.hpp"
 #include "foe/foe_server.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
@@ -625,15 +625,18 @@ int main(int argc, char** argv) {
     demo->add_option("-o,--output", demo_opt.outdir,
                      "Directory for the ESI file, SII image, capture and scope plot")
         ->capture_default_str();
-    demo->add_option("--network", demo_opt.network,
-                     "Run on the devices of a network file (docs/network-file.md) instead of a line of drives: "
-                     "the CiA 402 drives found are moved, the I/O devices' outputs written and inputs read back")
+    demo->add_option(
+            "--network", demo_opt.network,
+            "Run on the devices of a network file (docs/network-file.md) instead of a line of drives: "
+            "the CiA 402 drives found are moved, the I/O devices' outputs written and inputs read back")
         ->excludes("--slaves");
     demo->footer(
         "Phases: scan, preop, pdo-mapping, dc, safeop, op, enable, csp-move, homing, fault, disable, init.\n"
-        "With --network: scan (with the topology), preop, process-data, dc, safeop, op, enable, csp-move, io,\n"
+        "With --network: scan (with the topology), preop, process-data, dc, safeop, op, enable, csp-move, "
+        "io,\n"
         "disable, init.\n"
-        "Exit code 0 when every phase is done, 1 when one failed, 2 for a network file it refused, 130 after\n"
+        "Exit code 0 when every phase is done, 1 when one failed, 2 for a network file it refused, 130 "
+        "after\n"
         "Ctrl-C (128 + the signal); the files are written in every case.");
 
     auto* sii = app.add_subcommand("sii", "SII EEPROM tools");

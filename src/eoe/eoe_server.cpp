@@ -39,7 +39,8 @@ bool mailbox_running(AlState s) {
 
 protocol::MacAddress default_mac(std::size_t slave_index) {
     const std::size_t n = slave_index + 1;
-    return {kLocalUnicast, 0x00, 0x00, kMacTag, static_cast<std::uint8_t>(n >> 8), static_cast<std::uint8_t>(n)};
+    return {
+        kLocalUnicast, 0x00, 0x00, kMacTag, static_cast<std::uint8_t>(n >> 8), static_cast<std::uint8_t>(n)};
 }
 
 EoeServer::EoeServer(esc::Slave& slave, EoeOptions options, protocol::MacAddress mac)
@@ -95,7 +96,8 @@ void EoeServer::take_fragment(const EoeHeader& h, ConstBytes data, esc::MailboxR
         return mailbox_error(MailboxError::InvalidHeader, out);
     }
     // The data may end with a 4-byte time stamp (time appended) beyond the announced size.
-    const std::size_t room = rx_size_ + (h.last_fragment && h.time_appended ? protocol::kEoeTimestampSize : 0);
+    const std::size_t room =
+        rx_size_ + (h.last_fragment && h.time_appended ? protocol::kEoeTimestampSize : 0);
     if (data.size() > room - rx_len_ || (!h.last_fragment && data.size() % kEoeBlockSize != 0)) {
         ++counters_.oversize;
         drop_rx();

@@ -31,14 +31,14 @@ struct EoeOptions {
 };
 
 struct EoeCounters {
-    std::uint64_t fragments_in = 0;    // fragments from the master taken into a frame
-    std::uint64_t frames_in = 0;       // complete frames from the master
-    std::uint64_t fragments_out = 0;   // fragments sent to the master
-    std::uint64_t frames_out = 0;      // complete frames sent to the master
-    std::uint64_t to_ethernet = 0;     // frames from the master passed to the Ethernet side
-    std::uint64_t no_ethernet = 0;     // frames from the master for others, with no Ethernet side attached
-    std::uint64_t from_ethernet = 0;   // frames from the Ethernet side queued for the master
-    std::uint64_t arp_replies = 0;     // the device's own answers
+    std::uint64_t fragments_in = 0;   // fragments from the master taken into a frame
+    std::uint64_t frames_in = 0;      // complete frames from the master
+    std::uint64_t fragments_out = 0;  // fragments sent to the master
+    std::uint64_t frames_out = 0;     // complete frames sent to the master
+    std::uint64_t to_ethernet = 0;    // frames from the master passed to the Ethernet side
+    std::uint64_t no_ethernet = 0;    // frames from the master for others, with no Ethernet side attached
+    std::uint64_t from_ethernet = 0;  // frames from the Ethernet side queued for the master
+    std::uint64_t arp_replies = 0;    // the device's own answers
     std::uint64_t echo_replies = 0;
     // Dropped fragments and frames (each counted once):
     std::uint64_t out_of_sequence = 0;  // a fragment that is not the next of the frame (gap, overlap, other
@@ -102,8 +102,8 @@ class EoeServer final : public esc::MailboxProtocol {
                  esc::MailboxReplySink& out, ConstBytes block = {});
     void mailbox_error(protocol::MailboxError e, esc::MailboxReplySink& out);
     bool enqueue(ConstBytes frame);
-    void drop_rx();    // forgets the half frame
-    void clear_rx();   // after a whole frame
+    void drop_rx();   // forgets the half frame
+    void clear_rx();  // after a whole frame
 
     esc::Slave& slave_;
     EoeOptions options_;
@@ -114,17 +114,17 @@ class EoeServer final : public esc::MailboxProtocol {
 
     // Reassembly of the frame from the master (one at a time, ETG.1000.6 5.7: fragments in order).
     std::array<std::uint8_t, kRxBufferSize> rx_{};
-    std::size_t rx_len_ = 0;        // bytes received so far
-    std::size_t rx_size_ = 0;       // the complete size announced by fragment 0 (whole blocks)
-    std::uint8_t rx_next_ = 0;      // the fragment number expected next (0: no frame in progress)
-    std::uint8_t rx_frame_ = 0;     // the frame number of the frame in progress
+    std::size_t rx_len_ = 0;     // bytes received so far
+    std::size_t rx_size_ = 0;    // the complete size announced by fragment 0 (whole blocks)
+    std::uint8_t rx_next_ = 0;   // the fragment number expected next (0: no frame in progress)
+    std::uint8_t rx_frame_ = 0;  // the frame number of the frame in progress
 
     // Frames to the master: a ring of fixed slots, the head one being sent in fragments.
     std::vector<std::array<std::uint8_t, protocol::kEthernetMaxFrame>> q_;
     std::vector<std::uint16_t> q_len_;
     std::size_t q_head_ = 0;
     std::size_t q_count_ = 0;
-    std::size_t tx_off_ = 0;       // bytes of the head frame sent
+    std::size_t tx_off_ = 0;        // bytes of the head frame sent
     std::uint8_t tx_fragment_ = 0;  // its next fragment number
     std::uint8_t tx_frame_ = 0;     // the frame number of the head frame (1..15, then 0 again)
     std::array<std::uint8_t, protocol::kEthernetMaxFrame> answer_{};  // the device's own reply

@@ -37,8 +37,8 @@ constexpr std::uint8_t kArpHwLen = 6;
 constexpr std::uint8_t kArpProtoLen = 4;
 constexpr std::uint16_t kArpRequest = 1;
 constexpr std::uint16_t kArpReply = 2;
-constexpr std::size_t kArpHw = 0, kArpProto = 2, kArpHwLenAt = 4, kArpProtoLenAt = 5, kArpOp = 6,
-                      kArpSha = 8, kArpSpa = 14, kArpTha = 18, kArpTpa = 24;
+constexpr std::size_t kArpHw = 0, kArpProto = 2, kArpHwLenAt = 4, kArpProtoLenAt = 5, kArpOp = 6, kArpSha = 8,
+                      kArpSpa = 14, kArpTha = 18, kArpTpa = 24;
 // Ethernet frames are at least 60 bytes without FCS; shorter replies are padded.
 constexpr std::size_t kMinFrame = 60;
 
@@ -66,8 +66,8 @@ Answer arp(ConstBytes frame, const MacAddress& mac, Ip4 ip, Bytes out, std::size
     if (frame.size() < kEthernetHeaderSize + kArpSize) return Answer::None;
     const std::uint8_t* a = frame.data() + kEthernetHeaderSize;
     if (ld_be16(a + kArpHw) != kArpHwEthernet || ld_be16(a + kArpProto) != kEtherTypeIpv4 ||
-        a[kArpHwLenAt] != kArpHwLen || a[kArpProtoLenAt] != kArpProtoLen || ld_be16(a + kArpOp) != kArpRequest ||
-        ld_be32(a + kArpTpa) != ip)
+        a[kArpHwLenAt] != kArpHwLen || a[kArpProtoLenAt] != kArpProtoLen ||
+        ld_be16(a + kArpOp) != kArpRequest || ld_be32(a + kArpTpa) != ip)
         return Answer::None;
     const std::size_t n = std::max(kEthernetHeaderSize + kArpSize, kMinFrame);
     if (out.size() < n) return Answer::None;
@@ -128,7 +128,8 @@ Answer answer(ConstBytes frame, const MacAddress& mac, Ip4 ip, Bytes out, std::s
     len = 0;
     const auto dst = destination_mac(frame);
     if (!dst || ip == 0) return Answer::None;
-    const std::uint16_t type = protocol::EthernetHeader::unpack(frame.first<protocol::EthernetHeader::kSize>()).ether_type;
+    const std::uint16_t type =
+        protocol::EthernetHeader::unpack(frame.first<protocol::EthernetHeader::kSize>()).ether_type;
     if (type == kEtherTypeArp && (*dst == protocol::kBroadcastMac || *dst == mac))
         return arp(frame, mac, ip, out, len);
     if (type == kEtherTypeIpv4 && *dst == mac) return echo(frame, mac, ip, out, len);

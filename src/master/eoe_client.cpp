@@ -29,7 +29,8 @@ bool EoeClient::send_frame(ConstBytes frame, std::uint8_t port) {
         h.port = port;
         h.last_fragment = last;
         h.fragment = fragment;
-        h.blocks = fragment == 0 ? eoe_size_blocks(frame.size()) : static_cast<std::uint8_t>(off / kEoeBlockSize);
+        h.blocks =
+            fragment == 0 ? eoe_size_blocks(frame.size()) : static_cast<std::uint8_t>(off / kEoeBlockSize);
         h.frame = tx_frame_;
         write_eoe_header(buf, h);
         std::copy_n(frame.begin() + static_cast<std::ptrdiff_t>(off), n, buf.begin() + kEoeHeaderSize);

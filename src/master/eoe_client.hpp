@@ -24,9 +24,7 @@ struct EoeServiceResult {
     bool unexpected = false;                              // a response of another type or malformed
     std::optional<protocol::EoeIpParameters> ip;          // get IP parameter: what the slave has
     std::optional<protocol::EoeAddressFilter> filter;     // get address filter: what the slave has
-    bool ok() const {
-        return transport_ok && !mailbox_error && !unexpected && result == std::uint16_t{0};
-    }
+    bool ok() const { return transport_ok && !mailbox_error && !unexpected && result == std::uint16_t{0}; }
 };
 
 class EoeClient {

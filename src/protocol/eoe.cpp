@@ -29,9 +29,9 @@ void EoeHeader::pack(std::span<std::uint8_t, kSize> out) const noexcept {
     if (last_fragment) w1 |= kLastFragment;
     if (time_appended) w1 |= kTimeAppended;
     if (time_requested) w1 |= kTimeRequested;
-    const auto w2 = static_cast<std::uint16_t>((fragment & kFragmentMask) |
-                                               ((blocks & kBlocksMask) << kBlocksShift) |
-                                               ((frame & kFrameMask) << kFrameShift));
+    const auto w2 =
+        static_cast<std::uint16_t>((fragment & kFragmentMask) | ((blocks & kBlocksMask) << kBlocksShift) |
+                                   ((frame & kFrameMask) << kFrameShift));
     st_le16(out.data(), w1);
     st_le16(out.data() + 2, w2);
 }

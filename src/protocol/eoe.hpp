@@ -19,15 +19,15 @@ namespace vecat::protocol {
 
 // EoE frame types (ETG.1000.6 5.7, the Frame Type field of the EoE header).
 enum class EoeFrameType : std::uint8_t {
-    Fragment = 0,            // a fragment of an Ethernet frame (both directions)
-    Timestamp = 1,           // the time a frame was sent, answering "time requested" (slave to master)
-    SetIpRequest = 2,        // "init request" in SOEM/SOES
-    SetIpResponse = 3,       // "init response"
-    SetFilterRequest = 4,    // set address filter
+    Fragment = 0,          // a fragment of an Ethernet frame (both directions)
+    Timestamp = 1,         // the time a frame was sent, answering "time requested" (slave to master)
+    SetIpRequest = 2,      // "init request" in SOEM/SOES
+    SetIpResponse = 3,     // "init response"
+    SetFilterRequest = 4,  // set address filter
     SetFilterResponse = 5,
-    GetIpRequest = 6,        // get IP parameter
+    GetIpRequest = 6,  // get IP parameter
     GetIpResponse = 7,
-    GetFilterRequest = 8,    // get address filter
+    GetFilterRequest = 8,  // get address filter
     GetFilterResponse = 9,
 };
 

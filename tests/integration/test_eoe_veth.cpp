@@ -3,9 +3,9 @@
 // (the project master over a raw socket) and bridges its own TAP interface to the device through its EoE
 // client, as a master that routes IP through EoE does (IgH's eoeXsY interfaces, SOEM's eoe_test). The
 // device's TAP is moved into a namespace of its own with an address behind the device. Then real ICMP echo
-// (a raw socket, as ping) and a TCP connection (48 KiB each way) go from the master's namespace to the kernel behind the
-// device, and a ping to the device's own address (set IP parameter) is answered by the device. The address
-// filter, set by the master, is honoured on the way back. Needs root or unprivileged user namespaces
+// (a raw socket, as ping) and a TCP connection (48 KiB each way) go from the master's namespace to the kernel
+// behind the device, and a ping to the device's own address (set IP parameter) is answered by the device. The
+// address filter, set by the master, is honoured on the way back. Needs root or unprivileged user namespaces
 // (skipped otherwise), and ip, unshare and nsenter.
 #include <gtest/gtest.h>
 
@@ -22,14 +22,14 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <algorithm>
 #include <filesystem>
-#include <optional>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -74,15 +74,22 @@ std::optional<protocol::MacAddress> mac_of(const char* ifname) {
 
 // Sends ICMP echo requests to `to` from this namespace (a raw socket, as ping) until one is answered or the
 // timeout passes.
-bool ping(const char* to, std::uint16_t seq, std::chrono::milliseconds timeout = std::chrono::milliseconds(3000)) {
+bool ping(const char* to, std::uint16_t seq,
+          std::chrono::milliseconds timeout = std::chrono::milliseconds(3000)) {
     const int s = ::socket(AF_INET, SOCK_RAW | SOCK_CLOEXEC, IPPROTO_ICMP);
     if (s < 0) return false;
     sockaddr_in dst{};
     dst.sin_family = AF_INET;
     ::inet_pton(AF_INET, to, &dst.sin_addr);
     constexpr std::uint16_t kId = 0x5EC4;
-    std::uint8_t req[8 + 56] = {ICMP_ECHO, 0, 0, 0, kId >> 8, kId & 0xFF,
-                                static_cast<std::uint8_t>(seq >> 8), static_cast<std::uint8_t>(seq)};
+    std::uint8_t req[8 + 56] = {ICMP_ECHO,
+                                0,
+                                0,
+                                0,
+                                kId >> 8,
+                                kId & 0xFF,
+                                static_cast<std::uint8_t>(seq >> 8),
+                                static_cast<std::uint8_t>(seq)};
     for (std::size_t i = 8; i < sizeof req; ++i)
         req[i] = static_cast<std::uint8_t>(i);
     const std::uint16_t c = eoe::internet_checksum(ConstBytes(req, sizeof req));
@@ -92,7 +99,8 @@ bool ping(const char* to, std::uint16_t seq, std::chrono::milliseconds timeout =
     bool answered = false;
     while (!answered && std::chrono::steady_clock::now() < deadline) {
         ::sendto(s, req, sizeof req, 0, reinterpret_cast<sockaddr*>(&dst), sizeof dst);
-        const auto until = std::min(deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(500));
+        const auto until =
+            std::min(deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(500));
         while (!answered && std::chrono::steady_clock::now() < until) {
             pollfd p{s, POLLIN, 0};
             if (::poll(&p, 1, 50) <= 0) continue;
@@ -143,16 +151,18 @@ struct Pump {
 }  // namespace
 
 TEST(EoeVeth, PingAndTcpThroughTheDeviceToTheNetworkBehindIt) {
-    if (!g_netns) GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
+    if (!g_netns)
+        GTEST_SKIP() << "needs root or unprivileged user namespaces for a private network namespace";
     if (!sh("command -v ip && command -v unshare && command -v nsenter"))
         GTEST_SKIP() << "needs ip, unshare and nsenter";
     std::string why;
     ASSERT_TRUE(net::loopback_up(&why)) << why;
     ASSERT_TRUE(net::create_veth_pair("eoem", "eoes", &why)) << why;
-    const std::string log = (std::filesystem::temp_directory_path() /
-                             ("vecat-eoe-veth-" + std::to_string(getpid()) + ".log"))
-                                .string();
-    test::ChildProcess vecat({VECAT_BINARY, "run", "--iface", "eoes", "--slaves", "1", "--eoe-tap", "vdev"}, log);
+    const std::string log =
+        (std::filesystem::temp_directory_path() / ("vecat-eoe-veth-" + std::to_string(getpid()) + ".log"))
+            .string();
+    test::ChildProcess vecat({VECAT_BINARY, "run", "--iface", "eoes", "--slaves", "1", "--eoe-tap", "vdev"},
+                             log);
     ASSERT_GT(vecat.pid, 0);
     for (int i = 0; i < 100 && read_text(log).find("Ctrl-C stops") == std::string::npos; ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -194,7 +204,8 @@ TEST(EoeVeth, PingAndTcpThroughTheDeviceToTheNetworkBehindIt) {
     std::atomic<bool> listening{false};
     std::string heard;
     std::thread server([&] {
-        const int ns = ::open(("/proc/" + std::to_string(behind.pid) + "/ns/net").c_str(), O_RDONLY | O_CLOEXEC);
+        const int ns =
+            ::open(("/proc/" + std::to_string(behind.pid) + "/ns/net").c_str(), O_RDONLY | O_CLOEXEC);
         if (ns < 0 || ::setns(ns, CLONE_NEWNET) != 0) return;
         ::close(ns);
         const int l = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);

@@ -3,7 +3,7 @@
 // of fragments (in order, overlapping, out of order, never completed, too large), frames fragmented to the
 // master, set/get IP parameter and address filter with every result code the server answers, the device's
 // ARP and ICMP echo answers, the address filter on frames to the master, and CoE and process data going on
-// throughout. About 600 lines: one protocol, each case its own test.
+// throughout. About 650 lines: one protocol, each case its own test.
 #include <gtest/gtest.h>
 
 #include <deque>
@@ -551,8 +551,18 @@ std::vector<std::uint8_t> echo_request(const MacAddress& dst, protocol::Ip4 to, 
     f.push_back(0x08);
     f.push_back(0x00);
     const std::size_t total = 20 + 8 + payload;
-    std::vector<std::uint8_t> ip = {0x45, 0, static_cast<std::uint8_t>(total >> 8), static_cast<std::uint8_t>(total),
-                                    0x12, 0x34, 0x40, 0, 64, 1, 0, 0};
+    std::vector<std::uint8_t> ip = {0x45,
+                                    0,
+                                    static_cast<std::uint8_t>(total >> 8),
+                                    static_cast<std::uint8_t>(total),
+                                    0x12,
+                                    0x34,
+                                    0x40,
+                                    0,
+                                    64,
+                                    1,
+                                    0,
+                                    0};
     for (int i = 3; i >= 0; --i)
         ip.push_back(static_cast<std::uint8_t>(kMasterIp >> (8 * i)));
     for (int i = 3; i >= 0; --i)
@@ -589,10 +599,10 @@ TEST(EoeServer, AnswersArpAndPingForTheAddressTheMasterSet) {
     ASSERT_GE(r->size(), 42u);
     EXPECT_TRUE(std::equal(kMasterMac.begin(), kMasterMac.end(), r->begin()));
     EXPECT_TRUE(std::equal(mac.begin(), mac.end(), r->begin() + 6));
-    EXPECT_EQ((*r)[21], 2);                                             // ARP reply
+    EXPECT_EQ((*r)[21], 2);                                            // ARP reply
     EXPECT_TRUE(std::equal(mac.begin(), mac.end(), r->begin() + 22));  // sender: the device
-    EXPECT_EQ((*r)[31], 5);                                             // 10.0.0.5
-    EXPECT_EQ((*r)[41], 1);                                             // target: 10.0.0.1
+    EXPECT_EQ((*r)[31], 5);                                            // 10.0.0.5
+    EXPECT_EQ((*r)[41], 1);                                            // target: 10.0.0.1
     EXPECT_EQ(e.wire.frames.size(), 2u);  // both broadcasts went to the Ethernet side too
 
     const auto ping = echo_request(mac, kDeviceIp, 1000);  // fragmented both ways
@@ -603,7 +613,7 @@ TEST(EoeServer, AnswersArpAndPingForTheAddressTheMasterSet) {
     const ConstBytes ip(r->data() + 14, r->size() - 14);
     EXPECT_EQ(eoe::internet_checksum(ip.first(20)), 0);
     EXPECT_EQ(eoe::internet_checksum(ip.subspan(20)), 0);
-    EXPECT_EQ(ip[20], 0);  // echo reply
+    EXPECT_EQ(ip[20], 0);                                                // echo reply
     EXPECT_EQ(ld_le32(ip.data() + 12), ld_le32(ping.data() + 14 + 16));  // from the device's address
     EXPECT_TRUE(std::equal(ping.begin() + 14 + 24, ping.end(), r->begin() + 14 + 24));  // id, seq, data
     EXPECT_EQ(e.server().counters().echo_replies, 1u);

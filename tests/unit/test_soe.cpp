@@ -1,4 +1,4 @@
-// SoE (ETG.1000.6 5.6) (about 600 lines: one protocol, each error code its own test): the wire layout of
+// SoE (ETG.1000.6 5.6) (about 670 lines: one protocol, each error code its own test): the wire layout of
 // protocol/soe.hpp (round trips, bytes written by hand from the header layout), the SoE server's cases
 // (read and write of elements, segmented transfers both ways, notifications) with every SoE error code and
 // mailbox error it answers, and the SoE drive behind the project's master: the AT/MDT mapping through
