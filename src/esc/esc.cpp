@@ -127,6 +127,7 @@ void Esc::reload_eeprom() {
     }
     st_le16(&mem_[addr(Reg::SiiControl)], ctrl);
     update_dl_status();
+    address_changed();  // the alias
 }
 
 namespace {
@@ -203,10 +204,14 @@ void Esc::count_processing_unit_error() {
     saturating_inc(mem_[addr(Reg::EcatProcessingUnitErrorCounter)]);
 }
 
-bool Esc::addressed_fixed(std::uint16_t adp) const {
-    if (adp == ld_le16(&mem_[addr(Reg::StationAddress)])) return true;
-    const bool alias_enabled = (mem_[addr(Reg::DlControl) + 3] & 0x01) != 0;
-    return alias_enabled && adp == ld_le16(&mem_[addr(Reg::StationAlias)]);
+Esc::Addressing Esc::addressing() const {
+    Addressing a;
+    a.station = ld_le16(&mem_[addr(Reg::StationAddress)]);
+    a.alias = ld_le16(&mem_[addr(Reg::StationAlias)]);
+    a.alias_enabled = (mem_[addr(Reg::DlControl) + 3] & 0x01) != 0;
+    a.log_first_bit = fmmu_log_first_bit_;
+    a.log_last_bit = fmmu_log_last_bit_;
+    return a;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -586,6 +591,10 @@ void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTi
     if (overlaps(lo, hi, addr(Reg::WatchdogCounterProcessData), 1))
         mem_[addr(Reg::WatchdogCounterProcessData)] = 0;
     if (overlaps(lo, hi, addr(Reg::WatchdogCounterPdi), 1)) mem_[addr(Reg::WatchdogCounterPdi)] = 0;
+    if (overlaps(lo, hi, addr(Reg::StationAddress), 2) || overlaps(lo, hi, addr(Reg::StationAlias), 2) ||
+        overlaps(lo, hi, addr(Reg::DlControl) + 3, 1) ||
+        overlaps(lo, hi, 0x0600, kFmmuSize * cfg_.fmmu_count))
+        address_changed();
     if (overlaps(lo, hi, 0x0600, kFmmuSize * cfg_.fmmu_count)) {
         const unsigned f0 = lo < 0x0600 ? 0 : (lo - 0x0600u) / kFmmuSize;
         for (unsigned f = f0; f < cfg_.fmmu_count && fmmu_addr(f) <= hi; ++f)

@@ -52,7 +52,7 @@ struct FrameTiming {
 };
 
 struct EscCounters {
-    std::uint64_t datagrams = 0;
+    std::uint64_t datagrams = 0;  // handed to process() (a segment hands an ESC those that can concern it)
     std::uint64_t dropped_frames = 0;
 };
 
@@ -170,7 +170,26 @@ class Esc {
     std::uint16_t station_address() const { return peek16(protocol::addr(protocol::Reg::StationAddress)); }
     // A configured-address command (FPxx, FRMW) with this ADP addresses this ESC: its station address, or
     // its alias when DL control enables alias addressing.
-    bool addressed_fixed(std::uint16_t adp) const;
+    bool addressed_fixed(std::uint16_t adp) const { return addressing().fixed(adp); }
+
+    // What decides whether a datagram can concern this ESC at all (ETG.1000.4 5.4): the configured station
+    // address 0x0010, the alias 0x0012 with its enable bit (DL control 0x0100 bit 24), and the logical bit
+    // range that the active FMMUs cover together. A segment keeps a copy per ESC, so that a frame visits
+    // only the ESCs that a datagram can address (broadcasts and auto-increment commands aside).
+    struct Addressing {
+        std::uint16_t station = 0;
+        std::uint16_t alias = 0;
+        bool alias_enabled = false;
+        std::uint64_t log_first_bit = ~std::uint64_t{0}, log_last_bit = 0;  // empty: first > last
+        bool fixed(std::uint16_t adp) const { return adp == station || (alias_enabled && adp == alias); }
+        bool logical(std::uint64_t first_bit, std::uint64_t last_bit) const {
+            return first_bit <= log_last_bit && last_bit >= log_first_bit;
+        }
+    };
+    Addressing addressing() const;
+    // Counted up whenever addressing() may have changed (a write to those registers or to an FMMU, an SII
+    // reload that brings a new alias). Only process() and reload_eeprom() change it.
+    void set_address_change_counter(std::uint64_t* counter) { address_changes_ = counter; }
 
     // The slave's firmware writes its own EEPROM (a firmware update writes the new revision into the SII,
     // words 0x000C/0x000D). A word past the EEPROM's end is not written.
@@ -284,6 +303,10 @@ class Esc {
     std::uint64_t fmmu_log_first_bit_ = ~std::uint64_t{0}, fmmu_log_last_bit_ = 0;
     std::uint32_t repeat_bits_ = 0;
     std::uint64_t* port_changes_ = nullptr;
+    std::uint64_t* address_changes_ = nullptr;
+    void address_changed() {
+        if (address_changes_) ++*address_changes_;
+    }
     std::uint8_t auto_closed_ = 0;  // ports that "auto close" closed at a link loss, until the master reopens
     std::uint8_t link_mask_ = 0x01;
     // Bit p: port_open(p), as update_dl_status last found it (it runs whenever a link, the loop setting of

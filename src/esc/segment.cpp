@@ -47,6 +47,7 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     ring_timing_.push_back({});
     ring_seen_.push_back(0);
     slaves_.back()->esc().set_port_change_counter(&port_epoch_);
+    slaves_.back()->esc().set_address_change_counter(&address_epoch_);
     ++port_epoch_;
     for (std::size_t k = 0; k < slaves_.size(); ++k)
         update_links(k);
@@ -254,6 +255,7 @@ bool Segment::restart_slave(std::size_t i) {
     pulse_ns_[i] = 0;
     ++slaves_epoch_;
     slaves_[i]->esc().set_port_change_counter(&port_epoch_);
+    slaves_[i]->esc().set_address_change_counter(&address_epoch_);
     ++port_epoch_;
     update_links(i);
     return true;
@@ -360,21 +362,7 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
                 if (latches_receive_times(pf.datagram(frame, i))) latch_pos = i;
             if (latch_pos < pf.count) std::fill(latched_.begin(), latched_.end(), std::uint8_t{0});
         }
-        for (std::size_t k = 0; k < intact; ++k) {
-            if (!reached_[k]) continue;
-            Esc& esc = slaves_[k]->esc();
-            const FrameTiming& rel = timing_[k];
-            const FrameTiming t{now_ns + rel.port0_ns, now_ns + rel.port1_ns, now_ns + rel.port2_ns,
-                                now_ns + rel.port3_ns};
-            bool addressed = false;
-            for (std::size_t i = 0; i < pf.count; ++i) {
-                const bool took = esc.process(pf.datagram(frame, i), t);
-                addressed |= took;
-                if (i == latch_pos && took) latched_[k] = 1;
-            }
-            // Marks the slave for its firmware run below (0: run now).
-            if (addressed) last_run_ns_[k] = 0;
-        }
+        process_datagrams(frame, pf, intact, latch_pos, now_ns);
         if (latch_pos < pf.count) {
             const DatagramView d = pf.datagram(frame, latch_pos);
             pending_latch_ = PendingLatch{true, d.index(), latch_pos, d.wkc(), now_ns};
@@ -406,6 +394,109 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
     else
         ++counters_.replies;
     return true;
+}
+
+void Segment::refresh_addressing() {
+    addressing_.resize(slaves_.size());
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        addressing_[k] = slaves_[k]->esc().addressing();
+    addressed_epoch_ = address_epoch_;
+    addressed_slaves_epoch_ = slaves_epoch_;
+}
+
+void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t intact, std::size_t latch_pos,
+                                std::uint64_t now_ns) {
+    if (addressed_epoch_ != address_epoch_ || addressed_slaves_epoch_ != slaves_epoch_) refresh_addressing();
+    // What each datagram can reach (ETG.1000.4 5.4: the addressing modes).
+    bool auto_increment = false;
+    for (std::size_t i = 0; i < pf.count; ++i) {
+        const DatagramView d = pf.datagram(frame, i);
+        DatagramReach& r = reach_[i];
+        r.adp = d.adp();
+        switch (d.command()) {
+            case Command::APRD:
+            case Command::APWR:
+            case Command::APRW:
+                r.reach = Reach::Position;
+                auto_increment = true;
+                break;
+            case Command::FPRD:
+            case Command::FPWR:
+            case Command::FPRW:
+                r.reach = Reach::Fixed;
+                break;
+            case Command::BRD:
+            case Command::BWR:
+            case Command::BRW:
+            case Command::ARMW:  // the ESC at the position reads, every other one writes
+            case Command::FRMW:  // the ESC of the address reads, every other one writes
+                r.reach = Reach::All;
+                break;
+            case Command::LRD:
+            case Command::LWR:
+            case Command::LRW:
+                r.reach = d.length() ? Reach::Logical : Reach::None;
+                r.first_bit = static_cast<std::uint64_t>(d.logical_address()) * 8;
+                r.last_bit = r.first_bit + d.length() * 8 - 1;
+                break;
+            default:  // NOP and unknown commands pass every ESC unchanged
+                r.reach = Reach::None;
+                break;
+        }
+    }
+    // position: the ESCs the frame has passed so far (each counts up the ADP of auto-increment commands).
+    std::uint16_t position = 0;
+    for (std::size_t k = 0; k < intact; ++k) {
+        if (!reached_[k]) continue;
+        Esc* esc = nullptr;
+        FrameTiming t{};
+        bool addressed = false;
+        for (std::size_t i = 0; i < pf.count; ++i) {
+            const DatagramReach& r = reach_[i];
+            const Esc::Addressing& a = addressing_[k];
+            bool concerns = false;
+            switch (r.reach) {
+                case Reach::None:
+                    break;
+                case Reach::All:
+                    concerns = true;
+                    break;
+                case Reach::Position:
+                    concerns = static_cast<std::uint16_t>(r.adp + position) == 0;
+                    break;
+                case Reach::Fixed:
+                    concerns = a.fixed(r.adp);
+                    break;
+                case Reach::Logical:
+                    concerns = a.logical(r.first_bit, r.last_bit);
+                    break;
+            }
+            if (!concerns) continue;
+            if (!esc) {
+                esc = &slaves_[k]->esc();
+                const FrameTiming& rel = timing_[k];
+                t = FrameTiming{now_ns + rel.port0_ns, now_ns + rel.port1_ns, now_ns + rel.port2_ns,
+                                now_ns + rel.port3_ns};
+            }
+            DatagramView d = pf.datagram(frame, i);
+            if (r.reach == Reach::Position) d.set_adp(0);  // as the ESCs before this one left it
+            const std::uint64_t epoch = address_epoch_;
+            const bool took = esc->process(d, t);
+            if (address_epoch_ != epoch) addressing_[k] = esc->addressing();  // for its next datagrams
+            addressed |= took;
+            if (i == latch_pos && took) latched_[k] = 1;
+        }
+        // Marks the slave for its firmware run (0: run now).
+        if (addressed) last_run_ns_[k] = 0;
+        ++position;
+    }
+    // Each ESC passed counted up the ADP of the auto-increment and broadcast commands; the ESCs that the
+    // loop above did not hand an auto-increment datagram to count here.
+    if (auto_increment)
+        for (std::size_t i = 0; i < pf.count; ++i)
+            if (reach_[i].reach == Reach::Position)
+                pf.datagram(frame, i).set_adp(static_cast<std::uint16_t>(reach_[i].adp + position));
+    addressed_epoch_ = address_epoch_;  // the entries of the ESCs that changed were taken again above
 }
 
 void Segment::count_corruption(const FrameDamage& d, std::size_t m) {

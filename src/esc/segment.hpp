@@ -289,6 +289,29 @@ class Segment {
     std::vector<std::size_t> coupled_;  // those slaves, as of coupled_epoch_
     std::uint64_t coupled_epoch_ = ~std::uint64_t{0};
     void run_due_firmware(std::uint64_t now_ns);
+
+    // ---- Which ESCs a datagram concerns (see Esc::Addressing). A real ESC looks at every datagram in
+    // hardware; here a frame of a large network would touch every ESC's memory once per datagram. The
+    // segment keeps each ESC's addressing in one compact table instead, and hands a datagram to the ESCs it
+    // can concern: all of them for broadcasts and read-multiple-writes, the one at its position for
+    // auto-increment commands (whose ADP the segment then counts on for the others), those of that station
+    // address or alias, and those whose FMMUs cover some of a logical datagram. The answers are the same as
+    // when every ESC looks at every datagram.
+    void process_datagrams(Bytes frame, const protocol::ParsedFrame& pf, std::size_t intact,
+                           std::size_t latch_pos, std::uint64_t now_ns);
+    void refresh_addressing();
+    std::vector<Esc::Addressing> addressing_;  // per slave
+    std::uint64_t address_epoch_ = 1;          // counted up by the ESCs (Esc::set_address_change_counter)
+    std::uint64_t addressed_epoch_ = 0;        // ... when addressing_ was last made whole
+    std::uint64_t addressed_slaves_epoch_ = ~std::uint64_t{0};
+    enum class Reach : std::uint8_t { None, All, Position, Fixed, Logical };
+    struct DatagramReach {
+        Reach reach = Reach::None;
+        std::uint16_t adp = 0;                      // as it arrived at the first ESC
+        std::uint64_t first_bit = 0, last_bit = 0;  // Logical: the bits it covers
+    };
+    std::array<DatagramReach, protocol::kMaxDatagramsPerFrame> reach_{};
+
     bool defer_firmware_ = false;
     bool firmware_due_ = false;          // a frame's firmware runs are still to be done
     std::uint64_t firmware_due_ns_ = 0;  // at the time of that frame
