@@ -511,7 +511,10 @@ std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node mod
             std::string ident;
             module = default_module(slot, modules, ident);
             if (!module) {
-                notes.push_back(fmt::format("{}: default module {} not found", slot_label(slot, no), ident));
+                notes.push_back(ident.empty() ? fmt::format("{}: no default module (it takes {}), empty",
+                                                            slot_label(slot, no), slot_offer(slot))
+                                              : fmt::format("{}: default module {} not found, empty",
+                                                            slot_label(slot, no), ident));
                 d.module_idents.push_back(0);
                 continue;
             }
