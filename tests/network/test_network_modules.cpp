@@ -5,8 +5,10 @@
 // status code 0x0070. examples/networks/modular-io.xml is the self-contained modular device; the ETG.2001
 // example of ../shared is used where it is there.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <filesystem>
 
 #include "common/bytes.hpp"
 #include "esi/esi_reader.hpp"
@@ -17,6 +19,7 @@
 #include "protocol/objects.hpp"
 #include "serve/in_process_link.hpp"
 #include "shared_data.hpp"
+#include "test_support.hpp"
 
 namespace vecat::network {
 namespace {
@@ -271,6 +274,30 @@ TEST(NetworkModules, TheEtg2001ExampleTakesChosenModules) {
     ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
     for (int i = 0; i < 5; ++i)
         ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
+}
+
+// vecat esi generate / sii generate / run --esi FILE --modules LIST: the same choice as modules: (the
+// generated ESI describes the device with the chosen modules in place, 0xF050 with their ModuleIdents).
+TEST(NetworkModules, TheModulesOptionOfTheCommandLine) {
+    const auto out = std::filesystem::temp_directory_path() / ("vecat-modules-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(out);
+    const std::string esi = (out / "gen.xml").string();
+    const std::string log =
+        test::run_capture(std::string(VECAT_BINARY) + " esi generate --esi " + kModularIo +
+                          " --device VECAT-MOD-3 --modules DO8,0x1003,empty -o " + esi + " 2>&1");
+    EXPECT_NE(log.find("slot 2 \"Slot 2\": chosen module \"DI8\" (ModuleIdent 0x1003)"), std::string::npos)
+        << log;
+    const auto d = esi::import_esi_file(esi).desc;  // no Slots in it: the objects as written
+    EXPECT_EQ(assigned(d.tx_pdos), (std::vector<std::uint16_t>{0x1A01}));
+    const auto objs = device::dictionary_objects(d);
+    EXPECT_EQ(idents(object(objs, md::detected_module_ident_list)),
+              (std::vector<std::uint32_t>{0x1002, 0x1003, 0}));
+    const std::string refused =
+        test::run_capture(std::string(VECAT_BINARY) + " sii generate --esi " + kModularIo +
+                          " --device VECAT-MOD-3 --modules AI1 -o " + (out / "x.sii").string() + " 2>&1");
+    EXPECT_NE(refused.find("slot 1 \"Slot 1\" does not take module \"AI1\""), std::string::npos) << refused;
+    EXPECT_FALSE(std::filesystem::exists(out / "x.sii"));
+    std::filesystem::remove_all(out);
 }
 
 }  // namespace
