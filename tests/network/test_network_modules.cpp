@@ -215,8 +215,16 @@ TEST(NetworkModules, AConfiguredListThatDiffersRefusesSafeOpWithCode0x0070) {
     EXPECT_EQ(s.master.read_al_status(station).code,
               static_cast<std::uint16_t>(protocol::AlStatusCode::ModuleIdentListMismatch));
     ASSERT_TRUE(s.master.acknowledge_error(station, protocol::AlState::PreOp));
-    // The matching list: SAFEOP and OP, process data of the chosen modules (1 output, 1 + 2 input bytes).
-    ASSERT_TRUE(c.download_value(md::configured_module_ident_list, 0, std::uint8_t{3}).ok());
+    // The matching list written whole by complete access, as TwinCAT's start-up list does (subindex 0 as a
+    // byte and a pad byte, then the three UDINTs): SAFEOP and OP, process data of the chosen modules.
+    std::vector<std::uint8_t> list(2 + 3 * 4, 0);
+    list[0] = 3;
+    st_le32(&list[2], 0x1002);
+    st_le32(&list[6], 0x1003);
+    st_le32(&list[10], 0x2001);
+    ASSERT_TRUE(
+        c.download(md::configured_module_ident_list, 0, ConstBytes(list.data(), list.size()), true).ok());
+    EXPECT_EQ(read32(c, md::configured_module_ident_list, 3), 0x2001u);
     ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
     EXPECT_EQ(s.master.slaves().at(0).out_bytes, 1u);
     EXPECT_EQ(s.master.slaves().at(0).in_bytes, 3u);
