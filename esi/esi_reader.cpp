@@ -1,6 +1,6 @@
-// The ESI reader (about 730 lines): one vendor file to one DeviceDescription, element by element of the
-// ETG.2000 schema (identity, SyncManagers, PDOs, Dictionary, Modules/Slots, DC), each with its bad-input
-// messages.
+// The ESI reader (about 900 lines): one vendor file to one DeviceDescription, element by element of the
+// ETG.2000 schema (identity, SyncManagers, PDOs, Dictionary, Modules/Slots and the modules chosen for them,
+// DC), each with its bad-input messages; the elements share the reading helpers of this file.
 #include "esi/esi_reader.hpp"
 
 #include <fmt/core.h>
@@ -17,6 +17,7 @@
 
 #include "common/file.hpp"
 #include "esc/sii_image.hpp"
+#include "protocol/objects.hpp"
 #include "protocol/registers.hpp"
 
 namespace vecat::esi {
@@ -355,6 +356,183 @@ std::string string_of(const EntryDescription* e, const std::string& dflt) {
     return std::string(e->default_value.begin(), e->default_value.end());
 }
 
+// Modular devices (ETG.2000 Slots / Modules) ---------------------------------------------------------------
+
+std::uint32_t module_ident(pugi::xml_node module) {
+    return static_cast<std::uint32_t>(attr_or(module.child("Type"), "ModuleIdent", 0));
+}
+
+std::string module_label(pugi::xml_node module) {
+    return fmt::format("\"{}\" (ModuleIdent 0x{:X})", txt(module.child("Type")), module_ident(module));
+}
+
+// "0x110", "#x110", "272": a ModuleIdent as a network file or an ESI file writes it.
+std::optional<std::int64_t> parse_ident(const std::string& s) {
+    const auto v = s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')
+                       ? parse_hexdec("#x" + s.substr(2))
+                       : parse_hexdec(s);
+    if (!v || *v < 0 || *v > 0xFFFFFFFF) return std::nullopt;  // a ModuleIdent is an UDINT (0xF050)
+    return v;
+}
+
+// The Module of the file a choice names: by its Type text (which must be unique), else by its ModuleIdent.
+pugi::xml_node find_module(pugi::xml_node modules, const std::string& choice, std::size_t entry) {
+    std::vector<pugi::xml_node> by_type;
+    for (auto m : modules.children("Module"))
+        if (txt(m.child("Type")) == choice) by_type.push_back(m);
+    if (by_type.size() == 1) return by_type.front();
+    if (by_type.size() > 1) {
+        std::vector<std::string> idents;
+        for (auto m : by_type)
+            idents.push_back(fmt::format("0x{:X}", module_ident(m)));
+        throw ModuleError(entry, fmt::format("{} modules have the Type \"{}\" (ModuleIdent {}): give the "
+                                             "ModuleIdent",
+                                             by_type.size(), choice, fmt::join(idents, ", ")));
+    }
+    if (const auto ident = parse_ident(choice))
+        for (auto m : modules.children("Module"))
+            if (attr_or(m.child("Type"), "ModuleIdent", -1) == *ident) return m;
+    std::vector<std::string> all;
+    for (auto m : modules.children("Module"))
+        all.push_back(module_label(m));
+    throw ModuleError(
+        entry, fmt::format("unknown module \"{}\"; the file has {}", choice,
+                           all.empty() ? std::string("no Module") : fmt::format("{}", fmt::join(all, ", "))));
+}
+
+// ETG.2000 SlotType: a slot lists the modules it takes by ModuleIdent or by ModuleClass (the Class the
+// Module's Type names).
+bool slot_accepts(pugi::xml_node slot, pugi::xml_node module) {
+    bool listed = false;
+    for (auto mi : slot.children("ModuleIdent")) {
+        listed = true;
+        if (parse_hexdec(txt(mi)) == static_cast<std::int64_t>(module_ident(module))) return true;
+    }
+    const std::string cls = trim(module.child("Type").attribute("ModuleClass").as_string());
+    for (auto mc : slot.children("ModuleClass")) {
+        listed = true;
+        if (!cls.empty() && txt(mc.child("Class")) == cls) return true;
+    }
+    return !listed;
+}
+
+std::string slot_offer(pugi::xml_node slot) {
+    std::vector<std::string> what;
+    for (auto mi : slot.children("ModuleIdent"))
+        what.push_back(fmt::format("ModuleIdent {}", txt(mi)));
+    for (auto mc : slot.children("ModuleClass"))
+        what.push_back(fmt::format("ModuleClass {}", txt(mc.child("Class"))));
+    return fmt::format("{}", fmt::join(what, ", "));
+}
+
+std::string slot_label(pugi::xml_node slot, int no) {
+    const std::string n = name_of(slot);
+    return n.empty() ? fmt::format("slot {}", no + 1) : fmt::format("slot {} \"{}\"", no + 1, n);
+}
+
+// The default module of a slot: its ModuleIdent with Default, else its first one.
+pugi::xml_node default_module(pugi::xml_node slot, pugi::xml_node modules, std::string& ident_text) {
+    pugi::xml_node ident;
+    for (auto mi : slot.children("ModuleIdent"))
+        if (bool_attr(mi, "Default")) ident = mi;
+    if (!ident) ident = slot.child("ModuleIdent");
+    ident_text = txt(ident);
+    const auto want = parse_hexdec(ident_text);
+    for (auto m : modules.children("Module"))
+        if (want && attr_or(m.child("Type"), "ModuleIdent", -1) == *want) return m;
+    return {};
+}
+
+// The objects of a module's own dictionary (Module/Profile/Dictionary), their DependOnSlot indexes moved by
+// the slot's index increment. Data types come from the module's dictionary, then the device's.
+void read_module_objects(pugi::xml_node module, pugi::xml_node device_dict, std::uint16_t index_inc,
+                         std::vector<ObjectDescription>& out, std::vector<std::string>& notes) {
+    pugi::xml_node md;
+    for (auto p : module.children("Profile"))
+        if (!md) md = p.child("Dictionary");
+    if (!md) return;
+    Dictionary dict;
+    for (auto src : {md, device_dict})
+        for (auto dt : src.child("DataTypes").children("DataType"))
+            dict.types.emplace(txt(dt.child("Name")), dt);
+    for (auto x : md.child("Objects").children("Object")) {
+        auto o = read_object(dict, x, notes);
+        if (!o) continue;
+        if (bool_attr(x.child("Index"), "DependOnSlot"))
+            o->index = static_cast<std::uint16_t>(o->index + index_inc);
+        out.push_back(std::move(*o));
+    }
+}
+
+// The slots of a modular device: each its chosen (or default) module's PDOs and objects, the increments of
+// Slots applied to DependOnSlot indexes (slot n, from 0: n * SlotPdoIncrement, n * SlotIndexIncrement), and
+// its ModuleIdent in d.module_idents. Returns the modules' objects. A refused choice throws ModuleError.
+std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node modules,
+                                          pugi::xml_node device_dict, const DeviceSelector& sel,
+                                          device::DeviceDescription& d, std::vector<std::string>& notes) {
+    std::vector<ObjectDescription> objects;
+    const auto slots = dev.child("Slots");
+    std::vector<pugi::xml_node> slot_nodes;
+    for (auto slot : slots.children("Slot"))
+        slot_nodes.push_back(slot);
+    if (sel.modules && slot_nodes.empty())
+        throw ModuleError(std::nullopt,
+                          "the device has no slots (no Slots element): modules: is for modular devices");
+    if (sel.modules && sel.modules->size() > slot_nodes.size())
+        throw ModuleError(slot_nodes.size(),
+                          fmt::format("{} modules for {} slot{}", sel.modules->size(), slot_nodes.size(),
+                                      slot_nodes.size() == 1 ? "" : "s"));
+    if (slot_nodes.size() > protocol::obj::modular_device::max_slots)
+        throw EsiError(fmt::format("{} slots: the module ident lists have room for {}", slot_nodes.size(),
+                                   protocol::obj::modular_device::max_slots));
+    const auto pdo_inc = attr_or(slots, "SlotPdoIncrement", 0);
+    const auto idx_inc = attr_or(slots, "SlotIndexIncrement", 0);
+    for (std::size_t i = 0; i < slot_nodes.size(); ++i) {
+        const auto slot = slot_nodes[i];
+        const int no = static_cast<int>(i);
+        const bool chosen = sel.modules && i < sel.modules->size();
+        pugi::xml_node module;
+        if (chosen && !(*sel.modules)[i]) {
+            if (attr_or(slot, "MinInstances", 1) != 0)
+                throw ModuleError(i,
+                                  fmt::format("{} cannot stay empty (MinInstances {})", slot_label(slot, no),
+                                              trim(slot.attribute("MinInstances").as_string("1"))));
+            d.module_idents.push_back(0);
+            notes.push_back(fmt::format("{}: empty", slot_label(slot, no)));
+            continue;
+        }
+        if (chosen) {
+            module = find_module(modules, *(*sel.modules)[i], i);
+            if (!slot_accepts(slot, module))
+                throw ModuleError(i,
+                                  fmt::format("{} does not take module {}; it takes {}", slot_label(slot, no),
+                                              module_label(module), slot_offer(slot)));
+        } else {
+            std::string ident;
+            module = default_module(slot, modules, ident);
+            if (!module) {
+                notes.push_back(ident.empty() ? fmt::format("{}: no default module (it takes {}), empty",
+                                                            slot_label(slot, no), slot_offer(slot))
+                                              : fmt::format("{}: default module {} not found, empty",
+                                                            slot_label(slot, no), ident));
+                d.module_idents.push_back(0);
+                continue;
+            }
+        }
+        const auto pi = static_cast<std::uint16_t>(pdo_inc * no);
+        const auto ii = static_cast<std::uint16_t>(idx_inc * no);
+        for (auto p : module.children("RxPdo"))
+            d.rx_pdos.push_back(read_pdo(p, d, true, pi, ii));
+        for (auto p : module.children("TxPdo"))
+            d.tx_pdos.push_back(read_pdo(p, d, false, pi, ii));
+        read_module_objects(module, device_dict, ii, objects, notes);
+        d.module_idents.push_back(module_ident(module));
+        notes.push_back(fmt::format("{}: {} module {}", slot_label(slot, no), chosen ? "chosen" : "default",
+                                    module_label(module)));
+    }
+    return objects;
+}
+
 }  // namespace
 
 std::optional<std::int64_t> parse_hexdec(const std::string& s0) {
@@ -500,35 +678,8 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
         d.rx_pdos.push_back(read_pdo(p, d, true, 0, 0));
     for (auto p : dev.children("TxPdo"))
         d.tx_pdos.push_back(read_pdo(p, d, false, 0, 0));
-    // Modular devices: the default module of each slot brings its PDOs.
-    if (auto slots = dev.child("Slots")) {
-        const auto pdo_inc = attr_or(slots, "SlotPdoIncrement", 0);
-        const auto idx_inc = attr_or(slots, "SlotIndexIncrement", 0);
-        int slot_no = 0;
-        for (auto slot : slots.children("Slot")) {
-            pugi::xml_node ident;
-            for (auto mi : slot.children("ModuleIdent"))
-                if (bool_attr(mi, "Default")) ident = mi;
-            if (!ident) ident = slot.child("ModuleIdent");
-            const auto want = parse_hexdec(txt(ident));
-            pugi::xml_node module;
-            for (auto m : descs.child("Modules").children("Module"))
-                if (want && attr_or(m.child("Type"), "ModuleIdent", -1) == *want) module = m;
-            if (!module) {
-                notes.push_back(fmt::format("slot {}: default module {} not found", slot_no, txt(ident)));
-            } else {
-                const auto pi = static_cast<std::uint16_t>(pdo_inc * slot_no);
-                const auto ii = static_cast<std::uint16_t>(idx_inc * slot_no);
-                for (auto p : module.children("RxPdo"))
-                    d.rx_pdos.push_back(read_pdo(p, d, true, pi, ii));
-                for (auto p : module.children("TxPdo"))
-                    d.tx_pdos.push_back(read_pdo(p, d, false, pi, ii));
-                notes.push_back(
-                    fmt::format("slot {}: default module \"{}\"", slot_no, txt(module.child("Type"))));
-            }
-            ++slot_no;
-        }
-    }
+    // Modular devices: the module in each slot brings its PDOs and objects.
+    auto module_objects = read_slots(dev, descs.child("Modules"), dict_node, sel, d, notes);
 
     d.mailbox_protocols = 0;
     d.coe_details = 0;
@@ -626,6 +777,21 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
     } else {
         d.device_type = d.profile_no;
         notes.push_back("no Dictionary: only the communication area is emulated");
+    }
+    // The modules' own objects: one of the index of a device object replaces it (ETG.2000 Object Index
+    // OverwrittenByModule); the communication area stays generated.
+    for (auto& o : module_objects) {
+        if (protocol::obj::communication_area.contains(o.index)) {
+            notes.push_back(fmt::format(
+                "module object 0x{:04X}: in the communication area, which is generated", o.index));
+            continue;
+        }
+        auto it = std::find_if(d.objects.begin(), d.objects.end(),
+                               [&](const ObjectDescription& x) { return x.index == o.index; });
+        if (it != d.objects.end())
+            *it = std::move(o);
+        else
+            d.objects.push_back(std::move(o));
     }
     if (d.profile_no == 0) d.profile_no = d.device_type & 0xFFFF;
 

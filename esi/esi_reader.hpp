@@ -1,6 +1,6 @@
 // ESI files read into a device description: identity, names, SyncManagers, FMMUs, PDOs (device level or
-// from the default modules of its slots), mailbox and CoE flags, DC op modes, EEPROM config data and
-// the dictionary objects the communication area does not generate.
+// from the modules in its slots: the default ones or those chosen), mailbox and CoE flags, DC op modes,
+// EEPROM config data and the dictionary objects the communication area does not generate.
 #pragma once
 
 #include <cstdint>
@@ -22,6 +22,17 @@ struct DeviceSelector {
     std::optional<std::string> type;
     std::optional<std::uint32_t> product_code;
     std::optional<std::uint32_t> revision;
+    // A modular device (ETG.2000 Slots): the module of each slot in slot order, by its Type text or its
+    // ModuleIdent (decimal, 0x or #x hexadecimal); nullopt: the slot stays empty. Slots after the list keep
+    // their default module. No list: every slot its default module.
+    std::optional<std::vector<std::optional<std::string>>> modules;
+};
+
+// A module choice the device refuses: entry is the index in DeviceSelector::modules of the refused one,
+// nullopt when the list as a whole is refused (a device without slots).
+struct ModuleError : EsiError {
+    ModuleError(std::optional<std::size_t> at, const std::string& what) : EsiError(what), entry(at) {}
+    std::optional<std::size_t> entry;
 };
 
 struct DeviceSummary {

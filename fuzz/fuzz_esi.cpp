@@ -1,10 +1,13 @@
 // Fuzz target: ESI import (esi::import_esi_text) and what vecat run --esi does with the result: completes
 // it for emulation, builds the SII image and the dictionary, and starts a slave on it.
 // Invariants: a file is either refused with an exception (what vecat reports and stops on) or gives a
-// description whose SII image parses back with the same identity, and whose slave can be built.
+// description whose SII image parses back with the same identity, and whose slave can be built. A modular
+// device imported again with chosen modules (network file modules:; each slot another slot's module, or
+// empty) gives one ModuleIdent per slot or is refused with a ModuleError naming an entry of the list.
 #include <cstdint>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "coe/coe_application.hpp"
@@ -24,6 +27,25 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         return 0;  // refused: vecat prints the reason and stops
     }
     auto& d = r.desc;
+    if (!d.module_idents.empty()) {
+        // Slot i takes the default module of the slot after it (the last one stays empty), by ModuleIdent.
+        esi::DeviceSelector sel;
+        sel.modules.emplace();
+        const std::size_t n = d.module_idents.size();
+        for (std::size_t i = 0; i < n; ++i)
+            if (i + 1 < n)
+                sel.modules->push_back(std::to_string(d.module_idents[i + 1]));
+            else
+                sel.modules->push_back(std::nullopt);
+        try {
+            const auto chosen = esi::import_esi_text(xml, sel);
+            VECAT_FUZZ_CHECK(chosen.desc.module_idents.size() == n);
+        } catch (const esi::ModuleError& e) {
+            VECAT_FUZZ_CHECK(e.entry && *e.entry < n);
+        } catch (const std::exception&) {
+            // refused for what else the chosen modules bring (an SII that does not fit)
+        }
+    }
     auto img = esc::build_sii_image(d);
     VECAT_FUZZ_CHECK(img.size() == d.eeprom_size_bytes);
     const auto info = protocol::parse_sii(ConstBytes(img.data(), img.size()));

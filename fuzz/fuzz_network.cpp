@@ -4,7 +4,8 @@
 // or the file; nothing else is thrown. An accepted file is a tree: one device on the master, every other one
 // with a parent before it in the order, its port cabled to it and to nothing else. A redundancy port is a
 // free port of a device; hot connect group names are unique. The inputs of I/O terminals name channels the
-// terminal has, and wires name output terminals of the file. Quirks hold values within their ranges. The same
+// terminal has, and wires name output terminals of the file. Quirks hold values within their ranges. modules:
+// is on esi: devices only, each entry with its line. The same
 // text read as a signal's CSV table (io::parse_table) is refused with std::invalid_argument naming a line, or
 // gives rows at rising times with finite values.
 #include <cctype>
@@ -66,6 +67,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         VECAT_FUZZ_CHECK(q.mailbox_delay_ns <= 500'000'000ull);
         VECAT_FUZZ_CHECK(q.sii_without <= 0x07 && (q.sii_without == 0 || d.source != network::Source::Sii));
         VECAT_FUZZ_CHECK(!q.any() || d.quirks_line > 0);
+        VECAT_FUZZ_CHECK(d.modules.empty() || (d.source == network::Source::Esi && d.modules_line > 0));
+        for (const auto& m : d.modules)
+            VECAT_FUZZ_CHECK(m.line > 0 && (!m.module || !m.module->empty()));
     }
     for (const auto& d : f.devices)
         for (const auto& in : d.inputs) {

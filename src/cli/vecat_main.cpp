@@ -506,6 +506,7 @@ int main(int argc, char** argv) {
     std::string esi_path, device_type;
     std::uint32_t product = 0;
     std::optional<std::uint32_t> revision;
+    std::vector<std::string> modules;
     auto add_esi_options = [&](CLI::App* c, bool esi_option) {
         if (esi_option) c->add_option("--esi", esi_path, "Emulate a device described by this ESI file");
         c->add_option(
@@ -517,6 +518,13 @@ int main(int argc, char** argv) {
         c->add_option("--revision", revision,
                       "Revision of that device (0x... accepted); without it the file's first one. An error "
                       "names the revisions the file has");
+        c->add_option(
+             "--modules", modules,
+             "A modular device of the ESI file: the module of each slot in slot order, comma-separated: "
+             "a module Type or ModuleIdent (0x... accepted), empty for an empty slot; slots after "
+             "the list keep their default module (docs/network-file.md, Modules in slots)")
+            ->delimiter(',')
+            ->allow_extra_args(false);
     };
     const std::map<std::string, vecat::cia402::TwinsyncPreset> presets = {
         {"off", vecat::cia402::TwinsyncPreset::None},
@@ -692,6 +700,15 @@ int main(int argc, char** argv) {
     if (!device_type.empty()) sel.type = device_type;
     if (product != 0) sel.product_code = product;
     sel.revision = revision;
+    if (!modules.empty()) {
+        if (esi_path.empty() && !*esi_chk) {
+            fmt::print(stderr, "vecat: --modules chooses the modules of a device of an --esi file\n");
+            return 2;
+        }
+        sel.modules.emplace();
+        for (const auto& m : modules)
+            sel.modules->push_back(m == "empty" ? std::nullopt : std::optional<std::string>(m));
+    }
     ro.esi_path = esi_path;
     ro.sel = sel;
     if (!ro.esi_dir.empty() && ro.eni_path.empty()) {

@@ -1,5 +1,6 @@
 #include "coe/coe_application.hpp"
 
+#include "coe/module_idents.hpp"
 #include "protocol/cia402_objects.hpp"
 
 namespace vecat::coe {
@@ -58,6 +59,10 @@ void CoeApplication::clear_faults() {
 protocol::AlStatusCode CoeApplication::check_transition(AlState from, AlState to) {
     requested_ = to;
     if (from == AlState::PreOp && to == AlState::SafeOp) {
+        // The modules first (ETG.5001.1): a device configured for other modules has no valid mapping to
+        // check.
+        if (const auto modules = check_module_idents(od_); modules != protocol::AlStatusCode::NoError)
+            return modules;
         const auto code = map_->validate();
         return code != protocol::AlStatusCode::NoError ? code : sync_->check_safeop();
     }

@@ -172,6 +172,10 @@ struct DeviceDescription {
     // The application objects (profile and manufacturer area). The communication area (0x1000-0x1FFF) is
     // generated from the fields above by dictionary_objects(); an object listed here replaces it.
     std::vector<ObjectDescription> objects;
+    // A modular device (ETG.2000 Slots, ETG.5001 Modular Device Profile): the ModuleIdent of the module in
+    // each slot, in slot order, 0 for an empty slot. Not empty: the dictionary has the Detected Module Ident
+    // List 0xF050 (these values) and the Configured Module Ident List 0xF030 a master writes in PREOP.
+    std::vector<std::uint32_t> module_idents;
 
     std::uint32_t eeprom_size_bytes = 4096;
 
@@ -192,8 +196,8 @@ struct DeviceDescription {
 
 // Every object of the device's dictionary, sorted by index: the generated communication area
 // (0x1000, 0x1001, 0x1008-0x100A, 0x1010, 0x1011, 0x1018, 0x10F1, 0x16xx, 0x1Axx, 0x1C00, 0x1C1x, 0x1C32,
-// 0x1C33) and the application objects. The CoE dictionary, the ESI Dictionary and the SDO information come
-// from this.
+// 0x1C33; 0xF030 and 0xF050 of a modular device) and the application objects. The CoE dictionary, the ESI
+// Dictionary and the SDO information come from this.
 std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d);
 
 // The objects of the CiA 402 drive profile the vecat drive core implements (0x603F-0x60FF, 0x6502) and

@@ -157,6 +157,20 @@ std::vector<ObjectDescription> dictionary_objects(const DeviceDescription& d) {
     if (d.sm_index_of_type(SmType::Inputs))
         objs.push_back(sync_parameter_object(obj::sync_parameter::inputs, d, false));
 
+    // A modular device (ETG.5001.1 device area): the ModuleIdent of each slot as it is (0xF050, read-only)
+    // and as the master configures it (0xF030, writable in PREOP, subindex 0 too: 0 entries is "nothing
+    // configured"). 0xF030 starts equal to 0xF050, as a device that was never configured otherwise.
+    if (!d.module_idents.empty()) {
+        std::vector<std::int64_t> idents(d.module_idents.begin(), d.module_idents.end());
+        idents.resize(std::min(idents.size(), obj::modular_device::max_slots));
+        objs.push_back(make_array(obj::modular_device::configured_module_ident_list,
+                                  "Configured module ident list", DT::Unsigned32, access::RWPreop, idents,
+                                  access::RWPreop));
+        set_range(objs.back().entries.front(), 0, static_cast<std::int64_t>(idents.size()));
+        objs.push_back(make_array(obj::modular_device::detected_module_ident_list,
+                                  "Detected module ident list", DT::Unsigned32, access::RO, idents));
+    }
+
     // Application objects; one with the index of a generated object replaces it.
     for (const auto& o : d.objects) {
         auto it = std::find_if(objs.begin(), objs.end(),

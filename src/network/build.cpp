@@ -102,8 +102,9 @@ std::unique_ptr<esc::Application> process_image(const device::DeviceDescription&
 
 using Made = DeviceParts;
 
-Made make_device(const DeviceEntry& e, const std::string& at, const std::string& quirks_at,
-                 std::vector<std::string>& notes) {
+// file: the network file's name, for messages on other lines than the device's (modules:).
+Made make_device(const DeviceEntry& e, const std::string& file, const std::string& at,
+                 const std::string& quirks_at, std::vector<std::string>& notes) {
     Made m;
     device::DeviceDescription d;
     bool drive = false;
@@ -124,6 +125,11 @@ Made make_device(const DeviceEntry& e, const std::string& at, const std::string&
             sel.type = e.esi_type;
             sel.product_code = e.esi_product;
             sel.revision = e.esi_revision;
+            if (e.modules_line) {
+                sel.modules.emplace();
+                for (const auto& m : e.modules)
+                    sel.modules->push_back(m.module);
+            }
             try {
                 auto r = esi::import_esi_file(e.path, sel);
                 for (const auto& n : r.notes)
@@ -134,6 +140,12 @@ Made make_device(const DeviceEntry& e, const std::string& at, const std::string&
                     notes.push_back(at + e.path + ": the built-in " + std::string(*b) +
                                     " by its identity: its behaviour and PDO rules");
                 d = std::move(r.desc);
+            } catch (const esi::ModuleError& x) {
+                // The line of the refused entry of modules:, or of modules: itself.
+                const unsigned line =
+                    x.entry && *x.entry < e.modules.size() ? e.modules[*x.entry].line : e.modules_line;
+                throw NetworkFileError(file + ":" + std::to_string(line) + ": " + e.name +
+                                       ": modules: " + x.what());
             } catch (const std::exception& x) {
                 throw NetworkFileError(at + e.path + ": " + x.what());
             }
@@ -388,7 +400,7 @@ BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
     for (const DeviceEntry& e : f.devices) {
         const std::string at = file + ":" + std::to_string(e.line) + ": " + e.name + ": ";
         const std::string quirks_at = file + ":" + std::to_string(e.quirks_line) + ": " + e.name + ": ";
-        Made m = make_device(e, at, quirks_at, b.notes);
+        Made m = make_device(e, file, at, quirks_at, b.notes);
         attach_io(e, m, b);
         apply_esc(m.esc, e.esc);
         if (e.esc.ram_kib && *e.esc.ram_kib < 8)

@@ -236,6 +236,27 @@ void parse_quirks(const Reader& r, const YAML::Node& n, DeviceEntry& d) {
     }
 }
 
+// modules: of an esi: device: a list, one entry per slot, each a module Type, a ModuleIdent, or empty / null
+// for an empty slot. Whether the ESI has such modules and slots is checked when the device is built.
+void parse_modules(const Reader& r, const YAML::Node& n, DeviceEntry& d) {
+    constexpr const char* what =
+        "modules: a list, one entry per slot: a module Type or ModuleIdent, or empty for an empty slot";
+    if (!n.IsSequence()) r.fail(n, what);
+    if (n.size() == 0) r.fail(n, "modules: an empty list (leave modules: out for the default modules)");
+    d.modules_line = Reader::line(n);
+    for (const auto& item : n) {
+        DeviceEntry::SlotModule m;
+        m.line = Reader::line(item);
+        if (!item.IsNull()) {
+            if (!item.IsScalar()) r.fail(item, what);
+            const std::string s = item.as<std::string>();
+            if (s.empty()) r.fail(item, "modules: an empty name; write empty for an empty slot");
+            if (s != "empty") m.module = s;
+        }
+        d.modules.push_back(std::move(m));
+    }
+}
+
 DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string& folder) {
     if (!n.IsMap()) r.fail(n, "a device is a map (name:, and device:, esi: or sii:)");
     DeviceEntry d;
@@ -279,6 +300,8 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
         } else if (key == "revision") {
             d.esi_revision = static_cast<std::uint32_t>(r.number(v, key, 0xFFFFFFFFu));
             esi_keys_line = Reader::line(v);
+        } else if (key == "modules") {
+            parse_modules(r, v, d);
         } else if (key == "channels") {
             d.channels = static_cast<unsigned>(r.number(v, key, kMaxChannels));
             if (d.channels == 0) r.fail(v, "channels: at least 1");
@@ -310,7 +333,7 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
         } else {
             r.fail(item.first,
                    "unknown key " + key +
-                       " (name, device, esi, sii, type, product, revision, channels, upstream, "
+                       " (name, device, esi, sii, type, product, revision, modules, channels, upstream, "
                        "cable_delay_ns, alias, identity, dictionary, esc, hot_connect, inputs, quirks)");
         }
     }
@@ -318,6 +341,8 @@ DeviceEntry parse_device(const Reader& r, const YAML::Node& n, const std::string
     if (sources != 1) r.fail(d.line, d.name + ": give exactly one of device:, esi: and sii:");
     if (esi_keys_line && d.source != Source::Esi)
         r.fail(*esi_keys_line, d.name + ": type:, product: and revision: select a device of an esi: file");
+    if (d.modules_line && d.source != Source::Esi)
+        r.fail(d.modules_line, d.name + ": modules: chooses the modules of a modular device of an esi: file");
     if (d.dictionary_line && d.source != Source::Sii)
         r.fail(d.dictionary_line, d.name + ": dictionary: is for an sii: device");
     if (d.quirks.sii_without && d.source == Source::Sii)

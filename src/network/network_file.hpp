@@ -12,6 +12,7 @@
 //     - name: axis                   # without upstream: the device before it in the list, port 1
 //       esi: drives/vendor.xml       # or sii: dumps/el2004.bin
 //       type: VENDOR-DRIVE-1
+//       modules: [0x110, empty]      # a modular device: the module of each slot (Type or ModuleIdent)
 //     - name: copy                   # a device read by vecat clone: its SII, its dictionary, its ESC
 //       sii: copy.sii.bin
 //       dictionary: copy.dictionary.yaml
@@ -81,7 +82,15 @@ struct DeviceEntry {
     std::string path;  // esi: / sii: file, relative paths resolved against the file's folder
     std::optional<std::string> esi_type;
     std::optional<std::uint32_t> esi_product, esi_revision;
-    unsigned channels = 0;  // built-in I/O terminals (0: the kind's default)
+    // esi: of a modular device (modules:): the module of each slot in slot order, a module Type or
+    // ModuleIdent; nullopt: the slot empty. Checked against the ESI file when the device is built.
+    struct SlotModule {
+        std::optional<std::string> module;
+        unsigned line = 0;
+    };
+    std::vector<SlotModule> modules;
+    unsigned modules_line = 0;  // of modules: (0: not given, every slot its default module)
+    unsigned channels = 0;      // built-in I/O terminals (0: the kind's default)
     // Cabling: this device's port 0 to port upstream_port of upstream (empty: the master).
     std::string upstream;
     unsigned upstream_port = 1;

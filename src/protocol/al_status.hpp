@@ -100,6 +100,9 @@ enum class AlStatusCode : std::uint16_t {
     EepromError = 0x0051,
     RestartedLocally = 0x0060,
     DeviceIdentificationUpdated = 0x0061,
+    // A modular device (ETG.5001): the Configured Module Ident List 0xF030 the master wrote differs from the
+    // Detected Module Ident List 0xF050.
+    ModuleIdentListMismatch = 0x0070,
 };
 
 constexpr std::string_view describe(AlStatusCode c) noexcept {
@@ -208,6 +211,8 @@ constexpr std::string_view describe(AlStatusCode c) noexcept {
             return "Slave restarted locally";
         case AlStatusCode::DeviceIdentificationUpdated:
             return "Device identification value updated";
+        case AlStatusCode::ModuleIdentListMismatch:
+            return "Detected Module Ident List does not match";
     }
     return "Unknown AL status code";
 }

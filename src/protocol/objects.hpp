@@ -1,10 +1,12 @@
 // The object catalogue: every object the tree reads or writes by number, named once with its index,
 // subindex and data type (ETG.1000.6 5.6.3). This file: the identifier type and the communication area
-// 0x1000-0x1FFF (CiA 301 7.5, ETG.1000.6 5.6.7, ETG.1020); protocol/cia402_objects.hpp: the drive profile
+// 0x1000-0x1FFF (CiA 301 7.5, ETG.1000.6 5.6.7, ETG.1020) and the module ident lists of the Modular Device
+// Profile (ETG.5001.1); protocol/cia402_objects.hpp: the drive profile
 // 0x6000-0x6FFF. The dictionary description (src/device) builds its objects from these names, and the
 // typed dictionary handles (coe::Value) take their C++ type from the data type given here.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "protocol/data_type.hpp"
@@ -83,6 +85,15 @@ inline constexpr std::uint8_t sync_mode = 1, cycle_time = 2, shift_time = 3, syn
                               get_cycle_time = 8, delay_time = 9, sync0_cycle_time = 10, sm_event_missed = 11,
                               cycle_time_too_small = 12, shift_time_too_short = 13, sync_error = 32;
 }  // namespace sync_parameter
+
+// The device area of the Modular Device Profile (ETG.5001.1, Table "Device area"): ARRAYs of UNSIGNED32,
+// one ModuleIdent per slot (subindex n: slot n), 0 for an empty slot.
+namespace modular_device {
+inline constexpr std::uint16_t configured_module_ident_list = 0xF030;  // written by the master in PREOP
+inline constexpr std::uint16_t detected_module_ident_list = 0xF050;    // what the device has, read-only
+// The largest slot count these arrays describe (subindexes 1..255).
+inline constexpr std::size_t max_slots = 255;
+}  // namespace modular_device
 
 }  // namespace obj
 }  // namespace vecat::protocol
