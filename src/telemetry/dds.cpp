@@ -318,7 +318,8 @@ void Subscriber::record(Recording& r, double duration_s, const std::atomic<bool>
         impl_->take<vecat_telemetry_TwinsyncStatus>(impl_->dds.endpoints[2],
                                                     [&](TwinsyncSample t) { r.twinsync.push_back(t); });
         impl_->take<vecat_telemetry_Event>(impl_->dds.endpoints[3], [&](Event e) { r.events.push_back(e); });
-        impl_->take<vecat_telemetry_IoSample>(impl_->dds.endpoints[4], [&](IoSample s) { r.io.push_back(s); });
+        impl_->take<vecat_telemetry_IoSample>(impl_->dds.endpoints[4],
+                                              [&](IoSample s) { r.io.push_back(s); });
     }
 }
 

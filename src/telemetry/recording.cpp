@@ -135,7 +135,10 @@ template <unsigned I, bool Out>
 Column<IoSample> io_channel_column() {
     static const std::string name = (Out ? "out" : "in") + std::to_string(I);
     return Column<IoSample>{
-        name.c_str(), "I/O channel", "", true,
+        name.c_str(),
+        "I/O channel",
+        "",
+        true,
         [](const IoSample& s) -> long double { return static_cast<long double>(Out ? s.out[I] : s.in[I]); },
         [](IoSample& s, long double v) { (Out ? s.out[I] : s.in[I]) = static_cast<std::int16_t>(v); }};
 }
@@ -337,7 +340,8 @@ std::vector<SignalInfo> signal_list() {
     for (const auto& c : io_columns()) {
         const std::string n = c.name;
         if (n.rfind("in", 0) == 0 && n != "in_channels") v.push_back({"io." + n, "I/O input", "0/1 or raw"});
-        if (n.rfind("out", 0) == 0 && n != "out_channels") v.push_back({"io." + n, "I/O output", "0/1 or raw"});
+        if (n.rfind("out", 0) == 0 && n != "out_channels")
+            v.push_back({"io." + n, "I/O output", "0/1 or raw"});
     }
     return v;
 }
@@ -414,7 +418,7 @@ Plot make_plot(const Recording& r, const std::vector<std::vector<std::string>>& 
             SignalRef ref{};
             if (!find_signal(name, ref)) continue;
             std::map<unsigned, Series> by_slave;  // keyed by slave << 8 | axis
-            std::map<unsigned, bool> digital;      // series of a digital terminal's channel: drawn as steps
+            std::map<unsigned, bool> digital;     // series of a digital terminal's channel: drawn as steps
             auto add_rows = [&](const auto& rows, const auto& cols) {
                 const auto& c = cols[ref.column];
                 if (pan.quantity.empty()) {

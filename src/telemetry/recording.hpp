@@ -21,7 +21,8 @@ struct Recording {
 };
 
 // Writes the axis samples to path and, when any were received, the other topics beside it
-// (FILE-status.csv, FILE-twinsync.csv, FILE-events.csv, FILE-io.csv for FILE.csv). False when a file cannot be written.
+// (FILE-status.csv, FILE-twinsync.csv, FILE-events.csv, FILE-io.csv for FILE.csv). False when a file cannot
+// be written.
 bool write_csv(const Recording& r, const std::string& path, std::string* why = nullptr);
 // Reads what write_csv wrote (the files beside path are optional).
 bool read_csv(const std::string& path, Recording& r, std::string* why = nullptr);

@@ -5,8 +5,8 @@
 // emergencies) on every frame. A CiA 402 device is one whose dictionary has the statusword 0x6041; its state
 // is the statusword decoded (protocol::cia402::decode_state), as a master sees it. The TWINsync status comes
 // from an application that is a twinsync::StatusSource (the drive). I/O terminals (io::InputTerminal,
-// io::OutputTerminal) give an IoSample every `decimation`-th exchange of theirs. It neither allocates nor blocks: a full
-// queue drops the record and counts it.
+// io::OutputTerminal) give an IoSample every `decimation`-th exchange of theirs. It neither allocates nor
+// blocks: a full queue drops the record and counts it.
 #pragma once
 
 #include <cstdint>
@@ -32,10 +32,10 @@ struct SamplerOptions {
 };
 
 struct SamplerStats {
-    std::uint64_t frames = 0;   // on_frame calls
-    std::uint64_t samples = 0;  // axis samples pushed
+    std::uint64_t frames = 0;      // on_frame calls
+    std::uint64_t samples = 0;     // axis samples pushed
     std::uint64_t io_samples = 0;  // I/O samples pushed
-    std::uint64_t events = 0;   // events pushed
+    std::uint64_t events = 0;      // events pushed
 };
 
 class Sampler {

@@ -75,10 +75,10 @@ inline constexpr unsigned kIoChannels = 16;
 // The channels of one I/O terminal (io::InputTerminal, io::OutputTerminal) in one sampled cycle, as the
 // process image holds them: a digital channel 0 or 1, an analog one the raw signed 16-bit value.
 struct IoSample {
-    std::uint64_t time_ns = 0;  // host CLOCK_MONOTONIC: receive time of the frame that was processed
-    std::uint64_t cycle = 0;    // process data exchanges of the slave so far
-    std::uint16_t slave = 0;    // position on the line
-    bool analog = false;        // the channels are analog (raw counts), else digital (bits)
+    std::uint64_t time_ns = 0;      // host CLOCK_MONOTONIC: receive time of the frame that was processed
+    std::uint64_t cycle = 0;        // process data exchanges of the slave so far
+    std::uint16_t slave = 0;        // position on the line
+    bool analog = false;            // the channels are analog (raw counts), else digital (bits)
     std::uint8_t in_channels = 0;   // valid entries of in (inputs the terminal sends to the master)
     std::uint8_t out_channels = 0;  // valid entries of out (outputs the master writes)
     std::array<std::int16_t, kIoChannels> in{};

@@ -8,8 +8,8 @@
 
 #include <atomic>
 #include <cstdlib>
-#include <memory>
 #include <filesystem>
+#include <memory>
 #include <thread>
 
 #include "child_process.hpp"
