@@ -32,7 +32,7 @@ set(LAYER_faults esc coe net)
 set(LAYER_io esc faults)           # I/O terminals with behaviour: signals, wires, inputs forced by set_input
 set(LAYER_report esc net network)  # the report on the master: checks on the frames beside the slaves, the
                                    # master against an ENI's InitCmds
-set(LAYER_telemetry cia402 telemetry_idl)
+set(LAYER_telemetry cia402 io telemetry_idl)  # io: the I/O terminals' channels (IoSample)
 set(LAYER_telemetry_idl "")    # the telemetry IDL types compiled by idlc (with VECAT_TELEMETRY)
 set(LAYER_telemetry_types "")  # ... and idlc's generated sources
 set(LAYER_testing master cia402 faults telemetry serve)

@@ -37,7 +37,7 @@ install(FILES ${PROJECT_BINARY_DIR}/vecatConfig.cmake ${PROJECT_BINARY_DIR}/veca
         DESTINATION ${VECAT_CMAKE_DIR})
 
 # pkg-config: all libraries, users first (static linking resolves left to right).
-set(VECAT_PC_LIBS "-lvecat_network -lvecat_io -lvecat_testing -lvecat_esi -lvecat_master -lvecat_faults -lvecat_telemetry")
+set(VECAT_PC_LIBS "-lvecat_network -lvecat_testing -lvecat_esi -lvecat_master -lvecat_telemetry -lvecat_io -lvecat_faults")
 if(VECAT_TELEMETRY)
   string(APPEND VECAT_PC_LIBS " -lvecat_telemetry_idl")
   set(VECAT_PC_REQUIRES "fmt yaml-cpp pugixml libcap CycloneDDS")

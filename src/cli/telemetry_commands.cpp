@@ -95,9 +95,10 @@ CLI::App* add_scope_command(CLI::App& app) {
         "PNG)");
     s->add_option("-d,--duration", g_scope.duration, "Seconds to record (default: until Ctrl-C)")
         ->check(CLI::Range(0.0, 1e6));
-    s->add_option("--csv", g_scope.csv,
-                  "Write the axis samples to this CSV file (status, TWINsync and events beside it as "
-                  "FILE-status.csv, FILE-twinsync.csv, FILE-events.csv)");
+    s->add_option(
+        "--csv", g_scope.csv,
+        "Write the axis samples to this CSV file (status, TWINsync, events and I/O samples beside it "
+        "as FILE-status.csv, FILE-twinsync.csv, FILE-events.csv, FILE-io.csv)");
     s->add_option("--svg", g_scope.svg, "Draw the signals into this SVG file");
     s->add_option("--png", g_scope.png, "Draw the signals into this PNG file (needs rsvg-convert)");
     s->add_option("--signals", g_scope.signals,
@@ -151,8 +152,9 @@ int run_scope() {
             fmt::print(stderr, "vecat scope: {}\n", e.what());
             return 1;
         }
-        fmt::print("vecat scope: {} axis samples, {} slave status, {} TWINsync samples, {} events\n",
-                   rec.axes.size(), rec.status.size(), rec.twinsync.size(), rec.events.size());
+        fmt::print(
+            "vecat scope: {} axis samples, {} slave status, {} TWINsync samples, {} events, {} I/O samples\n",
+            rec.axes.size(), rec.status.size(), rec.twinsync.size(), rec.events.size(), rec.io.size());
         if (!o.csv.empty()) {
             if (!tm::write_csv(rec, o.csv, &why)) {
                 fmt::print(stderr, "vecat scope: {}\n", why);
@@ -209,9 +211,16 @@ std::vector<std::string> DemoScope::write(const std::string& dir, const std::str
         fmt::print(stderr, "vecat demo: {}\n", why);
         return {};
     }
-    const auto plot = tm::make_plot(rec, tm::parse_signal_groups(signals), title);
+    // The drives' panels, then one lane per channel of the I/O terminals (a network with terminals).
+    auto groups = tm::parse_signal_groups(signals);
+    for (auto& lane : tm::io_lanes(rec))
+        groups.push_back(std::move(lane));
+    const auto plot = tm::make_plot(rec, groups, title);
     std::ofstream(svg) << tm::render_svg(plot);
-    std::vector<std::string> files{fmt::format("{} ({} samples)", csv, rec.axes.size()), svg};
+    std::vector<std::string> files{rec.io.empty() ? fmt::format("{} ({} samples)", csv, rec.axes.size())
+                                                  : fmt::format("{} ({} axis samples, {} I/O samples)", csv,
+                                                                rec.axes.size(), rec.io.size()),
+                                   svg};
     if (tm::svg_to_png(svg, png, &why)) files.push_back(png);
     return files;
 }

@@ -45,6 +45,8 @@ class IoBus {
     }
     // Channel c of the output terminal in slot s: 0 or 1, or the 16-bit value (0 when it is gone).
     double output(std::size_t slot, unsigned channel) const noexcept;
+    ChannelKind output_kind(std::size_t slot) const { return outputs_.at(slot).kind; }
+    unsigned output_channels(std::size_t slot) const { return outputs_.at(slot).channels; }
     // Forced inputs of input slot s.
     void force(std::size_t slot, unsigned channel, double v);
     void release(std::size_t slot, unsigned channel);
@@ -79,6 +81,7 @@ class InputTerminal final : public esc::ProcessImageApplication {
     void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) override;
     std::size_t slot() const { return slot_; }
     unsigned channels() const { return static_cast<unsigned>(sources_.size()); }
+    ChannelKind kind() const { return kind_; }
 
   private:
     ChannelKind kind_;
@@ -95,6 +98,8 @@ class OutputTerminal final : public esc::ProcessImageApplication {
     ~OutputTerminal() override;
     OutputTerminal(const OutputTerminal&) = delete;
     OutputTerminal& operator=(const OutputTerminal&) = delete;
+    ChannelKind kind() const { return bus_->output_kind(slot_); }
+    unsigned channels() const { return bus_->output_channels(slot_); }
 
   private:
     std::shared_ptr<IoBus> bus_;

@@ -2,6 +2,7 @@
 // vecat_telemetry.idl through idlc.
 #include <dds/dds.h>
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 #include <thread>
@@ -43,11 +44,13 @@ struct TopicSpec {
     std::int32_t reader_depth;
 };
 
-const TopicSpec kTopics[4] = {
+constexpr int kTopicCount = 5;
+const TopicSpec kTopics[kTopicCount] = {
     {&vecat_telemetry_AxisSample_desc, kAxisTopic, false, 1, kSampleHistory},
     {&vecat_telemetry_SlaveStatus_desc, kStatusTopic, true, 1, 1},
     {&vecat_telemetry_TwinsyncStatus_desc, kTwinsyncTopic, false, 1, kSampleHistory},
     {&vecat_telemetry_Event_desc, kEventTopic, true, kEventHistory, kEventHistory},
+    {&vecat_telemetry_IoSample_desc, kIoTopic, false, 1, kSampleHistory},
 };
 
 dds_entity_t check(dds_entity_t e, const char* what) {
@@ -58,11 +61,11 @@ dds_entity_t check(dds_entity_t e, const char* what) {
 // Participant with one topic per spec, and a writer or reader on each.
 struct Entities {
     dds_entity_t participant = 0;
-    dds_entity_t endpoints[4] = {};
+    dds_entity_t endpoints[kTopicCount] = {};
     Entities(std::uint32_t domain, bool writers) {
         participant = check(dds_create_participant(domain, nullptr, nullptr), "the participant");
         try {
-            for (int i = 0; i < 4; ++i) {
+            for (int i = 0; i < kTopicCount; ++i) {
                 const TopicSpec& t = kTopics[i];
                 dds_qos_t* tq = make_qos(t.reliable, writers ? t.writer_depth : t.reader_depth);
                 const dds_entity_t topic =
@@ -178,6 +181,32 @@ Event from_dds(const vecat_telemetry_Event& d) {
     return e;
 }
 
+vecat_telemetry_IoSample to_dds(const IoSample& s) {
+    static_assert(sizeof(vecat_telemetry_IoSample::inputs) / sizeof(std::int16_t) == kIoChannels);
+    vecat_telemetry_IoSample d{};
+    d.slave = s.slave;
+    d.time_ns = s.time_ns;
+    d.cycle = s.cycle;
+    d.analog = s.analog;
+    d.in_channels = s.in_channels;
+    d.out_channels = s.out_channels;
+    std::copy(s.in.begin(), s.in.end(), d.inputs);
+    std::copy(s.out.begin(), s.out.end(), d.outputs);
+    return d;
+}
+IoSample from_dds(const vecat_telemetry_IoSample& d) {
+    IoSample s;
+    s.slave = d.slave;
+    s.time_ns = d.time_ns;
+    s.cycle = d.cycle;
+    s.analog = d.analog;
+    s.in_channels = std::min<std::uint8_t>(d.in_channels, kIoChannels);
+    s.out_channels = std::min<std::uint8_t>(d.out_channels, kIoChannels);
+    std::copy(d.inputs, d.inputs + kIoChannels, s.in.begin());
+    std::copy(d.outputs, d.outputs + kIoChannels, s.out.begin());
+    return s;
+}
+
 }  // namespace
 
 // ---- Publisher
@@ -205,6 +234,9 @@ struct Publisher::Impl {
         } else if (const auto* e = std::get_if<Event>(&r)) {
             const auto d = to_dds(*e);
             rc = dds_write(dds.endpoints[3], &d);
+        } else if (const auto* io = std::get_if<IoSample>(&r)) {
+            const auto d = to_dds(*io);
+            rc = dds_write(dds.endpoints[4], &d);
         }
         (rc == DDS_RETCODE_OK ? written : errors).fetch_add(1, std::memory_order_relaxed);
     }
@@ -277,8 +309,8 @@ void Subscriber::record(Recording& r, double duration_s, const std::atomic<bool>
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(duration_s);
     while (!stop.load()) {
         if (duration_s > 0 && std::chrono::steady_clock::now() >= end) break;
-        dds_attach_t triggered[4];
-        dds_waitset_wait(impl_->waitset, triggered, 4, DDS_MSECS(20));
+        dds_attach_t triggered[kTopicCount];
+        dds_waitset_wait(impl_->waitset, triggered, kTopicCount, DDS_MSECS(20));
         impl_->take<vecat_telemetry_AxisSample>(impl_->dds.endpoints[0],
                                                 [&](AxisSample a) { r.axes.push_back(a); });
         impl_->take<vecat_telemetry_SlaveStatus>(impl_->dds.endpoints[1],
@@ -286,6 +318,8 @@ void Subscriber::record(Recording& r, double duration_s, const std::atomic<bool>
         impl_->take<vecat_telemetry_TwinsyncStatus>(impl_->dds.endpoints[2],
                                                     [&](TwinsyncSample t) { r.twinsync.push_back(t); });
         impl_->take<vecat_telemetry_Event>(impl_->dds.endpoints[3], [&](Event e) { r.events.push_back(e); });
+        impl_->take<vecat_telemetry_IoSample>(impl_->dds.endpoints[4],
+                                              [&](IoSample s) { r.io.push_back(s); });
     }
 }
 

@@ -23,6 +23,7 @@ inline constexpr const char* kAxisTopic = "vecat_axis";
 inline constexpr const char* kStatusTopic = "vecat_slave_status";
 inline constexpr const char* kTwinsyncTopic = "vecat_twinsync";
 inline constexpr const char* kEventTopic = "vecat_event";
+inline constexpr const char* kIoTopic = "vecat_io";
 
 struct PublisherStats {
     std::uint64_t written = 0;  // records written to DDS

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <utility>
 
 namespace vecat::telemetry {
 
@@ -20,6 +21,8 @@ void Recording::add(const Record& r) {
                 status.push_back(v);
             else if constexpr (std::is_same_v<T, TwinsyncSample>)
                 twinsync.push_back(v);
+            else if constexpr (std::is_same_v<T, IoSample>)
+                io.push_back(v);
             else
                 events.push_back(v);
         },
@@ -126,6 +129,51 @@ const std::vector<Column<Event>>& event_columns() {
     return c;
 }
 
+// The I/O sample: its header fields, then one column per channel and direction (in0..in15, out0..out15).
+// A channel's quantity and unit depend on the terminal (bits or raw 16-bit counts): "I/O channel", no unit.
+template <unsigned I, bool Out>
+Column<IoSample> io_channel_column() {
+    static const std::string name = (Out ? "out" : "in") + std::to_string(I);
+    return Column<IoSample>{
+        name.c_str(),
+        "I/O channel",
+        "",
+        true,
+        [](const IoSample& s) -> long double { return static_cast<long double>(Out ? s.out[I] : s.in[I]); },
+        [](IoSample& s, long double v) { (Out ? s.out[I] : s.in[I]) = static_cast<std::int16_t>(v); }};
+}
+
+template <unsigned... I>
+void add_io_channels(std::vector<Column<IoSample>>& c, std::integer_sequence<unsigned, I...>) {
+    (c.push_back(io_channel_column<I, false>()), ...);
+    (c.push_back(io_channel_column<I, true>()), ...);
+}
+
+const std::vector<Column<IoSample>>& io_columns() {
+    using S = IoSample;
+    static const std::vector<Column<S>> c = [] {
+        std::vector<Column<S>> cols{
+            VECAT_COLUMN(S, time_ns, "time", "ns"),
+            VECAT_COLUMN(S, cycle, "cycle", ""),
+            VECAT_COLUMN(S, slave, "slave", ""),
+            VECAT_COLUMN(S, analog, "analog", ""),
+            VECAT_COLUMN(S, in_channels, "input channels", ""),
+            VECAT_COLUMN(S, out_channels, "output channels", ""),
+        };
+        add_io_channels(cols, std::make_integer_sequence<unsigned, kIoChannels>{});
+        return cols;
+    }();
+    return c;
+}
+
+// Whether column i of io_columns() is a channel the sample holds (in_channels / out_channels).
+bool io_channel_valid(const IoSample& s, std::size_t column) {
+    constexpr std::size_t first = 6;  // the header fields above
+    if (column < first) return true;
+    const std::size_t k = column - first;
+    return k < kIoChannels ? k < s.in_channels : k - kIoChannels < s.out_channels;
+}
+
 #undef VECAT_COLUMN
 
 template <class T>
@@ -213,7 +261,7 @@ bool read_table(const std::string& path, const std::vector<Column<T>>& cols, std
 }
 
 struct SignalRef {
-    enum Topic { Axis, Status, Twinsync } topic;
+    enum Topic { Axis, Status, Twinsync, Io } topic;
     std::size_t column;
 };
 
@@ -228,6 +276,11 @@ bool find_signal(const std::string& name, SignalRef& ref) {
     };
     if (name.rfind("twinsync.", 0) == 0) return look(twinsync_columns(), SignalRef::Twinsync, name.substr(9));
     if (name.rfind("status.", 0) == 0) return look(status_columns(), SignalRef::Status, name.substr(7));
+    if (name.rfind("io.", 0) == 0) {
+        const std::string ch = name.substr(3);
+        if (ch.rfind("in", 0) != 0 && ch.rfind("out", 0) != 0) return false;  // only the channels
+        return look(io_columns(), SignalRef::Io, ch);
+    }
     return look(axis_columns(), SignalRef::Axis, name);
 }
 
@@ -256,6 +309,7 @@ bool write_csv(const Recording& r, const std::string& path, std::string* why) {
         return false;
     if (!r.events.empty() && !write_table(csv_sibling(path, "events"), event_columns(), r.events, why, true))
         return false;
+    if (!r.io.empty() && !write_table(csv_sibling(path, "io"), io_columns(), r.io, why)) return false;
     return true;
 }
 
@@ -268,7 +322,7 @@ bool read_csv(const std::string& path, Recording& r, std::string* why) {
     };
     return optional("status", status_columns(), r.status) &&
            optional("twinsync", twinsync_columns(), r.twinsync) &&
-           optional("events", event_columns(), r.events);
+           optional("events", event_columns(), r.events) && optional("io", io_columns(), r.io);
 }
 
 std::vector<SignalInfo> signal_list() {
@@ -283,6 +337,12 @@ std::vector<SignalInfo> signal_list() {
     add(axis_columns(), "");
     add(twinsync_columns(), "twinsync.");
     add(status_columns(), "status.");
+    for (const auto& c : io_columns()) {
+        const std::string n = c.name;
+        if (n.rfind("in", 0) == 0 && n != "in_channels") v.push_back({"io." + n, "I/O input", "0/1 or raw"});
+        if (n.rfind("out", 0) == 0 && n != "out_channels")
+            v.push_back({"io." + n, "I/O output", "0/1 or raw"});
+    }
     return v;
 }
 
@@ -308,6 +368,20 @@ std::vector<std::vector<std::string>> parse_signal_groups(const std::string& spe
     return groups;
 }
 
+std::vector<std::vector<std::string>> io_lanes(const Recording& r) {
+    unsigned in = 0, out = 0;
+    for (const auto& s : r.io) {
+        in = std::max<unsigned>(in, s.in_channels);
+        out = std::max<unsigned>(out, s.out_channels);
+    }
+    std::vector<std::vector<std::string>> lanes;
+    for (unsigned c = 0; c < in; ++c)
+        lanes.push_back({fmt::format("io.in{}", c)});
+    for (unsigned c = 0; c < out; ++c)
+        lanes.push_back({fmt::format("io.out{}", c)});
+    return lanes;
+}
+
 Plot make_plot(const Recording& r, const std::vector<std::vector<std::string>>& groups,
                const std::string& title, const std::vector<unsigned>& slaves) {
     Plot p;
@@ -320,6 +394,8 @@ Plot make_plot(const Recording& r, const std::vector<std::vector<std::string>>& 
         t0 = std::min(t0, s.time_ns);
     for (const auto& t : r.twinsync)
         t0 = std::min(t0, t.time_ns);
+    for (const auto& s : r.io)
+        t0 = std::min(t0, s.time_ns);
     if (t0 == UINT64_MAX) t0 = 0;
     auto wanted = [&](unsigned slave) {
         return slaves.empty() || std::find(slaves.begin(), slaves.end(), slave) != slaves.end();
@@ -331,6 +407,8 @@ Plot make_plot(const Recording& r, const std::vector<std::vector<std::string>>& 
             if (wanted(a.slave)) seen[a.slave] = 1;
         for (const auto& t : r.twinsync)
             if (wanted(t.slave)) seen[t.slave] = 1;
+        for (const auto& s : r.io)
+            if (wanted(s.slave)) seen[s.slave] = 1;
         several_slaves = seen.size();
     }
 
@@ -340,6 +418,7 @@ Plot make_plot(const Recording& r, const std::vector<std::vector<std::string>>& 
             SignalRef ref{};
             if (!find_signal(name, ref)) continue;
             std::map<unsigned, Series> by_slave;  // keyed by slave << 8 | axis
+            std::map<unsigned, bool> digital;     // series of a digital terminal's channel: drawn as steps
             auto add_rows = [&](const auto& rows, const auto& cols) {
                 const auto& c = cols[ref.column];
                 if (pan.quantity.empty()) {
@@ -352,6 +431,10 @@ Plot make_plot(const Recording& r, const std::vector<std::vector<std::string>>& 
                 }
                 for (const auto& row : rows) {
                     if (!wanted(row.slave)) continue;
+                    if constexpr (std::is_same_v<std::decay_t<decltype(row)>, IoSample>) {
+                        if (!io_channel_valid(row, ref.column)) continue;  // the terminal lacks it
+                        if (!row.analog) digital[row.slave << 8] = true;
+                    }
                     unsigned axis = 0;
                     if constexpr (requires { row.axis; }) axis = row.axis;
                     Series& s = by_slave[static_cast<unsigned>(row.slave) << 8 | axis];
@@ -362,12 +445,13 @@ Plot make_plot(const Recording& r, const std::vector<std::vector<std::string>>& 
             if (ref.topic == SignalRef::Axis) add_rows(r.axes, axis_columns());
             if (ref.topic == SignalRef::Status) add_rows(r.status, status_columns());
             if (ref.topic == SignalRef::Twinsync) add_rows(r.twinsync, twinsync_columns());
+            if (ref.topic == SignalRef::Io) add_rows(r.io, io_columns());
             for (auto& [key, s] : by_slave) {
                 const unsigned slave = key >> 8, axis = key & 0xFF;
                 s.label = name;
                 if (several_slaves > 1 || axis != 0)
                     s.label = fmt::format("slave {}{} {}", slave, axis ? fmt::format(".{}", axis) : "", name);
-                s.step = step_like(name);
+                s.step = digital[key] || step_like(name);
                 s.dashed = name.find("demand") != std::string::npos;
                 pan.series.push_back(std::move(s));
             }

@@ -1,6 +1,8 @@
 #include "telemetry/sampler.hpp"
 
 #include "coe/coe_application.hpp"
+#include "common/bytes.hpp"
+#include "io/terminals.hpp"
 #include "protocol/cia402.hpp"
 #include "protocol/cia402_objects.hpp"
 #include "protocol/registers.hpp"
@@ -36,6 +38,11 @@ struct Sampler::Slot {
     // A CiA 402 device: its dictionary has the statusword 0x6041 (axis samples, CiA 402 state events).
     bool axis = false;
     const twinsync::StatusSource* twinsync = nullptr;  // nullptr: no TWINsync option card
+    // An I/O terminal (IoSample): its process image and how its channels are laid out there.
+    esc::ProcessImageApplication* io = nullptr;  // nullptr: no I/O terminal
+    io::ChannelKind io_kind = io::ChannelKind::Digital;
+    std::uint8_t io_in = 0;   // channels sampled from the inputs (at most kIoChannels)
+    std::uint8_t io_out = 0;  // channels sampled from the outputs
     // The CiA 402 objects (unbound where the device has none: they read 0).
     coe::Value<std::uint16_t> controlword;
     coe::Value<std::uint16_t> statusword;
@@ -65,6 +72,18 @@ namespace obj = protocol::obj;
 template <class T>
 T read(const coe::Value<T>& v) {
     return v.get_or(T{});
+}
+
+// Channel c of a terminal's image (io/terminals.hpp): bit c of a digital one, the little-endian signed
+// 16-bit value at byte 2c of an analog one; 0 beyond the image.
+std::int16_t channel(const std::vector<std::uint8_t>& img, io::ChannelKind kind, unsigned c) {
+    if (kind == io::ChannelKind::Digital)
+        return c / 8 < img.size() ? static_cast<std::int16_t>((img[c / 8] >> (c % 8)) & 1u) : std::int16_t{0};
+    return 2 * c + 1 < img.size() ? static_cast<std::int16_t>(ld_le16(&img[2 * c])) : std::int16_t{0};
+}
+
+std::uint8_t sampled_channels(unsigned n) {
+    return static_cast<std::uint8_t>(n < kIoChannels ? n : kIoChannels);
 }
 
 // The CiA 402 state the statusword shows (IEC 61800-7-201 Table 30), kNoCia402State for a pattern of none.
@@ -108,6 +127,18 @@ void Sampler::bind(Slot& s, std::size_t i) {
     s.torque_actual = {};
     s.following_error = {};
     s.axis = false;
+    s.io = nullptr;
+    s.io_in = s.io_out = 0;
+    if (auto* in = dynamic_cast<io::InputTerminal*>(&s.slave->app())) {
+        s.io = in;
+        s.io_kind = in->kind();
+        s.io_in = sampled_channels(in->channels());
+    } else if (auto* out = dynamic_cast<io::OutputTerminal*>(&s.slave->app())) {
+        s.io = out;
+        s.io_kind = out->kind();
+        s.io_out = sampled_channels(out->channels());
+    }
+    if (s.io) s.last_exchange = s.io->exchanges();
     if (!s.coe) return;
     auto& od = s.coe->dictionary();
     s.controlword = coe::bind(od, obj::controlword);
@@ -142,6 +173,13 @@ void Sampler::on_frame(std::uint64_t now_ns) {
     ++stats_.frames;
     for (auto& s : slots_) {
         detect_events(s, now_ns);
+        if (s.io) {
+            const std::uint64_t ex = s.io->exchanges();
+            if (ex == s.last_exchange) continue;
+            s.last_exchange = ex;
+            if (s.exchanges_seen++ % opt_.decimation == 0) sample_io(s, now_ns);
+            continue;
+        }
         if (!s.coe) continue;
         const std::uint64_t ex = s.coe->exchanges();
         if (ex == s.last_exchange) continue;
@@ -164,8 +202,27 @@ void Sampler::sample_all(std::uint64_t now_ns) {
     follow_slaves();
     for (auto& s : slots_) {
         detect_events(s, now_ns);
-        sample(s, now_ns);
+        if (s.io)
+            sample_io(s, now_ns);
+        else
+            sample(s, now_ns);
     }
+}
+
+void Sampler::sample_io(Slot& s, std::uint64_t now_ns) {
+    IoSample io;
+    io.time_ns = now_ns;
+    io.cycle = s.io->exchanges();
+    io.slave = s.position;
+    io.analog = s.io_kind == io::ChannelKind::Analog;
+    io.in_channels = s.io_in;
+    io.out_channels = s.io_out;
+    for (unsigned c = 0; c < s.io_in; ++c)
+        io.in[c] = channel(s.io->inputs(), s.io_kind, c);
+    for (unsigned c = 0; c < s.io_out; ++c)
+        io.out[c] = channel(s.io->outputs(), s.io_kind, c);
+    if (q_.push(Record{io})) ++stats_.io_samples;
+    if (s.samples++ % opt_.status_every == 0) status(s, now_ns);
 }
 
 void Sampler::sample(Slot& s, std::uint64_t now_ns) {
@@ -228,6 +285,7 @@ void Sampler::status(Slot& s, std::uint64_t now_ns) {
         st.lost_links +=
             e.peek(static_cast<std::uint16_t>(protocol::addr(protocol::Reg::LostLinkCounter) + i));
     st.mailbox_errors = s.slave->counters().mailbox_errors;
+    if (s.io) st.frames = s.io->exchanges();
     if (s.coe) {
         st.frames = s.coe->exchanges();
         st.emergencies = s.coe->sdo_server().counters().emergencies_sent;

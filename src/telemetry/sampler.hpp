@@ -4,8 +4,9 @@
 // data, every `decimation`-th exchange; it detects events (AL state, CiA 402 state, mode, 0x603F faults,
 // emergencies) on every frame. A CiA 402 device is one whose dictionary has the statusword 0x6041; its state
 // is the statusword decoded (protocol::cia402::decode_state), as a master sees it. The TWINsync status comes
-// from an application that is a twinsync::StatusSource (the drive). It neither allocates nor blocks: a full
-// queue drops the record and counts it.
+// from an application that is a twinsync::StatusSource (the drive). I/O terminals (io::InputTerminal,
+// io::OutputTerminal) give an IoSample every `decimation`-th exchange of theirs. It neither allocates nor
+// blocks: a full queue drops the record and counts it.
 #pragma once
 
 #include <cstdint>
@@ -31,9 +32,10 @@ struct SamplerOptions {
 };
 
 struct SamplerStats {
-    std::uint64_t frames = 0;   // on_frame calls
-    std::uint64_t samples = 0;  // axis samples pushed
-    std::uint64_t events = 0;   // events pushed
+    std::uint64_t frames = 0;      // on_frame calls
+    std::uint64_t samples = 0;     // axis samples pushed
+    std::uint64_t io_samples = 0;  // I/O samples pushed
+    std::uint64_t events = 0;      // events pushed
 };
 
 class Sampler {
@@ -64,6 +66,7 @@ class Sampler {
     void bind(Slot& s, std::size_t position);  // the slave at position and its objects
     void follow_slaves();
     void sample(Slot& s, std::uint64_t now_ns);  // after detect_events(s) of the same frame
+    void sample_io(Slot& s, std::uint64_t now_ns);
     void status(Slot& s, std::uint64_t now_ns);
     void detect_events(Slot& s, std::uint64_t now_ns);
     void event(const Slot& s, std::uint64_t now_ns, EventKind k, std::uint32_t code, std::int64_t old_value,

@@ -1,8 +1,10 @@
 // What the telemetry carries, as plain C++ structures (no DDS): one record per axis and sampled cycle, the
-// EtherCAT status of each slave, the TWINsync link of each drive that has one, and events. The sampler
+// EtherCAT status of each slave, the TWINsync link of each drive that has one, events, and the channels of
+// each I/O terminal. The sampler
 // fills them on the cyclic thread; the publisher converts them to the IDL types (vecat_telemetry.idl).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <variant>
 
@@ -66,6 +68,23 @@ struct TwinsyncSample {
     float tracking_error = 0;  // user units
 };
 
+// I/O channels one IoSample holds per direction; a terminal with more shows its first kIoChannels (the
+// others are not sampled: in_channels/out_channels say how many the sample holds).
+inline constexpr unsigned kIoChannels = 16;
+
+// The channels of one I/O terminal (io::InputTerminal, io::OutputTerminal) in one sampled cycle, as the
+// process image holds them: a digital channel 0 or 1, an analog one the raw signed 16-bit value.
+struct IoSample {
+    std::uint64_t time_ns = 0;      // host CLOCK_MONOTONIC: receive time of the frame that was processed
+    std::uint64_t cycle = 0;        // process data exchanges of the slave so far
+    std::uint16_t slave = 0;        // position on the line
+    bool analog = false;            // the channels are analog (raw counts), else digital (bits)
+    std::uint8_t in_channels = 0;   // valid entries of in (inputs the terminal sends to the master)
+    std::uint8_t out_channels = 0;  // valid entries of out (outputs the master writes)
+    std::array<std::int16_t, kIoChannels> in{};
+    std::array<std::int16_t, kIoChannels> out{};
+};
+
 enum class EventKind : std::uint8_t {
     AlState = 1,       // AL status register changed (old/new: 0x0130), code: 0x0134
     Cia402State = 2,   // old/new: AxisSample::cia402_state (the statusword decoded)
@@ -88,6 +107,6 @@ struct Event {
 };
 
 // What goes through the queue from the cyclic thread to the publisher (trivially copyable).
-using Record = std::variant<AxisSample, SlaveStatus, TwinsyncSample, Event>;
+using Record = std::variant<AxisSample, SlaveStatus, TwinsyncSample, Event, IoSample>;
 
 }  // namespace vecat::telemetry

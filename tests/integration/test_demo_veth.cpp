@@ -16,6 +16,7 @@
 #include "esc/sii_image.hpp"
 #include "esi/esi_reader.hpp"
 #include "pcapng_reader.hpp"
+#include "telemetry/recording.hpp"
 
 using namespace vecat;
 namespace fs = std::filesystem;
@@ -171,6 +172,21 @@ TEST(Demo, OnANetworkFileItMovesTheDrivesAndExercisesTheIo) {
     ASSERT_NE(at, std::string::npos) << out;
     EXPECT_GE(std::stoi(out.substr(at + 15)), 4) << out;
     EXPECT_GT(test::read_pcapng_frames((dir / "out" / "demo.pcapng").string()).size(), 100u);
+    // The scope has the I/O lanes (one per channel: valves' outputs, sensors' inputs), and the samples show
+    // the wired inputs following the walking bit of the outputs.
+    const std::string svg = read_text((dir / "out" / "scope.svg").string());
+    for (const char* lane : {"io.in0", "io.in3", "io.out0", "io.out3"})
+        EXPECT_NE(svg.find(lane), std::string::npos) << lane;
+    telemetry::Recording rec;
+    std::string why;
+    ASSERT_TRUE(telemetry::read_csv((dir / "out" / "scope.csv").string(), rec, &why)) << why;
+    unsigned out_high = 0, in_high = 0;
+    for (const auto& s : rec.io) {
+        out_high += static_cast<unsigned>(s.out_channels == 4 && s.out[2] != 0);  // valves
+        in_high += static_cast<unsigned>(s.in_channels == 4 && s.in[2] != 0);     // sensors
+    }
+    EXPECT_GT(out_high, 0u);
+    EXPECT_GT(in_high, 0u);
     fs::remove_all(dir);
     fs::remove(log);
 }

@@ -6,8 +6,10 @@
 #include <signal.h>
 #include <time.h>
 
+#include <atomic>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <thread>
 
 #include "child_process.hpp"
@@ -166,6 +168,52 @@ TEST(VethTelemetry, SubscriberReceivesWhatTheMasterReadWithinOneCycle) {
     EXPECT_TRUE(saw_init) << "event OP -> INIT missing";
     EXPECT_TRUE(std::filesystem::exists(dir / "scope.svg"));
     std::filesystem::remove_all(dir);
+}
+
+// The I/O samples (topic vecat_io) cross DDS field by field: a publisher and a subscriber in this process,
+// on the namespace's loopback; samples are written until well after discovery (best effort, volatile).
+TEST(VethTelemetry, IoSamplesTravelOverDds) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    if (!telemetry::dds_built_in()) GTEST_SKIP() << telemetry::kNotBuiltIn;
+    telemetry::Subscriber sub(7);
+    auto q = std::make_unique<telemetry::TelemetryQueue>();
+    telemetry::Publisher pub(*q, 7);
+    pub.start();
+    std::atomic<bool> writing{true};
+    std::thread writer([&] {
+        for (std::uint64_t k = 1; writing.load(); ++k) {
+            telemetry::IoSample s;
+            s.time_ns = k;
+            s.cycle = k;
+            s.slave = 3;
+            s.analog = true;
+            s.in_channels = 2;
+            s.out_channels = 16;
+            s.in[0] = -1234;
+            s.in[1] = static_cast<std::int16_t>(k % 1000);
+            s.out[15] = 32767;
+            q->push(telemetry::Record{s});
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+    });
+    telemetry::Recording rec;
+    std::atomic<bool> stop{false};
+    sub.record(rec, 2.0, stop);
+    writing = false;
+    writer.join();
+    pub.stop();
+    ASSERT_FALSE(rec.io.empty()) << "no I/O sample arrived over DDS";
+    for (const auto& s : rec.io) {
+        EXPECT_EQ(s.slave, 3);
+        EXPECT_TRUE(s.analog);
+        EXPECT_EQ(s.in_channels, 2);
+        EXPECT_EQ(s.out_channels, 16);
+        EXPECT_EQ(s.in[0], -1234);
+        EXPECT_EQ(s.in[1], static_cast<std::int16_t>(s.cycle % 1000));
+        EXPECT_EQ(s.out[15], 32767);
+        EXPECT_EQ(s.time_ns, s.cycle);
+    }
+    EXPECT_TRUE(rec.axes.empty());
 }
 
 TEST(VethTelemetry, ScopeSaysClearlyWhenTelemetryIsNotBuiltIn) {

@@ -2,10 +2,12 @@
 // output terminal to an input terminal, inputs forced through the fault injector (set_input), as the
 // project's master sees them in its process data; and the network file's refusals of bad inputs: entries.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include "faults/injector.hpp"
 #include "io/signal.hpp"
@@ -14,6 +16,9 @@
 #include "network/build.hpp"
 #include "network/network_file.hpp"
 #include "serve/in_process_link.hpp"
+#include "telemetry/plot.hpp"
+#include "telemetry/recording.hpp"
+#include "telemetry/sampler.hpp"
 
 namespace vecat {
 namespace {
@@ -193,6 +198,99 @@ TEST(IoTerminals, AnInputForcedThroughTheControlSocketUntilTheFaultIsCleared) {
     EXPECT_EQ(l.inj.execute("inject set_input slave=0 channel=0 value=1", l.now).rfind("error", 0), 0u);
     EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=4 value=1", l.now).rfind("error", 0), 0u);
     EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=0", l.now).rfind("error", 0), 0u);
+}
+
+// The telemetry samples every I/O terminal (IoSample): the output terminals' channels as the master wrote
+// them, the input terminals' as they are sent, here following a wire and a ramp; the recording reads back
+// from CSV and its picture has one lane per channel asked for, digital ones drawn as steps.
+TEST(IoTerminals, TheScopeSamplesTheChannelsOfEachTerminal) {
+    IoLine l;
+    std::string why;
+    ASSERT_TRUE(l.m.startup(AlState::Op, &why)) << why;
+    auto q = std::make_unique<telemetry::TelemetryQueue>();
+    telemetry::Sampler sampler(*l.built.segment, *q);
+    auto run = [&](int cycles) {
+        for (int i = 0; i < cycles; ++i) {
+            l.cycle();
+            sampler.on_frame(l.now);
+        }
+    };
+    l.m.outputs(0)[0] = 0x04;  // outs channel 2: wired to ins channel 0
+    st_le16(l.m.outputs(3).data() + 2, static_cast<std::uint16_t>(-1234));  // aouts channel 1 -> levels 1
+    run(4);
+    l.m.outputs(0)[0] = 0x00;
+    run(4);
+    telemetry::Recording r;
+    telemetry::Record rec;
+    while (q->pop(rec))
+        r.add(rec);
+    EXPECT_GT(sampler.stats().io_samples, 0u);
+    auto of = [&](std::uint16_t slave) {
+        std::vector<telemetry::IoSample> v;
+        for (const auto& s : r.io)
+            if (s.slave == slave) v.push_back(s);
+        return v;
+    };
+    const auto outs = of(0), ins = of(1), levels = of(2), aouts = of(3);
+    ASSERT_EQ(outs.size(), 8u);  // one per exchange (decimation 1)
+    ASSERT_EQ(ins.size(), 8u);
+    ASSERT_FALSE(levels.empty());
+    ASSERT_FALSE(aouts.empty());
+    EXPECT_EQ(outs[0].out_channels, 4);
+    EXPECT_EQ(outs[0].in_channels, 0);
+    EXPECT_FALSE(outs[0].analog);
+    EXPECT_EQ(ins[0].in_channels, 4);
+    EXPECT_TRUE(levels[0].analog);
+    // The output as written, every sample of the first half; then low.
+    for (std::size_t i = 0; i < 4; ++i)
+        EXPECT_EQ(outs[i].out[2], 1) << i;
+    EXPECT_EQ(outs.back().out[2], 0);
+    // The wired input rises behind the output and falls behind it; input 3 is a constant 1.
+    EXPECT_EQ(ins[3].in[0], 1);
+    EXPECT_EQ(ins.back().in[0], 0);
+    EXPECT_EQ(ins.back().in[3], 1);
+    EXPECT_EQ(aouts.back().out[1], -1234);
+    EXPECT_EQ(levels.back().in[1], -1234);
+    // The ramp: 10 per ms.
+    EXPECT_EQ((levels.back().in[0] - levels[levels.size() - 2].in[0] + 1000) % 1000, 10);
+
+    const auto dir = std::filesystem::temp_directory_path() / ("vecat-ioscope-" + std::to_string(getpid()));
+    std::filesystem::create_directories(dir);
+    const std::string path = (dir / "rec.csv").string();
+    ASSERT_TRUE(telemetry::write_csv(r, path, &why)) << why;
+    EXPECT_TRUE(std::filesystem::exists(dir / "rec-io.csv"));
+    telemetry::Recording back;
+    ASSERT_TRUE(telemetry::read_csv(path, back, &why)) << why;
+    std::filesystem::remove_all(dir);
+    ASSERT_EQ(back.io.size(), r.io.size());
+    for (std::size_t i = 0; i < r.io.size(); ++i) {
+        EXPECT_EQ(back.io[i].time_ns, r.io[i].time_ns);
+        EXPECT_EQ(back.io[i].slave, r.io[i].slave);
+        EXPECT_EQ(back.io[i].analog, r.io[i].analog);
+        EXPECT_EQ(back.io[i].in_channels, r.io[i].in_channels);
+        EXPECT_EQ(back.io[i].out, r.io[i].out);
+        EXPECT_EQ(back.io[i].in, r.io[i].in);
+    }
+
+    const auto groups = telemetry::parse_signal_groups("io.out2,io.in0,io.in1", &why);
+    ASSERT_EQ(groups.size(), 3u) << why;
+    EXPECT_TRUE(telemetry::parse_signal_groups("io.in16", &why).empty());  // beyond kIoChannels
+    EXPECT_TRUE(telemetry::parse_signal_groups("io.cycle", &why).empty());
+    const telemetry::Plot p = telemetry::make_plot(back, groups, "io");
+    ASSERT_EQ(p.panels.size(), 3u);
+    ASSERT_EQ(p.panels[0].series.size(), 1u);  // only outs has a digital output channel 2 (aouts has 2)
+    EXPECT_EQ(p.panels[0].series[0].label, "slave 0 io.out2");
+    EXPECT_TRUE(p.panels[0].series[0].step);
+    ASSERT_EQ(p.panels[2].series.size(), 2u);  // ins (digital) and levels (analog) have an input 1
+    EXPECT_TRUE(p.panels[2].series[0].step);
+    EXPECT_FALSE(p.panels[2].series[1].step);
+    const std::string svg = telemetry::render_svg(p);
+    EXPECT_NE(svg.find("slave 1 io.in0"), std::string::npos);
+    EXPECT_NE(svg.find("slave 2 io.in1"), std::string::npos);
+    bool listed = false;
+    for (const auto& sig : telemetry::signal_list())
+        listed = listed || sig.name == "io.out15";
+    EXPECT_TRUE(listed);
 }
 
 TEST(IoTerminals, TheNetworkFileRefusesBadInputsNamingTheLine) {

@@ -23,6 +23,7 @@
 #include "network/build.hpp"
 #include "report/master_checks.hpp"
 #include "serve/server.hpp"
+#include "telemetry/sampler.hpp"
 #include "test_support.hpp"
 
 using namespace vecat;
@@ -112,6 +113,10 @@ devices:
                                         "tree");
     net::InProcessLink link(*built.segment);
     report::MasterChecks checks(*built.segment);
+    // The telemetry's sampler after each frame, as the serve loop calls it: I/O samples of the terminals,
+    // axis samples of the drives (the queue fills up: a full queue is no allocation either).
+    auto queue = std::make_unique<telemetry::TelemetryQueue>();
+    telemetry::Sampler sampler(*built.segment, *queue);
     link.set_observer(&checks);
     master::Master m(link);
     link.set_time(1'000'000'000);
@@ -125,9 +130,11 @@ devices:
         link.set_time(t);
         built.segment->tick(t);
         ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+        sampler.on_frame(t);
     }
     EXPECT_EQ(test::allocations() - before, 0u);
     EXPECT_EQ(test::lock_calls() - locks_before, 0u);
+    EXPECT_GT(sampler.stats().io_samples, 0u);
     EXPECT_TRUE(checks.findings().empty()) << report::summary(checks);
 }
 
