@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "build_refusal.hpp"
 #include "common/bytes.hpp"
 #include "esi/esi_reader.hpp"
 #include "master/coe_client.hpp"
@@ -33,15 +34,8 @@ std::string net(const std::string& modules, const std::string& type = "VECAT-MOD
     return "devices:\n  - name: io\n    esi: " + kModularIo + "\n    type: " + type + "\n" + modules;
 }
 
-// The refusal of reading and building text ("" if it was accepted).
-std::string refusal(const std::string& text) {
-    try {
-        build_network(parse_network(text, "net.yaml"), "net.yaml");
-    } catch (const NetworkFileError& e) {
-        return e.what();
-    }
-    return "";
-}
+// The message of the refusal of text, reading it and making its devices ("" if it was accepted).
+const auto refusal = vecat::test::build_refusal;
 
 #define EXPECT_REFUSED(text, part)                                                      \
     do {                                                                                \

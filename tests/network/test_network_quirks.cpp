@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "build_refusal.hpp"
 #include "esi/esi_reader.hpp"
 #include "esi/esi_writer.hpp"
 #include "master/coe_client.hpp"
@@ -24,14 +25,7 @@ namespace cd = device::coe_details;
 using protocol::AlState;
 
 // The message of the refusal of text, reading it and making its devices ("" if it was accepted).
-std::string refusal(const std::string& text) {
-    try {
-        build_network(parse_network(text, "net.yaml"), "net.yaml");
-    } catch (const NetworkFileError& e) {
-        return e.what();
-    }
-    return "";
-}
+const auto refusal = vecat::test::build_refusal;
 
 struct Served {
     explicit Served(const std::string& text)
