@@ -515,15 +515,29 @@ bool Master::request_state(AlState s, std::chrono::milliseconds timeout) {
     last_states_.assign(slaves_.size(), {});
     while (true) {
         if (s == AlState::Op || s == AlState::SafeOp) exchange_process_data();
-        bool all = true, failed = false;
-        for (std::size_t i = 0; i < slaves_.size(); ++i) {
-            last_states_[i] = read_al_status(slaves_[i].station);
-            const auto& r = last_states_[i];
-            if (!r.ok || r.error()) failed |= r.ok && r.error();
-            if (!r.ok || r.state() != s || r.error()) all = false;
+        // One broadcast read first (as SOEM does): the slaves OR their AL status into it, so every slave
+        // answering with the requested state and no error flag means all are there. Only an error flag or the
+        // deadline asks each slave, so that the process data above keep flowing on a large network.
+        std::uint8_t all_status[2] = {0, 0};
+        const auto answered = brd(ra(Reg::AlStatus), all_status);
+        const bool error_seen = answered && (all_status[0] & protocol::kAlErrorFlag);
+        if (answered == slaves_.size() && !error_seen && all_status[0] == static_cast<std::uint8_t>(s)) {
+            for (auto& r : last_states_)
+                r = AlStatusReading{all_status[0], 0, true};
+            return true;
         }
-        if (all) return true;
-        if (failed || std::chrono::steady_clock::now() > deadline) return false;
+        const bool late = std::chrono::steady_clock::now() > deadline;
+        if (error_seen || late || !answered) {
+            bool all = true, failed = false;
+            for (std::size_t i = 0; i < slaves_.size(); ++i) {
+                last_states_[i] = read_al_status(slaves_[i].station);
+                const auto& r = last_states_[i];
+                if (!r.ok || r.error()) failed |= r.ok && r.error();
+                if (!r.ok || r.state() != s || r.error()) all = false;
+            }
+            if (all) return true;
+            if (failed || late) return false;
+        }
         std::this_thread::sleep_for(std::chrono::microseconds(200));
     }
 }
