@@ -286,8 +286,7 @@ void Segment::deliver_coupled_pulses(std::uint64_t now_ns) {
 void Segment::run_due_firmware(std::uint64_t now_ns) {
     deliver_coupled_pulses(now_ns);
     for (std::size_t k = 0; k < slaves_.size(); ++k)
-        if (last_run_ns_[k] == 0 || now_ns - last_run_ns_[k] >= kMaxRunGapNs || now_ns < last_run_ns_[k])
-            run(k, now_ns);
+        if (last_run_ns_[k] == 0 || now_ns < last_run_ns_[k]) run(k, now_ns);
 }
 
 void Segment::run_deferred_firmware() {

@@ -269,11 +269,10 @@ class Segment {
     std::vector<std::uint8_t> halted_;
     ApplicationFactory factory_;
     std::vector<ApplicationFactory> own_factory_;  // per slave, empty: factory_
-    // Per slave: host time of its last firmware run. A frame runs the firmware of the slaves it addressed,
-    // and of the others only when kMaxRunGapNs has passed (a cycle of several frames does not run every
-    // slave once per frame).
+    // Per slave: host time of its last firmware run (0: run it after this frame). A frame runs the firmware
+    // of the slaves it addressed only; the others catch up before a frame reads them (catch_up) or at their
+    // deadlines, so a cycle of several frames does not run every slave once per frame.
     std::vector<std::uint64_t> last_run_ns_;
-    static constexpr std::uint64_t kMaxRunGapNs = 100'000;
     // Per slave: its earliest deadline as of its last run (Slave::next_event_ns); 0: run it before the next
     // frame. A frame that moves a deadline earlier (a shorter watchdog) addresses the slave, which then runs
     // after the frame and looks again.
