@@ -211,6 +211,8 @@ Esc::Addressing Esc::addressing() const {
     a.alias_enabled = (mem_[addr(Reg::DlControl) + 3] & 0x01) != 0;
     a.log_first_bit = fmmu_log_first_bit_;
     a.log_last_bit = fmmu_log_last_bit_;
+    a.log_read_first_bit = fmmu_log_read_first_bit_;
+    a.log_read_last_bit = fmmu_log_read_last_bit_;
     return a;
 }
 
@@ -506,10 +508,11 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
             const std::uint8_t* v = src + pos;
             // Most writes (the system time of the cyclic FRMW, error counters, FMMUs, SII address) touch
             // none of the registers with rules of their own: those take the masked copy of the whole run.
-            if (plain_register_write(cur, last))
-                counted |= write_registers_masked(cur, v, run);
-            else
-                counted |= write_registers_bytewise(cur, v, run, al_control_written);
+            const bool c = plain_register_write(cur, last)
+                               ? write_registers_masked(cur, v, run)
+                               : write_registers_bytewise(cur, v, run, al_control_written);
+            counted |= c;
+            if (c && !dc_time_registers(cur, last)) firmware_work_ = true;
             // What a write starts acts on the value the master sent: the SII command byte, the system time
             // (only where the ESC has the system time unit).
             constexpr std::uint32_t sii_cmd = addr(Reg::SiiControl) + 1;
@@ -529,12 +532,13 @@ bool Esc::ecat_write(std::uint16_t a, const std::uint8_t* src, std::size_t n, co
             const int s = sm_covering(cur);
             if (s >= 0) {
                 run = std::min<std::size_t>(rem, sm_[s].start + sm_[s].length - cur);
-                if (!sm_[s].locked)
-                    counted |= sm_ecat_write(static_cast<unsigned>(s), cur - sm_[s].start, src + pos, run);
+                if (!sm_[s].locked &&
+                    sm_ecat_write(static_cast<unsigned>(s), cur - sm_[s].start, src + pos, run))
+                    counted = firmware_work_ = true;
             } else {
                 run = std::min<std::size_t>(rem, next_sm_start(cur) - cur);
                 std::memcpy(&mem_[cur], src + pos, run);
-                counted = true;
+                counted = firmware_work_ = true;
             }
         } else {
             run = std::min<std::size_t>(rem, 0x10000 - cur);  // past the process RAM: nothing to write
@@ -624,10 +628,16 @@ void Esc::update_fmmu(unsigned i) {
     fmmu_read_mask_ = fmmu_write_mask_ = 0;
     fmmu_log_first_bit_ = ~std::uint64_t{0};
     fmmu_log_last_bit_ = 0;
+    fmmu_log_read_first_bit_ = ~std::uint64_t{0};
+    fmmu_log_read_last_bit_ = 0;
     for (unsigned k = 0; k < cfg_.fmmu_count; ++k) {
         const FmmuState& g = fmmu_[k];
         if (!g.active) continue;
-        if (g.read) fmmu_read_mask_ |= 1u << k;
+        if (g.read) {
+            fmmu_read_mask_ |= 1u << k;
+            fmmu_log_read_first_bit_ = std::min(fmmu_log_read_first_bit_, g.log_first_bit);
+            fmmu_log_read_last_bit_ = std::max(fmmu_log_read_last_bit_, g.log_last_bit);
+        }
         if (g.write) fmmu_write_mask_ |= 1u << k;
         fmmu_log_first_bit_ = std::min(fmmu_log_first_bit_, g.log_first_bit);
         fmmu_log_last_bit_ = std::max(fmmu_log_last_bit_, g.log_last_bit);

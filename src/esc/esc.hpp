@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "common/bytes.hpp"
@@ -66,6 +67,18 @@ class Esc {
     // Processes one datagram as this ESC; updates data, working counter and (auto-increment) ADP. Returns
     // true when the datagram addressed this ESC (it added to the working counter).
     bool process(protocol::DatagramView d, const FrameTiming& t);
+    // Whether the datagrams processed since the last call gave the firmware something to do: the master
+    // wrote into the ESC's memory (registers, SyncManager buffers, process RAM), or read a mailbox empty
+    // (the firmware may post its next message). Reading process data or registers, and the DC unit's time
+    // registers that the ESC keeps by itself (dc_time_registers), give it nothing. Clears the flag.
+    bool take_firmware_work() { return std::exchange(firmware_work_, false); }
+    // The DC unit's time registers, kept by the ESC alone (ESC datasheet section I, distributed clocks):
+    // the receive times of the ports and the system time, 0x0900-0x0917 (the cyclic FRMW of the system
+    // time and the BWR that latches the receive times).
+    static constexpr bool dc_time_registers(std::uint32_t first, std::uint32_t last) {
+        return first >= protocol::addr(protocol::Reg::DcRecvTimePort0) &&
+               last < protocol::addr(protocol::Reg::DcRecvTimeEcatPu);
+    }
     // A frame this ESC could not parse: counted as a real ESC counts a malformed frame on port 0.
     void count_invalid_frame(unsigned port = 0);
     // A frame already marked invalid by a previous ESC arrived at this port (0x0308 + port).
@@ -181,9 +194,14 @@ class Esc {
         std::uint16_t alias = 0;
         bool alias_enabled = false;
         std::uint64_t log_first_bit = ~std::uint64_t{0}, log_last_bit = 0;  // empty: first > last
+        // The bits of the FMMUs that read (logical reads take data from the ESC's memory there).
+        std::uint64_t log_read_first_bit = ~std::uint64_t{0}, log_read_last_bit = 0;
         bool fixed(std::uint16_t adp) const { return adp == station || (alias_enabled && adp == alias); }
         bool logical(std::uint64_t first_bit, std::uint64_t last_bit) const {
             return first_bit <= log_last_bit && last_bit >= log_first_bit;
+        }
+        bool logical_read(std::uint64_t first_bit, std::uint64_t last_bit) const {
+            return first_bit <= log_read_last_bit && last_bit >= log_read_first_bit;
         }
     };
     Addressing addressing() const;
@@ -300,7 +318,9 @@ class Esc {
     // Active FMMUs that read / write, and the logical bit range all active FMMUs cover together (a
     // logical datagram outside it is rejected without looking at each FMMU).
     std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;
+    bool firmware_work_ = false;  // see take_firmware_work
     std::uint64_t fmmu_log_first_bit_ = ~std::uint64_t{0}, fmmu_log_last_bit_ = 0;
+    std::uint64_t fmmu_log_read_first_bit_ = ~std::uint64_t{0}, fmmu_log_read_last_bit_ = 0;
     std::uint32_t repeat_bits_ = 0;
     std::uint64_t* port_changes_ = nullptr;
     std::uint64_t* address_changes_ = nullptr;

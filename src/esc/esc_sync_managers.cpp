@@ -50,6 +50,7 @@ bool Esc::sm_ecat_read(unsigned i, std::size_t off, std::uint8_t* dst, std::size
         if (s.mailbox) {
             s.mbx_full = false;
             s.irq_read = true;
+            firmware_work_ = true;  // the firmware may post its next message
         } else
             s.ecat_reading = false;
         set_al_event(al_event::sm(i));

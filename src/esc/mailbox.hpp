@@ -33,8 +33,9 @@ class MailboxProtocol {
     virtual void handle(const protocol::MailboxHeader& h, ConstBytes payload, MailboxReplySink& out) = 0;
     // Called while the slave is running so a protocol can send unsolicited messages (emergencies).
     virtual void poll(MailboxReplySink&) {}
-    // Whether poll() may have something to send now (false lets the firmware skip it).
-    virtual bool has_output() const { return true; }
+    // Whether poll() may have something to send now (false lets the firmware skip it). A protocol that
+    // sends from poll() says so here.
+    virtual bool has_output() const { return false; }
     // The mailbox was reset (state INIT or BOOT): forget transfers in progress.
     virtual void reset() {}
     // Served in the BOOT state too. ETG.1000.6 6.4 (the BOOT state): only FoE runs there (the bootloader);

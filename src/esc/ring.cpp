@@ -153,10 +153,9 @@ bool Segment::process_ring(Bytes frame, std::size_t& len, std::uint64_t now_ns, 
             const FrameTiming t{now_ns + rel.port0_ns, now_ns + rel.port1_ns, now_ns + rel.port2_ns,
                                 now_ns + rel.port3_ns, rel.returned_ports};
             Esc& esc = slaves_[k]->esc();
-            bool addressed = false;
             for (std::size_t i = 0; i < pf.count; ++i)
-                addressed |= esc.process(pf.datagram(frame, i), t);
-            if (addressed) last_run_ns_[k] = 0;  // its firmware runs below
+                esc.process(pf.datagram(frame, i), t);
+            if (esc.take_firmware_work()) last_run_ns_[k] = 0;  // its firmware runs below
         }
         if (defer_firmware_) {
             firmware_due_ = true;

@@ -1,3 +1,5 @@
+// About 650 lines: the line's frame path in one place (routing of datagrams to the ESCs they concern, the
+// firmware runs around a frame, port timing); the ring's is in ring.cpp.
 #include "esc/segment.hpp"
 
 #include <algorithm>
@@ -350,9 +352,9 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
         gone = passed < slaves_.size();
         // An outbound frame damaged on the cable into slave c is processed by the slaves before c only.
         const std::size_t intact = std::min(hit && !damage.returning ? damage.cable : slaves_.size(), passed);
-        // SYNC pulses that fell due before this frame arrived happen first, and the slaves' own cycles
-        // catch up (see set_local_cycle_ns).
-        catch_up(now_ns);
+        // SYNC pulses that fell due before this frame arrived happen first, and the deadlines due; the
+        // slaves the frame reads catch up with their own cycles as it reaches them (process_datagrams).
+        catch_up_deadlines(now_ns);
         // A latch that goes on downstream: remembered until it returns (see return_frame()).
         const bool onward = downstream_ && m == slaves_.size() && !hit;
         std::size_t latch_pos = pf.count;
@@ -403,11 +405,34 @@ void Segment::refresh_addressing() {
     addressed_slaves_epoch_ = slaves_epoch_;
 }
 
+namespace {
+
+bool reads_memory(Command c) {
+    switch (c) {
+        case Command::APRD:
+        case Command::APRW:
+        case Command::FPRD:
+        case Command::FPRW:
+        case Command::BRD:
+        case Command::BRW:
+        case Command::ARMW:
+        case Command::FRMW:
+        case Command::LRD:
+        case Command::LRW:
+            return true;
+        default:
+            return false;
+    }
+}
+
+}  // namespace
+
 void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t intact, std::size_t latch_pos,
                                 std::uint64_t now_ns) {
     if (addressed_epoch_ != address_epoch_ || addressed_slaves_epoch_ != slaves_epoch_) refresh_addressing();
     // What each datagram can reach (ETG.1000.4 5.4: the addressing modes).
     bool auto_increment = false;
+    bool any_reads = false;
     for (std::size_t i = 0; i < pf.count; ++i) {
         const DatagramView d = pf.datagram(frame, i);
         DatagramReach& r = reach_[i];
@@ -442,35 +467,53 @@ void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t 
                 r.reach = Reach::None;
                 break;
         }
+        const bool dc_time_only =
+            r.reach != Reach::Logical && d.length() > 0 &&
+            Esc::dc_time_registers(d.ado(), static_cast<std::uint32_t>(d.ado()) + d.length() - 1);
+        r.reads = r.reach != Reach::None && !dc_time_only && reads_memory(d.command());
+        any_reads |= r.reads;
     }
     // position: the ESCs the frame has passed so far (each counts up the ADP of auto-increment commands).
     std::uint16_t position = 0;
+    const auto concerns = [&](const DatagramReach& r, const Esc::Addressing& a) {
+        switch (r.reach) {
+            case Reach::None:
+                return false;
+            case Reach::All:
+                return true;
+            case Reach::Position:
+                return static_cast<std::uint16_t>(r.adp + position) == 0;
+            case Reach::Fixed:
+                return a.fixed(r.adp);
+            case Reach::Logical:
+                return a.logical(r.first_bit, r.last_bit);
+        }
+        return false;
+    };
     for (std::size_t k = 0; k < intact; ++k) {
         if (!reached_[k]) continue;
+        // A slave the frame reads catches up with its own cycle first (see set_local_cycle_ns), or posts
+        // the mailbox message it has for the master (one that arrived between its runs: an EoE frame from
+        // the host, an emergency of an injected fault).
+        if (any_reads) {
+            const Esc::Addressing& a = addressing_[k];
+            for (std::size_t i = 0; i < pf.count; ++i) {
+                const DatagramReach& r = reach_[i];
+                if (!r.reads || !concerns(r, a)) continue;
+                if (r.reach == Reach::Logical && !a.logical_read(r.first_bit, r.last_bit)) continue;
+                if (stale(k, now_ns) || slaves_[k]->mailbox_output_pending()) {
+                    const std::uint64_t epoch = address_epoch_;
+                    run(k, now_ns);
+                    if (address_epoch_ != epoch) addressing_[k] = slaves_[k]->esc().addressing();
+                }
+                break;
+            }
+        }
         Esc* esc = nullptr;
         FrameTiming t{};
-        bool addressed = false;
         for (std::size_t i = 0; i < pf.count; ++i) {
             const DatagramReach& r = reach_[i];
-            const Esc::Addressing& a = addressing_[k];
-            bool concerns = false;
-            switch (r.reach) {
-                case Reach::None:
-                    break;
-                case Reach::All:
-                    concerns = true;
-                    break;
-                case Reach::Position:
-                    concerns = static_cast<std::uint16_t>(r.adp + position) == 0;
-                    break;
-                case Reach::Fixed:
-                    concerns = a.fixed(r.adp);
-                    break;
-                case Reach::Logical:
-                    concerns = a.logical(r.first_bit, r.last_bit);
-                    break;
-            }
-            if (!concerns) continue;
+            if (!concerns(r, addressing_[k])) continue;
             if (!esc) {
                 esc = &slaves_[k]->esc();
                 const FrameTiming& rel = timing_[k];
@@ -482,11 +525,10 @@ void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t 
             const std::uint64_t epoch = address_epoch_;
             const bool took = esc->process(d, t);
             if (address_epoch_ != epoch) addressing_[k] = esc->addressing();  // for its next datagrams
-            addressed |= took;
             if (i == latch_pos && took) latched_[k] = 1;
         }
-        // Marks the slave for its firmware run (0: run now).
-        if (addressed) last_run_ns_[k] = 0;
+        // Marks the slave for its firmware run (0: run now) if the frame gave it work.
+        if (esc && esc->take_firmware_work()) last_run_ns_[k] = 0;
         ++position;
     }
     // Each ESC passed counted up the ADP of the auto-increment and broadcast commands; the ESCs that the
@@ -528,9 +570,11 @@ void Segment::run(std::size_t k, std::uint64_t now_ns) {
     else
         slaves_[k]->run(now_ns);
     last_run_ns_[k] = now_ns == 0 ? 1 : now_ns;
+    ++counters_.firmware_runs;
     // A halted firmware has no deadlines but the silicon's watchdog.
     deadline_ns_[k] = halted_[k] ? slaves_[k]->esc().watchdog_deadline_ns()
-                                 : slaves_[k]->next_event_ns(now_ns + local_cycle_ns_);
+                                 : std::min(slaves_[k]->next_event_ns(now_ns + local_cycle_ns_),
+                                            now_ns + kMaxLagCycles * local_cycle_ns_);
     pulse_ns_[k] = slaves_[k]->esc().dc().next_pulse_host_ns();
 }
 
@@ -538,15 +582,26 @@ void Segment::tick(std::uint64_t now_ns) {
     run_firmware(now_ns);
 }
 
+bool Segment::deadline_due(std::size_t k, std::uint64_t now_ns) const {
+    const std::uint64_t last = last_run_ns_[k];
+    return last == 0 || now_ns < last || deadline_ns_[k] <= now_ns;
+}
+
+bool Segment::stale(std::size_t k, std::uint64_t now_ns) const {
+    // (The pulse as of the last run, with a microsecond to spare for the drift of the DC unit since.)
+    return now_ns - last_run_ns_[k] >= local_cycle_ns_ || pulse_ns_[k] <= now_ns + 1'000;
+}
+
 void Segment::catch_up(std::uint64_t now_ns) {
     deliver_coupled_pulses(now_ns);
-    for (std::size_t k = 0; k < slaves_.size(); ++k) {
-        const std::uint64_t last = last_run_ns_[k];
-        // (The pulse as of the last run, with a microsecond to spare for the drift of the DC unit since.)
-        if (last == 0 || now_ns < last || now_ns - last >= local_cycle_ns_ || deadline_ns_[k] <= now_ns ||
-            pulse_ns_[k] <= now_ns + 1'000)
-            run(k, now_ns);
-    }
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        if (deadline_due(k, now_ns) || stale(k, now_ns)) run(k, now_ns);
+}
+
+void Segment::catch_up_deadlines(std::uint64_t now_ns) {
+    deliver_coupled_pulses(now_ns);
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        if (deadline_due(k, now_ns)) run(k, now_ns);
 }
 
 std::uint64_t Segment::next_event_ns() const {

@@ -21,11 +21,12 @@ namespace vecat::esc {
 struct SegmentCounters {
     std::uint64_t frames = 0;
     std::uint64_t replies = 0;
-    std::uint64_t dropped = 0;   // malformed EtherCAT frames
-    std::uint64_t ignored = 0;   // not EtherCAT
-    std::uint64_t lost = 0;      // lost or corrupted on the line, or no link at the master's cable
-    std::uint64_t onward = 0;    // passed on to the downstream segment (chained segments)
-    std::uint64_t returned = 0;  // came back from the downstream segment, forwarded to the master
+    std::uint64_t dropped = 0;        // malformed EtherCAT frames
+    std::uint64_t ignored = 0;        // not EtherCAT
+    std::uint64_t lost = 0;           // lost or corrupted on the line, or no link at the master's cable
+    std::uint64_t onward = 0;         // passed on to the downstream segment (chained segments)
+    std::uint64_t returned = 0;       // came back from the downstream segment, forwarded to the master
+    std::uint64_t firmware_runs = 0;  // runs of one slave's firmware (Segment::run), for any reason
 };
 
 // Damage a frame suffers on one cable of the line (fault injection). Cable k joins the master (k == 0) or
@@ -280,8 +281,16 @@ class Segment {
     // Per slave: its next SYNC pulse as of its last run (a frame that starts or moves SYNC addresses it).
     std::vector<std::uint64_t> pulse_ns_;
     std::uint64_t local_cycle_ns_ = 250'000;
-    // Before a frame: the slaves whose state the frame must find current (see set_local_cycle_ns).
+    // A slave that no frame reads runs at the latest this many local cycles after its last run: the work
+    // of one run (the cycles it catches up) stays bounded, whichever slave a frame then reads.
+    static constexpr std::uint64_t kMaxLagCycles = 16;
+    // Before a frame: the slaves whose state the frame must find current (see set_local_cycle_ns). The
+    // line runs those with a deadline due here (catch_up_deadlines) and, in process_datagrams, those that
+    // the frame reads, each just before the frame reaches it; a ring catches every slave up (catch_up).
     void catch_up(std::uint64_t now_ns);
+    void catch_up_deadlines(std::uint64_t now_ns);
+    bool deadline_due(std::size_t k, std::uint64_t now_ns) const;
+    bool stale(std::size_t k, std::uint64_t now_ns) const;
     // Before any run: the SYNC pulses up to now_ns of the slaves whose applications are coupled
     // (Application::coupled), one at a time in time order across them.
     void deliver_coupled_pulses(std::uint64_t now_ns);
@@ -308,6 +317,11 @@ class Segment {
         Reach reach = Reach::None;
         std::uint16_t adp = 0;                      // as it arrived at the first ESC
         std::uint64_t first_bit = 0, last_bit = 0;  // Logical: the bits it covers
+        // Whether it reads what the slaves' firmware keeps (process data, mailbox, AL status...; not the
+        // DC time registers, Esc::dc_time_registers): the slaves it reads catch up first. Logical reads
+        // read a slave only through its reading FMMUs. (Which slaves run after the frame their ESCs say,
+        // Esc::take_firmware_work.)
+        bool reads = false;
     };
     std::array<DatagramReach, protocol::kMaxDatagramsPerFrame> reach_{};
 

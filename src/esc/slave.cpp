@@ -501,6 +501,17 @@ void Slave::post_replies() {
     if (q_count_ > 0) send_pending_replies();
 }
 
+bool Slave::mailbox_output_pending() const {
+    if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0 || state_ == AlState::Init) return false;
+    if (esc_.sm_mailbox_full(static_cast<unsigned>(sm_mbx_in_))) return false;  // the master has not read
+    if (q_count_ > 0) return true;
+    if (state_ == AlState::Boot) return false;
+    if (auto* coe = app_->mailbox_protocol(MailboxType::CoE); coe && coe->has_output()) return true;
+    for (const auto& p : own_protocols_)
+        if (p->has_output()) return true;
+    return false;
+}
+
 void Slave::send_pending_replies() {
     const auto in_idx = static_cast<unsigned>(sm_mbx_in_);
     const unsigned drop_every = desc_.quirks.mailbox_drop_every;

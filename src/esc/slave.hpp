@@ -149,6 +149,9 @@ class Slave {
 
     // Firmware step after a frame went through the ESC, and on timer ticks.
     void run(std::uint64_t now_ns);
+    // Whether the firmware has a mailbox message for the master (a queued reply, an emergency, an EoE frame
+    // from the host) and SM1 is free to take it: a run would post it.
+    bool mailbox_output_pending() const;
     // The host time by which run() must be called again without a frame (after a run; see
     // Segment::next_firmware_ns): the process data watchdog's expiry, SYNC pulses about to pile up beyond
     // what one run takes, the AL control read after its latency, the application's deadlines; poll_ns

@@ -14,6 +14,7 @@
 #include "network/build.hpp"
 #include "network/dictionary_file.hpp"
 #include "network/network_file.hpp"
+#include "network_support.hpp"
 #include "serve/in_process_link.hpp"
 
 namespace vecat::network {
@@ -162,12 +163,8 @@ struct Files {
     ~Files() { std::filesystem::remove_all(dir); }
 };
 
-struct Served {
-    explicit Served(const std::string& file)
-        : built(build_network(read_network_file(file), file)), link(*built.segment), master(link) {}
-    BuiltNetwork built;
-    net::InProcessLink link;
-    master::Master master;
+struct Served : vecat::test::ServedNetwork {
+    explicit Served(const std::string& file) : ServedNetwork(file, From::File) {}
 };
 
 TEST(DictionaryFile, AnSiiDeviceServesExactlyTheObjectsAndValuesOfItsFile) {

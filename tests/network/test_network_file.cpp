@@ -15,6 +15,7 @@
 #include "master/master.hpp"
 #include "network/build.hpp"
 #include "network/network_file.hpp"
+#include "network_support.hpp"
 #include "protocol/cia402_objects.hpp"
 #include "serve/in_process_link.hpp"
 #include "shared_data.hpp"
@@ -150,13 +151,7 @@ TEST(NetworkFile, RelativePathsStartAtTheFilesFolder) {
 }
 
 // A mixed line brought to OP by the project master behind an in-process link.
-struct Served {
-    explicit Served(const std::string& text)
-        : built(build_network(parse_network(text), "net.yaml")), link(*built.segment), master(link) {}
-    BuiltNetwork built;
-    net::InProcessLink link;
-    master::Master master;
-};
+using Served = vecat::test::ServedNetwork;
 
 TEST(Network, BuiltInDevicesAndDrivesReachOpWithTheExpectedWorkingCounter) {
     Served s(R"(

@@ -10,13 +10,13 @@
 #include <algorithm>
 #include <filesystem>
 
-#include "build_refusal.hpp"
 #include "common/bytes.hpp"
 #include "esi/esi_reader.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "network/build.hpp"
 #include "network/network_file.hpp"
+#include "network_support.hpp"
 #include "protocol/objects.hpp"
 #include "serve/in_process_link.hpp"
 #include "shared_data.hpp"
@@ -162,13 +162,7 @@ TEST(NetworkModules, ChosenModulesBringTheirPdosAndObjectsWithTheSlotIncrements)
 }
 
 // A built network to PREOP: the master reads 0xF050, writes 0xF030; SAFEOP only with a matching list.
-struct Served {
-    explicit Served(const std::string& text)
-        : built(build_network(parse_network(text), "net.yaml")), link(*built.segment), master(link) {}
-    BuiltNetwork built;
-    net::InProcessLink link;
-    master::Master master;
-};
+using Served = vecat::test::ServedNetwork;
 
 master::SdoResult write32(master::CoeClient& c, std::uint16_t index, std::uint8_t sub, std::uint32_t v) {
     return c.download_value(index, sub, v);

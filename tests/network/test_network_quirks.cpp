@@ -6,13 +6,13 @@
 #include <string>
 #include <vector>
 
-#include "build_refusal.hpp"
 #include "esi/esi_reader.hpp"
 #include "esi/esi_writer.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "network/build.hpp"
 #include "network/network_file.hpp"
+#include "network_support.hpp"
 #include "protocol/coe.hpp"
 #include "protocol/sii.hpp"
 #include "serve/in_process_link.hpp"
@@ -27,14 +27,8 @@ using protocol::AlState;
 // The message of the refusal of text, reading it and making its devices ("" if it was accepted).
 const auto refusal = vecat::test::build_refusal;
 
-struct Served {
-    explicit Served(const std::string& text)
-        : built(build_network(parse_network(text), "net.yaml")), link(*built.segment), master(link) {
-        link.set_time(1'000'000'000);
-    }
-    BuiltNetwork built;
-    net::InProcessLink link;
-    master::Master master;
+struct Served : vecat::test::ServedNetwork {
+    explicit Served(const std::string& text) : ServedNetwork(text, From::Text, 1'000'000'000) {}
 };
 
 TEST(NetworkQuirks, ReadAsAListOrOneQuirk) {

@@ -230,7 +230,9 @@ TEST(Quirks, FixedPdos) {
 // 0x080D bit 3) only when the delay has passed since the request; until then a master polling SM1 sees it
 // empty. Like gateways and drives whose mailbox runs in a slow background task.
 TEST(Quirks, MailboxRepliesAfterADelay) {
-    Preop p(with_quirks({"mailbox_delay_ms=5"}));
+    // (3 ms: shorter than the segment's lag bound, Segment::kMaxLagCycles local cycles, so that the held
+    // reply is the earliest deadline.)
+    Preop p(with_quirks({"mailbox_delay_ms=3"}));
     const auto sm1_full = [&] {
         const auto st = p.b.master.read16(p.station(), protocol::sm_addr(1) + protocol::sm::Status);
         return st && (*st & protocol::sm::StatusMailboxFull);
@@ -238,8 +240,8 @@ TEST(Quirks, MailboxRepliesAfterADelay) {
     ASSERT_TRUE(p.c->send(MailboxType::CoE, upload_request(0x1018, 2), p.c->next_counter()));
     EXPECT_FALSE(p.c->receive(20ms)) << "the reply came before its delay";
     // The held reply is a deadline of the firmware: a serve loop without frames wakes up for it.
-    EXPECT_EQ(p.b.seg->next_firmware_ns(), p.b.now + 5'000'000);
-    p.b.advance(4'900'000);
+    EXPECT_EQ(p.b.seg->next_firmware_ns(), p.b.now + 3'000'000);
+    p.b.advance(2'900'000);
     EXPECT_FALSE(sm1_full());
     EXPECT_FALSE(p.c->receive(5ms));
     p.b.advance(100'000);
