@@ -450,10 +450,11 @@ void Drive::configure() {
     // The servo period is the speed control's sampling time, the TWIN sampling time of the switching
     // frequency P0302 (TWINsync specification chapter 2: 250 us, 125 us at 8 kHz); the option card
     // exchanges its telegram in the same cycle. A device without P0302 keeps 250 us.
-    const auto period = o_->tw_switching_frequency.bound()
-                            ? twinsync::sampling_time_ns(
-                                  static_cast<std::uint8_t>(o_->tw_switching_frequency.get())).value_or(kServoPeriodNs)
-                            : kServoPeriodNs;
+    const auto period =
+        o_->tw_switching_frequency.bound()
+            ? twinsync::sampling_time_ns(static_cast<std::uint8_t>(o_->tw_switching_frequency.get()))
+                  .value_or(kServoPeriodNs)
+            : kServoPeriodNs;
     if (period != period_ns_) {
         period_ns_ = period;
         core_->set_period_ns(period);

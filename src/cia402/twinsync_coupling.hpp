@@ -76,7 +76,7 @@ class TwinsyncCoupling {
     // REFPOS: the master's position set-point in the last two telegrams (for its re-referencing).
     std::int32_t refpos_last_ = 0;
     std::int64_t refpos_step_ = 0;
-    int refpos_seen_ = 0;  // telegrams seen since coupling (0, 1, 2 = both of the above valid)
+    int refpos_seen_ = 0;         // telegrams seen since coupling (0, 1, 2 = both of the above valid)
     double torque_filtered_ = 0;  // VE: the master's torque after the P2581 filter (per mille)
 };
 

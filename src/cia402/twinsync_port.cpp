@@ -309,10 +309,10 @@ void Port::reconfigure() {
     // does not take TWINsync's set-points, as with P0165 not TWINSYNC.
     if (role_ == Role::Slave && rd<std::uint16_t>(c_->setpoint_selector) == kSetpointByTwinsync &&
         !setpoint_mode_fits())
-        set_message(fmt::format("P2580 = {} ({}) needs P0301 = 1 (IP-Mode) on the slave; with P0301 = {} it "
-                                "does not follow TWINsync's set-points",
-                                static_cast<unsigned>(mode_->setting), mode_->name,
-                                rd<std::uint16_t>(c_->setpoint_mode)));
+        set_message(fmt::format(
+            "P2580 = {} ({}) needs P0301 = 1 (IP-Mode) on the slave; with P0301 = {} it "
+            "does not follow TWINsync's set-points",
+            static_cast<unsigned>(mode_->setting), mode_->name, rd<std::uint16_t>(c_->setpoint_mode)));
     if (before != role_) {
         sync_.reset();
         has_data_ = false;

@@ -59,8 +59,8 @@ std::vector<ObjectDescription> twinsync_objects() {
     // names".
     // P0149 MPRO_DRVCOM_Init (4.1.2): writing 1 forces an initialisation of the TWINsync communication;
     // it reads 0 again once done.
-    o.push_back(ranged(tp::DriveComInit, "MPRO_DRVCOM_Init (1 = initialise TWINsync)", DT::Unsigned16, RW, 0,
-                       0, 1));
+    o.push_back(
+        ranged(tp::DriveComInit, "MPRO_DRVCOM_Init (1 = initialise TWINsync)", DT::Unsigned16, RW, 0, 0, 1));
     o.push_back(
         ranged(tp::ControlSelector, "MPRO_CTRL_SEL (0 EtherCAT, 10 TWINSYNC)", DT::Unsigned16, RW, 0, 0, 10));
     o.push_back(
@@ -141,10 +141,11 @@ std::vector<ObjectDescription> twinsync_objects() {
     // Section 4.1.6 / table 4.7: P2609[2], the partner's reference current, is "see P2697[2]": this
     // drive's reference current (100 mA). The specification names no other element; [0] and [1] are kept
     // so that element 2 is subindex 3, as everywhere else.
-    o.push_back(make_record(ix(tp::ReferenceValues), pname(tp::ReferenceValues, "Reference values"),
-                            {real_entry(1, "Element 0 (not described by the TWINsync specification)", RW, 0.0),
-                             real_entry(2, "Element 1 (not described by the TWINsync specification)", RW, 0.0),
-                             real_entry(3, "Reference current (100 mA)", RW, 90.0)}));
+    o.push_back(
+        make_record(ix(tp::ReferenceValues), pname(tp::ReferenceValues, "Reference values"),
+                    {real_entry(1, "Element 0 (not described by the TWINsync specification)", RW, 0.0),
+                     real_entry(2, "Element 1 (not described by the TWINsync specification)", RW, 0.0),
+                     real_entry(3, "Reference current (100 mA)", RW, 90.0)}));
     o.push_back(var(tp::RemoteAcc, "MPRO_TWIN_RemoteAcc", DT::Integer16, RWT));
     o.push_back(ranged(tp::SyncSel, "TOPT_TWIN_SyncSel", DT::Unsigned16, RW, 0, 0, 3));
     o.push_back(var(tp::LocalRefFFSpeed, "MPRO_TWIN_LocalRefFFISpeed", DT::Integer16, ROT));

@@ -274,7 +274,6 @@ TEST_F(MsdTwinsync, MsdTwinsync_4_1_P2619ReadsNoError) {
     EXPECT_EQ(par(kSlave, p::CommStatus).get<std::uint16_t>(), comm_status::NoError) << "OFF again";
 }
 
-
 // The issue-28 tests below drive the outputs of both drives themselves (mode, target torque), over the
 // RxPDO 0x1600 of the vecat drive: controlword, mode, pad, target position, velocity, torque.
 struct MsdTwinsyncIo : MsdTwinsync {
@@ -500,10 +499,10 @@ TEST_F(MsdTwinsyncIo, MsdTwinsync_4_1_2_P0149ForcesAnInitialisation) {
         step(0, 0);
     EXPECT_TRUE(drive(kSlave).twinsync_status()->synchronised);
     EXPECT_TRUE(drive(kSlave).twinsync_status()->link_ok);
-    EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::DriveComInit), 0, 2).abort ==
-                  protocol::SdoAbort::None,
-              false)
+    EXPECT_NE(c.download_value<std::uint16_t>(object_index(p::DriveComInit), 0, 2).abort,
+              protocol::SdoAbort::None)
         << "0 or 1";
+    EXPECT_EQ(drive(kSlave).twinsync_status()->initialisations, 1u);
 }
 
 // Tables 6.5-6.11, 6.14: the slave runs with P0301 setpoint mode = IP-Mode (1). With another setpoint
@@ -534,9 +533,9 @@ TEST_F(MsdTwinsyncIo, MsdTwinsync_6_2_SlaveFollowsOnlyInIpMode) {
 // (P2697[2], the reference current behind P2609[2]): the parameters exist with their values and ranges.
 TEST_F(MsdTwinsyncIo, MsdTwinsync_6_1_VirtualEncoderParametersAndReferenceCurrent) {
     master::CoeClient c(b.master, 0x1002);
-    EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::EncoderChannel3), 0, kEncoderChannel3Twinsync)
-                  .abort,
-              protocol::SdoAbort::None);
+    EXPECT_EQ(
+        c.download_value<std::uint16_t>(object_index(p::EncoderChannel3), 0, kEncoderChannel3Twinsync).abort,
+        protocol::SdoAbort::None);
     EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::CommutationEncoder), 0, kEncoderCh3).abort,
               protocol::SdoAbort::None);
     EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::SpeedEncoder), 0, kEncoderCh3).abort,
