@@ -151,6 +151,9 @@ struct Drive::Objects {
         return coe::bind<T>(od, twinsync::object_index(parameter), sub, coe::Match::Convert);
     }
     V<std::uint16_t> tw_control_mode = tw<std::uint16_t>(twinsync::p::ControlMode);
+    V<std::uint16_t> tw_switching_frequency = tw<std::uint16_t>(twinsync::p::SwitchingFrequency);
+    V<std::uint16_t> tw_setpoint_mode = tw<std::uint16_t>(twinsync::p::SetpointMode);
+    V<float> tw_master_torque_tf = tw<float>(twinsync::p::MasterTorqueTF);
     V<std::uint32_t> tw_config = tw<std::uint32_t>(twinsync::p::Config);
     V<std::int16_t> tw_inverted = tw<std::int16_t>(twinsync::p::SlaveInverted);
     V<float> tw_speed_up = tw<float>(twinsync::p::SpeedUp);
@@ -230,7 +233,7 @@ Drive::Drive(const device::DeviceDescription& d,
     variant_->install([this] { core_->zero_position(); });
     core_ = std::make_unique<DriveCore>(motor_from(*o_));
     configure();
-    twin_ = std::make_unique<twinsync::Port>(dictionary(), kServoPeriodNs);
+    twin_ = std::make_unique<twinsync::Port>(dictionary(), period_ns_);
     // Fault injection is refused for codes the drive does not simulate.
     if (o_->simulated_fault.bound())
         o_->simulated_fault.entry()->hooks().on_download = [](const Entry&, ConstBytes v) {
@@ -290,9 +293,9 @@ void Drive::advance(std::uint64_t now_ns) {
     Drive* partner = twin_partner_;
     const bool first = twin_->end() == 0;
     // The dictionary cannot change while the steps run (frames and SDO requests come in between calls).
-    if (now_ns - sim_ns_ >= kServoPeriodNs) configure();
-    while (now_ns - sim_ns_ >= kServoPeriodNs) {
-        sim_ns_ += kServoPeriodNs;
+    if (now_ns - sim_ns_ >= period_ns_) configure();
+    while (now_ns - sim_ns_ >= period_ns_) {
+        sim_ns_ += period_ns_;
         if (partner && !first) partner->step_to(sim_ns_);
         servo_step();
         if (partner && first) partner->step_to(sim_ns_);
@@ -306,9 +309,9 @@ void Drive::step_to(std::uint64_t t_ns) {
         return;
     }
     if (t_ns > sim_ns_ + 200'000'000) sim_ns_ = t_ns - 200'000'000;
-    if (sim_ns_ + kServoPeriodNs <= t_ns) configure();
-    while (sim_ns_ + kServoPeriodNs <= t_ns) {
-        sim_ns_ += kServoPeriodNs;
+    if (sim_ns_ + period_ns_ <= t_ns) configure();
+    while (sim_ns_ + period_ns_ <= t_ns) {
+        sim_ns_ += period_ns_;
         servo_step();
     }
 }
@@ -444,6 +447,19 @@ void Drive::configure() {
     if (parameter_writes_ != parameters_read_) read_parameters();
     io_.parameters.fieldbus_synchronised = dc;
     core_->configure(io_);
+    // The servo period is the speed control's sampling time, the TWIN sampling time of the switching
+    // frequency P0302 (TWINsync specification chapter 2: 250 us, 125 us at 8 kHz); the option card
+    // exchanges its telegram in the same cycle. A device without P0302 keeps 250 us.
+    const auto period =
+        o_->tw_switching_frequency.bound()
+            ? twinsync::sampling_time_ns(static_cast<std::uint8_t>(o_->tw_switching_frequency.get()))
+                  .value_or(kServoPeriodNs)
+            : kServoPeriodNs;
+    if (period != period_ns_) {
+        period_ns_ = period;
+        core_->set_period_ns(period);
+        if (twin_) twin_->set_period_ns(period);
+    }
 }
 
 template <class F>
@@ -475,6 +491,7 @@ void Drive::read_twinsync() {
     t.active = port.active();
     t.follows = port.follows();
     t.has_data = port.has_data();
+    t.fresh = port.received_fresh();
     t.controlled_by_twinsync = port.controlled_by_twinsync();
     t.received_control_word = port.received_control_word();
     t.pending_error = port.pending_error();
@@ -502,6 +519,7 @@ void Drive::read_twinsync() {
     t.remote_resolution = o.tw_remote_resolution.get_or(1);
     t.gear_numerator = o.tw_gear_numerator.get_or(1);
     t.gear_denominator = o.tw_gear_denominator.get_or(1);
+    t.master_torque_tf = o.tw_master_torque_tf.get_or(0.0f);
 }
 
 void Drive::write_feedback() {

@@ -43,6 +43,8 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     double position_actual() const { return core_->position_actual(); }
     double velocity_actual() const { return core_->velocity_actual(); }
     std::uint64_t servo_steps() const { return core_->steps(); }
+    // The servo period now: kServoPeriodNs, or the TWIN sampling time of P0302 (125 us at 8 kHz).
+    std::uint64_t servo_period_ns() const { return period_ns_; }
     std::uint64_t simulated_time_ns() const { return sim_ns_; }
     // The TWINsync option card of this drive, and its status (nullptr when no cable is connected).
     twinsync::Port& twinsync_port() { return *twin_; }
@@ -104,6 +106,7 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     std::uint32_t command_read_ = ~std::uint32_t{0};     // command_writes_ when it was last read
     std::uint32_t parameters_read_ = ~std::uint32_t{0};  // parameter_writes_ when they were last read
     std::uint64_t sim_ns_ = 0;
+    std::uint64_t period_ns_ = kServoPeriodNs;  // servo_period_ns()
     bool started_ = false;
     std::uint8_t probe_inputs_object_ = 0;            // 0x2100:6 as last read
     std::vector<std::uint8_t> digital_output_image_;  // see digital_output_image()

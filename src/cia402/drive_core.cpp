@@ -80,7 +80,7 @@ void DriveCore::start(DriveIo& io) {
 }
 
 void DriveCore::step(DriveIo& io) {
-    const double dt = Axis::kPeriod;
+    const double dt = static_cast<double>(period_ns_) * 1e-9;
     ++steps_;
     axis_.io = &io;
     DriveFeedback& fb = io.feedback;
@@ -322,7 +322,7 @@ void DriveCore::run_setpoints(DriveIo& io, double dt) {
         state_machine_stopped_ = true;
         coupling_.release(axis_);
     } else if (follow) {
-        coupling_.follow(axis_, io.twinsync);
+        coupling_.follow(axis_, io.twinsync, dt);
     } else if (coupling_.continuing()) {
         if (!coupling_.continue_motion(axis_, dt)) {
             on_mode_change();
@@ -405,7 +405,7 @@ void DriveCore::run_touch_probe(DriveIo& io, double previous_inc, double machine
 void DriveCore::write_feedback(DriveIo& io) {
     const DriveParameters& p = io.parameters;
     DriveFeedback& fb = io.feedback;
-    const double dt = Axis::kPeriod;
+    const double dt = static_cast<double>(period_ns_) * 1e-9;
     std::uint16_t status = sm_.statusword_bits() | sw::Remote;
     const State st = sm_.state();
     const bool enabled = st == State::OperationEnabled && sm_.stop() == StopKind::None;

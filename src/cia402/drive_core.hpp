@@ -43,6 +43,10 @@ class DriveCore {
     void start(DriveIo& io);
     // One servo period.
     void step(DriveIo& io);
+    // The servo period, the speed control's sampling time (the TWIN sampling time of P0302 on a drive
+    // with the TWINsync parameters: 250 us, 125 us at 8 kHz). kPeriodNs until set.
+    void set_period_ns(std::uint64_t ns) { period_ns_ = ns > 0 ? ns : kPeriodNs; }
+    std::uint64_t period_ns() const { return period_ns_; }
 
     // Position compensation 0x2111 (TwinCAT NC PTP online change): the move ends at its target plus the
     // achievable part of `distance`, spread over `length`.
@@ -101,6 +105,8 @@ class DriveCore {
     bool state_machine_stopped_ = false;  // a stop of the state machine ran (its ramp is in axis_.stopping)
 
     std::uint64_t steps_ = 0;
+
+    std::uint64_t period_ns_ = kPeriodNs;
     std::uint32_t override_ppm_ = 1'000'000;
     std::int64_t increments_ = 0;
     double previous_machine_inc_ = 0;

@@ -143,6 +143,7 @@ struct TwinsyncInputs {
     bool active = false;                  // a cable and P2614 not OFF
     bool follows = false;                 // a slave on TWINsync's set-points (P0165)
     bool has_data = false;                // valid data from the partner since the link came up
+    bool fresh = false;                   // a valid telegram arrived in this period
     bool controlled_by_twinsync = false;  // a slave on TWINsync's control word (P0159)
     bool link_ok = false;
     twinsync::Role role = twinsync::Role::Off;
@@ -171,6 +172,7 @@ struct TwinsyncInputs {
     std::uint32_t remote_resolution = 1;                // P2652
     std::int32_t gear_numerator = 1;                    // P2653
     std::int32_t gear_denominator = 1;                  // P2654
+    float master_torque_tf = 0;                         // P2581, ms (VE: filter of the master's torque)
 };
 
 // The local TWINsync values (section 4.1.6: 16-bit fractions of the references P2602).

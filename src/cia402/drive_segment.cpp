@@ -48,6 +48,7 @@ void apply_twinsync_preset(Drive& master, Drive& slave, TwinsyncPreset preset) {
     set_parameter(slave, p::Setting, 0, static_cast<std::int64_t>(ss));
     set_parameter(slave, p::ControlSelector, 0, kControlByTwinsync);
     set_parameter(slave, p::SetpointSelector, 0, kSetpointByTwinsync);
+    set_parameter(slave, p::SetpointMode, 0, kSetpointModeIp);  // tables 6.7, 6.8, 6.14: IP-Mode (1)
     set_parameter(slave, p::SyncSel, 0, static_cast<std::int64_t>(SyncSelection::SlaveByTwin));
     master.twinsync_port().reconfigure();
     slave.twinsync_port().reconfigure();

@@ -102,7 +102,50 @@ void TwinsyncCoupling::hold_for_coupling(Axis& a) {
     a.torque_ff = 0;
 }
 
-void TwinsyncCoupling::follow(Axis& a, const TwinsyncInputs& t) {
+// REFPOS (6.2.10): "The homing is controlled via the master and is also synchronized with the slave. The
+// synchronization of the slave with the position of the master is absolute." While the master homes (its
+// control word P2611 carries StartHoming) the slave follows its motion; when the master's homing redefines
+// its coordinates (the home position reads as its home offset), its position set-point P2600 jumps without
+// a motion, and the slave takes the same reference: its own coordinates shift by the jump, so it does not
+// move, reads the master's position from then on, and reports itself homed (P2612 HomePositionSet). The
+// telegram carries no "homed" flag from the master (table 4.5), so the slave finds the jump in the set-point:
+// the change of its increment between two consecutive telegrams, beyond what an acceleration of the
+// slave's homing acceleration 0x609A (master and slave are parametrised alike, 4.1.6) explains, plus two
+// units. A smaller re-referencing is followed as a motion.
+void TwinsyncCoupling::take_master_reference(Axis& a, const TwinsyncInputs& t, double dt) {
+    if (!t.fresh) {
+        refpos_seen_ = 0;  // frozen data (4.1.2): start again from the next two telegrams
+        return;
+    }
+    const std::int32_t rx = t.remote_ref_pos;
+    if (refpos_seen_ == 0) {
+        refpos_last_ = rx;
+        refpos_seen_ = 1;
+        return;
+    }
+    const std::int64_t step =
+        static_cast<std::int32_t>(static_cast<std::uint32_t>(rx) - static_cast<std::uint32_t>(refpos_last_));
+    refpos_last_ = rx;
+    if (refpos_seen_ == 1) {
+        refpos_step_ = step;
+        refpos_seen_ = 2;
+        return;
+    }
+    const double jump = static_cast<double>(step - refpos_step_);
+    const double tolerance = 2.0 + 2.0 * std::max<double>(a.par().homing_acceleration, 1.0) * dt * dt;
+    if ((control_ & twinsync::control::StartHoming) && std::abs(jump) > tolerance) {
+        const double shift = (t.inverted < 0 ? -1.0 : 1.0) * jump;
+        a.home_shift += shift;
+        a.actual += shift;
+        a.demand.p += shift;
+        a.profile.reset(a.demand);
+        homed_ = true;
+        return;  // the master's motion goes on at the increment it had before the jump
+    }
+    refpos_step_ = step;
+}
+
+void TwinsyncCoupling::follow(Axis& a, const TwinsyncInputs& t, double dt) {
     const twinsync::ModeInfo* m = t.mode;
     Follow f = m->follow;
     if (f == Follow::ByControlMode) {
@@ -138,7 +181,9 @@ void TwinsyncCoupling::follow(Axis& a, const TwinsyncInputs& t) {
                 // Coupling only at standstill of both axes.
                 if (std::abs(v) > still_remote || std::abs(a.velocity) > still) return hold_for_coupling(a);
                 a.coupled = true;
+                refpos_seen_ = 0;
             }
+            if (m->setting == Setting::PconRefposSlave) take_master_reference(a, t, dt);
             a.demand = {a.clamp_to_software_limits(inv * master), v, 0.0};
             a.loop = LoopMode::Position;
             if (m->setting == Setting::PconGantrySlave)
@@ -188,11 +233,21 @@ void TwinsyncCoupling::follow(Axis& a, const TwinsyncInputs& t) {
             a.coupled = true;
             break;
         }
-        case Follow::Torque:
-            a.torque_cmd = inv * torque(t.remote_ref_torque) / a.nm_per_permille;
+        case Follow::Torque: {
+            // VE (table 6.10): the master's torque set-point through P2581 MasterTorqueTF, a first-order
+            // lag of that time constant (ms; 0 = none), starting from no torque when the slave couples.
+            const double target = inv * torque(t.remote_ref_torque) / a.nm_per_permille;
+            const double tf = static_cast<double>(t.master_torque_tf) * 1e-3;
+            if (!a.coupled) torque_filtered_ = 0;
+            if (tf > 0)
+                torque_filtered_ += (target - torque_filtered_) * (1.0 - std::exp(-dt / tf));
+            else
+                torque_filtered_ = target;
+            a.torque_cmd = torque_filtered_;
             a.loop = LoopMode::Torque;
             a.coupled = true;
             break;
+        }
         case Follow::None:
         case Follow::ByControlMode:
             break;

@@ -43,8 +43,8 @@ class TwinsyncCoupling {
     void release(Axis& a) { a.coupled = continuing_ = false; }
     // A mode was selected: the decoupled motion ends.
     void end_motion() { continuing_ = false; }
-    // One period following the master drive.
-    void follow(Axis& a, const TwinsyncInputs& t);
+    // One period (dt seconds) following the master drive.
+    void follow(Axis& a, const TwinsyncInputs& t, double dt);
     // Decoupled motion: one period at the velocity of the coupling. false: a new set-point, target or
     // mode ended it (the mode takes over in this period).
     bool continuing() const { return continuing_; }
@@ -63,6 +63,8 @@ class TwinsyncCoupling {
 
   private:
     void hold_for_coupling(Axis& a);
+    // REFPOS (6.2.10): the master's homing carries over to the slave; see follow().
+    void take_master_reference(Axis& a, const TwinsyncInputs& t, double dt);
 
     std::optional<twinsync::ErrorId> error_;
     std::int32_t master_last_ = 0;  // master position at the previous cycle (PCON increments)
@@ -71,6 +73,11 @@ class TwinsyncCoupling {
     double continue_velocity_ = 0;
     std::int32_t continue_target_position_ = 0, continue_target_velocity_ = 0;
     bool homed_ = false;
+    // REFPOS: the master's position set-point in the last two telegrams (for its re-referencing).
+    std::int32_t refpos_last_ = 0;
+    std::int64_t refpos_step_ = 0;
+    int refpos_seen_ = 0;         // telegrams seen since coupling (0, 1, 2 = both of the above valid)
+    double torque_filtered_ = 0;  // VE: the master's torque after the P2581 filter (per mille)
 };
 
 }  // namespace vecat::cia402

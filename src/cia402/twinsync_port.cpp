@@ -30,6 +30,8 @@ struct Port::Config {
         switching_frequency = at(p::SwitchingFrequency);
         control_selector = at(p::ControlSelector);
         setpoint_selector = at(p::SetpointSelector);
+        setpoint_mode = at(p::SetpointMode);
+        drivecom_init = at(p::DriveComInit);
         max_fault_time = at(p::MaxFaultTime);
         sync_ticks = at(p::SyncTicks);
         sync_sel = at(p::SyncSel);
@@ -64,6 +66,8 @@ struct Port::Config {
     Entry* switching_frequency = nullptr;
     Entry* control_selector = nullptr;
     Entry* setpoint_selector = nullptr;
+    Entry* setpoint_mode = nullptr;
+    Entry* drivecom_init = nullptr;
     Entry* max_fault_time = nullptr;
     Entry* sync_ticks = nullptr;
     Entry* sync_sel = nullptr;
@@ -135,8 +139,15 @@ Port::Port(coe::ObjectDictionary& od, std::uint64_t period_ns)
         };
         e->hooks().after_download = [this](Entry&) { reconfigure(); };
     }
-    for (Entry* e : {c_->control_selector, c_->setpoint_selector})
+    for (Entry* e : {c_->control_selector, c_->setpoint_selector, c_->setpoint_mode})
         if (e) e->hooks().after_download = [this](Entry&) { reconfigure(); };
+    // P0149 MPRO_DRVCOM_Init (4.1.2): "an initialisation be forced" after master and slave were configured.
+    if (c_->drivecom_init)
+        c_->drivecom_init->hooks().after_download = [this](Entry& e) {
+            if (e.get<std::uint16_t>() == 0) return;
+            initialise();
+            e.set(std::uint16_t{0});
+        };
     // One-shot injections: the next n frames on the cable.
     if (c_->inject[2])
         c_->inject[2]->hooks().after_download = [this](Entry& e) {
@@ -294,6 +305,14 @@ void Port::reconfigure() {
         return;
     pdo_size_ = pdo_bytes(layout_, rd<std::uint16_t>(c_->frame)).value_or(0);
     configured_ = sb <= pdo_size_ && rb <= pdo_size_;
+    // The slave tables of chapter 6 (6.5-6.11, 6.14) require P0301 = IP-Mode (1): otherwise the slave
+    // does not take TWINsync's set-points, as with P0165 not TWINSYNC.
+    if (role_ == Role::Slave && rd<std::uint16_t>(c_->setpoint_selector) == kSetpointByTwinsync &&
+        !setpoint_mode_fits())
+        set_message(fmt::format(
+            "P2580 = {} ({}) needs P0301 = 1 (IP-Mode) on the slave; with P0301 = {} it "
+            "does not follow TWINsync's set-points",
+            static_cast<unsigned>(mode_->setting), mode_->name, rd<std::uint16_t>(c_->setpoint_mode)));
     if (before != role_) {
         sync_.reset();
         has_data_ = false;
@@ -302,6 +321,28 @@ void Port::reconfigure() {
         pending_.reset();
         partner_ = {};
     }
+}
+
+void Port::initialise() {
+    // The link starts again as after power-on: initialisation mode in the status word (bit 0 clear) until
+    // valid data arrive, the slave's synchronisation controller from its initial phase, the monitoring's
+    // timers from zero. The last received data stay in their parameters.
+    sync_.reset();
+    has_data_ = false;
+    fresh_ = false;
+    fault_time_ns_ = 0;
+    state_mismatch_ns_ = 0;
+    pending_.reset();
+    partner_ = {};
+    status_.link_ok = false;
+    status_.synchronised = false;
+    ++status_.initialisations;
+    reconfigure();
+}
+
+bool Port::setpoint_mode_fits() const {
+    return !mode_ || !requires_ip_mode(mode_->setting) ||
+           rd<std::uint16_t>(c_->setpoint_mode, kSetpointModeIp) == kSetpointModeIp;
 }
 
 std::uint16_t Port::received_control_word() const {
@@ -320,7 +361,7 @@ bool Port::receives(std::uint16_t parameter) const {
 
 bool Port::follows() const {
     return active() && configured_ && role_ == Role::Slave && mode_ && mode_->follow != Follow::None &&
-           rd<std::uint16_t>(c_->setpoint_selector) == kSetpointByTwinsync;
+           rd<std::uint16_t>(c_->setpoint_selector) == kSetpointByTwinsync && setpoint_mode_fits();
 }
 
 bool Port::controlled_by_twinsync() const {
@@ -355,6 +396,7 @@ void Port::receive(std::uint64_t t_ns, const LocalState& local) {
     }
     apply_fault_injection();
     bool valid = false;
+    fresh_ = false;
     const ConstBytes frame = channel_->receive(end_, t_ns);
     if (frame.empty()) {
         ++status_.frames_missing;
@@ -362,6 +404,7 @@ void Port::receive(std::uint64_t t_ns, const LocalState& local) {
         Telegram t;
         if (decode(frame, layout_, pdo_size_, t) == DecodeError::None) {
             valid = true;
+            fresh_ = true;
             ++status_.frames_received;
             has_data_ = true;
             std::size_t off = 0;

@@ -37,6 +37,10 @@ class Port {
     const std::shared_ptr<Channel>& channel() const { return channel_; }
     int end() const { return end_; }
 
+    // The control cycle (the TWIN sampling time): one telegram each way per cycle.
+    void set_period_ns(std::uint64_t ns) { period_ns_ = ns; }
+    std::uint64_t period_ns() const { return period_ns_; }
+
     Role role() const { return role_; }
     const ModeInfo* mode() const { return mode_; }
     bool active() const { return channel_ && role_ != Role::Off; }
@@ -49,6 +53,12 @@ class Port {
 
     // Valid data from the partner has arrived since the link became active (values may be frozen).
     bool has_data() const { return has_data_; }
+    // A valid telegram arrived in this cycle's receive.
+    bool received_fresh() const { return fresh_; }
+    // P0149 MPRO_DRVCOM_Init: the link initialises again (4.1.2).
+    void initialise();
+    // P0301 is what the slave table of the operation mode requires (IP-Mode), or the mode requires nothing.
+    bool setpoint_mode_fits() const;
     bool link_ok() const { return status_.link_ok; }
     // P2611 on a slave: from the telegram's control word (standard layout) or, in the extended layout, from
     // wherever the user mapped P2611.
@@ -97,6 +107,7 @@ class Port {
 
     SyncController sync_;
     bool has_data_ = false;
+    bool fresh_ = false;
     std::uint16_t rx_drivecom_ = 0;
     TwinStatusWord partner_;
     double fault_time_ns_ = 0;

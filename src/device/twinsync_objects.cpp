@@ -53,7 +53,14 @@ EntryDescription real_entry(std::uint8_t sub, const char* name, std::uint16_t ac
 
 std::vector<ObjectDescription> twinsync_objects() {
     std::vector<ObjectDescription> o;
-    // General drive parameters the TWINsync operation modes use.
+    // General drive parameters the TWINsync operation modes use. The specification names P0149, P0301,
+    // P0507, P0520 and P0521 with the values its tables require and nothing more (no type, unit, default
+    // or range): vecat's choices are listed in src/twinsync/README.md, "Parameters the specification only
+    // names".
+    // P0149 MPRO_DRVCOM_Init (4.1.2): writing 1 forces an initialisation of the TWINsync communication;
+    // it reads 0 again once done.
+    o.push_back(
+        ranged(tp::DriveComInit, "MPRO_DRVCOM_Init (1 = initialise TWINsync)", DT::Unsigned16, RW, 0, 0, 1));
     o.push_back(
         ranged(tp::ControlSelector, "MPRO_CTRL_SEL (0 EtherCAT, 10 TWINSYNC)", DT::Unsigned16, RW, 0, 0, 10));
     o.push_back(
@@ -62,9 +69,19 @@ std::vector<ObjectDescription> twinsync_objects() {
         ranged(tp::LocalResolution, "Resolution factor (local)", DT::Unsigned32, RW, 1, 1, 0x7FFFFFFF));
     o.push_back(real(tp::SpeedActualRpm, "Speed actual value (rpm)", ROT));
     o.push_back(ranged(tp::ControlMode, "CON_CfgCon (1 TCON, 2 SCON, 3 PCON)", DT::Unsigned16, RW, 3, 1, 3));
+    o.push_back(ranged(tp::SetpointMode, "Setpoint mode (1 IP-Mode)", DT::Unsigned16, RW,
+                       twinsync::kSetpointModeIp, 0, 1));
     o.push_back(ranged(tp::SwitchingFrequency, "CON_SwitchFreq (0 2k, 1 4k, 2 6k, 3 8k, 4 12k, 5 16kHz)",
                        DT::Unsigned16, RW, 1, 0, 5));
     o.push_back(var(tp::PositionActual, "Position actual value", DT::Integer32, ROT));
+    // Tables 6.1 / 6.2: the virtual encoder of TWD V1 and VE on the slave (channel 3 = TWINSYNC, used for
+    // commutation and speed control). Stored and reported; vecat's motor model has no encoder channels.
+    o.push_back(ranged(tp::EncoderChannel3, "Selector for encoder channel 3 (6 TWINSYNC)", DT::Unsigned16, RW,
+                       0, 0, twinsync::kEncoderChannel3Twinsync));
+    o.push_back(ranged(tp::CommutationEncoder, "Encoder for commutation (3 CH3)", DT::Unsigned16, RW, 1, 0,
+                       twinsync::kEncoderCh3));
+    o.push_back(ranged(tp::SpeedEncoder, "Encoder for speed control (3 CH3)", DT::Unsigned16, RW, 1, 0,
+                       twinsync::kEncoderCh3));
     o.push_back(
         var(tp::GantryPositionLimit, "Max. position tracking error (gantry)", DT::Unsigned32, RW, 50000));
     o.push_back(real(tp::SpeedSetpointRpm, "Speed set-point (rpm)", ROT));
@@ -72,6 +89,8 @@ std::vector<ObjectDescription> twinsync_objects() {
 
     // The TWINsync option (chapter 4 and 6).
     o.push_back(ranged(tp::Setting, "MPRO_TWIN_Setting", DT::Unsigned8, RW, 0, 0, 34));
+    // Table 6.10 (VE slave): the filter time of the master's torque set-point, a first-order lag; 0 = none.
+    o.push_back(real(tp::MasterTorqueTF, "MPRO_TWIN_MasterTorqueTF (ms)", RW, 0.0));
     o.push_back(ranged(tp::SlaveInverted, "MPRO_TWIN_SlaveInverted", DT::Integer16, RW, 1, -1, 1));
     o.push_back(real(tp::SpeedUp, "MPRO_TWIN_SpeedUp (%)", RW));
     o.push_back(real(tp::SpeedUpMinimum, "MPRO_TWIN_SpeedUpMin (rpm)", RW));
@@ -119,6 +138,14 @@ std::vector<ObjectDescription> twinsync_objects() {
     o.push_back(var(tp::GearNumerator, "Electronic gear numerator", DT::Integer32, RW, 1));
     o.push_back(
         ranged(tp::GearDenominator, "Electronic gear denominator", DT::Integer32, RW, 1, 1, 0x7FFFFFFF));
+    // Section 4.1.6 / table 4.7: P2609[2], the partner's reference current, is "see P2697[2]": this
+    // drive's reference current (100 mA). The specification names no other element; [0] and [1] are kept
+    // so that element 2 is subindex 3, as everywhere else.
+    o.push_back(
+        make_record(ix(tp::ReferenceValues), pname(tp::ReferenceValues, "Reference values"),
+                    {real_entry(1, "Element 0 (not described by the TWINsync specification)", RW, 0.0),
+                     real_entry(2, "Element 1 (not described by the TWINsync specification)", RW, 0.0),
+                     real_entry(3, "Reference current (100 mA)", RW, 90.0)}));
     o.push_back(var(tp::RemoteAcc, "MPRO_TWIN_RemoteAcc", DT::Integer16, RWT));
     o.push_back(ranged(tp::SyncSel, "TOPT_TWIN_SyncSel", DT::Unsigned16, RW, 0, 0, 3));
     o.push_back(var(tp::LocalRefFFSpeed, "MPRO_TWIN_LocalRefFFISpeed", DT::Integer16, ROT));

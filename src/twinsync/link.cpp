@@ -24,7 +24,9 @@ std::optional<std::uint32_t> switching_frequency_hz(std::uint8_t code) noexcept 
 std::optional<std::uint64_t> sampling_time_ns(std::uint8_t code) noexcept {
     const auto f = switching_frequency_hz(code);
     if (!f) return std::nullopt;
-    return *f > 8000 ? 125'000 : 1'000'000'000ull / *f;
+    // Chapter 2: "TWIN sampling time (dependent on the switching frequency, 250 us or 125 us)", "at 4 kHz,
+    // 250 us or at 8 kHz, 125 us". The specification gives 125 us for 8 kHz only.
+    return *f == 8000 ? kSamplingTime8kHzNs : kSamplingTimeNs;
 }
 
 std::uint64_t frame_time_ns(std::size_t bytes, std::uint32_t baud) noexcept {

@@ -17,8 +17,11 @@ namespace vecat::twinsync {
 // P2709[0]: 0 = 4 MBaud ... 6 = 250 kBaud.
 std::optional<std::uint32_t> baud_rate(std::uint16_t selection) noexcept;
 // P0302 switching frequency code (as in the status word: 0 2 kHz, 1 4 kHz, 2 6 kHz, 3 8 kHz, 4 12 kHz,
-// 5 16 kHz) and the TWIN sampling time, the speed control cycle: 250 us at 4 kHz, 125 us at 8 kHz; vecat
-// takes 1/f up to 8 kHz and 125 us above.
+// 5 16 kHz) and the TWIN sampling time, the speed control cycle in which the drives exchange their
+// telegrams (chapter 2): 125 us at 8 kHz, 250 us at every other frequency (the specification knows only
+// these two sampling times and gives 125 us for 8 kHz alone).
+inline constexpr std::uint64_t kSamplingTimeNs = 250'000;
+inline constexpr std::uint64_t kSamplingTime8kHzNs = 125'000;
 std::optional<std::uint64_t> sampling_time_ns(std::uint8_t switching_frequency) noexcept;
 std::optional<std::uint32_t> switching_frequency_hz(std::uint8_t code) noexcept;
 // UART time of a frame: 10 bits per byte (start, 8 data, stop).

@@ -72,6 +72,26 @@ constexpr std::array<ModeInfo, kLastSetting + 1> kModes = {{
     {S::DswSlave, "DSW_SLAVE", R::Slave, F::None, false, kDsw},
 }};
 
+}  // namespace
+
+bool requires_ip_mode(Setting s) noexcept {
+    switch (s) {
+        case S::TwdSlaveV1:
+        case S::TwdSlaveV2:
+        case S::SconSlave:
+        case S::PconSlave:
+        case S::RpdcSlave:
+        case S::VeTconSlave:
+        case S::PconRefposSlave:
+        case S::PconGantrySlave:
+            return true;
+        default:
+            return false;
+    }
+}
+
+namespace {
+
 constexpr std::uint32_t w(std::uint16_t parameter, std::uint8_t element, std::uint8_t bits) {
     return mapping_word(parameter, element, bits);
 }

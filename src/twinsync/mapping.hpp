@@ -98,6 +98,10 @@ struct ModeInfo {
 // nullptr for values above 34.
 const ModeInfo* mode_info(std::uint8_t setting) noexcept;
 
+// The slave tables of chapter 6 that require P0301 setpoint mode = IP-Mode (1): TWD V1/V2, SCON, PCON,
+// VE, REFPOS and GANTRY slaves (tables 6.5-6.11, 6.14; RPDC 6.9 too, which vecat refuses).
+bool requires_ip_mode(Setting s) noexcept;
+
 struct AutoMapping {
     MappingWords send{};
     MappingWords receive{};

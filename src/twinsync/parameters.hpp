@@ -18,18 +18,24 @@ constexpr std::uint16_t parameter_of(std::uint16_t index) noexcept {
 
 namespace p {
 // General drive parameters used by the TWINsync operation modes.
+inline constexpr std::uint16_t DriveComInit = 149;         // P0149 MPRO_DRVCOM_Init (4.1.2: force an init)
 inline constexpr std::uint16_t ControlSelector = 159;      // P0159 MPRO_CTRL_SEL (TWINSYNC = 10)
 inline constexpr std::uint16_t SetpointSelector = 165;     // P0165 MPRO_REF_SEL (TWINSYNC = 11)
 inline constexpr std::uint16_t LocalResolution = 270;      // P0270 resolution factor (local)
 inline constexpr std::uint16_t SpeedActualRpm = 281;       // P0281 speed actual value (rpm, Float32)
 inline constexpr std::uint16_t ControlMode = 300;          // P0300 CON_CfgCon (TCON 1, SCON 2, PCON 3)
+inline constexpr std::uint16_t SetpointMode = 301;         // P0301 setpoint mode (IP-Mode = 1)
 inline constexpr std::uint16_t SwitchingFrequency = 302;   // P0302 CON_SwitchFreq
 inline constexpr std::uint16_t PositionActual = 412;       // P0412 position actual value
+inline constexpr std::uint16_t EncoderChannel3 = 507;      // P0507 selector for encoder channel 3
+inline constexpr std::uint16_t CommutationEncoder = 520;   // P0520 encoder for commutation
+inline constexpr std::uint16_t SpeedEncoder = 521;         // P0521 encoder for speed control
 inline constexpr std::uint16_t GantryPositionLimit = 744;  // P0744 max. position tracking error
 inline constexpr std::uint16_t SpeedSetpointRpm = 764;     // P0764 speed set-point (rpm, Float32)
 inline constexpr std::uint16_t TorqueActualScaled = 2272;  // P2272 torque actual value (scaled, Int16)
 // The TWINsync option.
 inline constexpr std::uint16_t Setting = 2580;           // MPRO_TWIN_Setting (operation mode)
+inline constexpr std::uint16_t MasterTorqueTF = 2581;    // filter time of the master's torque (VE), ms
 inline constexpr std::uint16_t SlaveInverted = 2583;     // 1 / -1
 inline constexpr std::uint16_t SpeedUp = 2584;           // % of the main set-point
 inline constexpr std::uint16_t SpeedUpMinimum = 2585;    // rpm
@@ -64,6 +70,7 @@ inline constexpr std::uint16_t Config = 2651;
 inline constexpr std::uint16_t RemoteResolution = 2652;  // P2652 resolution factor (master)
 inline constexpr std::uint16_t GearNumerator = 2653;
 inline constexpr std::uint16_t GearDenominator = 2654;
+inline constexpr std::uint16_t ReferenceValues = 2697;  // [2] reference current (100 mA), 4.1.6
 inline constexpr std::uint16_t RemoteAcc = 2700;
 inline constexpr std::uint16_t SyncSel = 2701;
 inline constexpr std::uint16_t LocalRefFFSpeed = 2702;  // speed set-point for the feed-forward (scaled)
@@ -76,6 +83,12 @@ inline constexpr std::uint16_t RpdcCurrentTx = 4202;
 inline constexpr std::uint16_t RpdcCurrentRx = 4203;
 inline constexpr std::uint16_t RpdcSpeed = 4204;
 }  // namespace p
+
+// P0301 setpoint mode: the slave tables of chapter 6 require IP-Mode (1).
+inline constexpr std::uint16_t kSetpointModeIp = 1;
+// P0507 selector for encoder channel 3: TWINSYNC (6); P0520 / P0521: channel 3 = CH3 (3) (tables 6.1, 6.2).
+inline constexpr std::uint16_t kEncoderChannel3Twinsync = 6;
+inline constexpr std::uint16_t kEncoderCh3 = 3;
 
 // P2614 TOPT_TWIN_Mode.
 enum class Role : std::uint16_t { Off = 0, Slave = 1, Master = 2 };

@@ -21,11 +21,12 @@ struct LinkStatus {
     std::uint64_t frames_sent = 0;
     std::uint64_t frames_received = 0;  // valid frames (CRC correct)
     std::uint64_t crc_errors = 0;
-    std::uint64_t frames_missing = 0;  // control cycles without a frame from the other drive
-    std::int64_t sync_offset_ns = 0;   // slave: phase of its control cycle against the master's SYNC_OUT
-    bool synchronised = false;         // slave: locked to SYNC_OUT (the master reports true)
-    bool link_ok = false;              // valid frames within P2613
-    std::uint8_t error_number = 0;     // MSD error (40 or 39), 0 = none
+    std::uint64_t frames_missing = 0;   // control cycles without a frame from the other drive
+    std::uint64_t initialisations = 0;  // P0149 MPRO_DRVCOM_Init writes that re-initialised the link
+    std::int64_t sync_offset_ns = 0;    // slave: phase of its control cycle against the master's SYNC_OUT
+    bool synchronised = false;          // slave: locked to SYNC_OUT (the master reports true)
+    bool link_ok = false;               // valid frames within P2613
+    std::uint8_t error_number = 0;      // MSD error (40 or 39), 0 = none
     std::uint8_t error_location = 0;
     float tracking_error = 0;  // gantry: master position minus slave position (user units)
 };

@@ -11,8 +11,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "master/coe_client.hpp"
 #include "protocol/cia402.hpp"
@@ -270,6 +272,286 @@ TEST_F(MsdTwinsync, MsdTwinsync_4_1_P2619ReadsNoError) {
     drive(kSlave).twinsync_port().reconfigure();
     step(0, 0);
     EXPECT_EQ(par(kSlave, p::CommStatus).get<std::uint16_t>(), comm_status::NoError) << "OFF again";
+}
+
+// The issue-28 tests below drive the outputs of both drives themselves (mode, target torque), over the
+// RxPDO 0x1600 of the vecat drive: controlword, mode, pad, target position, velocity, torque.
+struct MsdTwinsyncIo : MsdTwinsync {
+    void io(std::uint16_t cw0, std::int8_t mode0, std::int32_t pos0, std::int16_t torque0, std::uint16_t cw1,
+            std::uint64_t ns = kMs) {
+        auto o = b.master.outputs(kMaster);
+        st_le16(o.data(), cw0);
+        o[2] = static_cast<std::uint8_t>(mode0);
+        st_le32(o.data() + 4, static_cast<std::uint32_t>(pos0));
+        st_le16(o.data() + 12, static_cast<std::uint16_t>(torque0));
+        auto o1 = b.master.outputs(kSlave);
+        st_le16(o1.data(), cw1);
+        o1[2] = 8;
+        st_le32(o1.data() + 4, static_cast<std::uint32_t>(p1));
+        ASSERT_EQ(b.master.exchange_process_data().value_or(0), b.master.expected_wkc());
+        b.advance(ns);
+    }
+    // The times (ns) at which the slave's received P2607 changed while the master moves for `ms`.
+    std::vector<std::uint64_t> remote_changes(int ms) {
+        std::vector<std::uint64_t> at;
+        std::int32_t last = par(kSlave, p::RemoteRefPos).get<std::int32_t>();
+        for (int i = 0; i < ms; ++i) {
+            p0 += 300;
+            step(0x0F, 0x0F, 0);
+            for (int k = 0; k < 40; ++k) {  // 25 us steps
+                b.advance(25'000);
+                const auto v = par(kSlave, p::RemoteRefPos).get<std::int32_t>();
+                if (v != last) at.push_back(b.now);
+                last = v;
+            }
+        }
+        return at;
+    }
+    void set_switching_frequency(std::uint16_t code) {
+        for (std::size_t d : {kMaster, kSlave})
+            par(d, p::SwitchingFrequency).set<std::uint16_t>(code);
+    }
+};
+
+// Chapter 2: "Data transfer takes place according to the speed control clock (dependent on the switching
+// frequency; at 4 kHz, 250 us or at 8 kHz, 125 us)". Both drives at 8 kHz (P0302 = 3): the partner sees a
+// new value every 125 us, and the drives' servo period (the speed control's sampling) is 125 us.
+TEST_F(MsdTwinsyncIo, MsdTwinsync_2_At8kHzThePartnerSeesANewValueEvery125Us) {
+    configure(kCouplings[7]);  // REFPOS: the master's position set-point P2600 -> the slave's P2607
+    set_switching_frequency(3);
+    enable_both();
+    EXPECT_EQ(drive(kMaster).servo_period_ns(), 125'000u);
+    EXPECT_EQ(drive(kSlave).servo_period_ns(), 125'000u);
+    const auto frames = drive(kSlave).twinsync_status()->frames_received;
+    const auto at = remote_changes(4);
+    ASSERT_GE(at.size(), 30u);
+    for (std::size_t i = 1; i < at.size(); ++i)
+        EXPECT_EQ(at[i] - at[i - 1], 125'000u) << i;
+    EXPECT_EQ(drive(kSlave).twinsync_status()->frames_received - frames, 32u) << "4 ms / 125 us";
+    EXPECT_FALSE(drive(kSlave).twinsync_error());
+}
+
+TEST_F(MsdTwinsyncIo, MsdTwinsync_2_At4kHzThePartnerSeesANewValueEvery250Us) {
+    configure(kCouplings[7]);
+    set_switching_frequency(1);
+    enable_both();
+    EXPECT_EQ(drive(kMaster).servo_period_ns(), 250'000u);
+    const auto frames = drive(kSlave).twinsync_status()->frames_received;
+    const auto at = remote_changes(4);
+    ASSERT_GE(at.size(), 14u);
+    for (std::size_t i = 1; i < at.size(); ++i)
+        EXPECT_EQ(at[i] - at[i - 1], 250'000u) << i;
+    EXPECT_EQ(drive(kSlave).twinsync_status()->frames_received - frames, 16u) << "4 ms / 250 us";
+}
+
+// Chapter 2: "up to 30 bytes of usable data ... depending on the baud rate selected and the TWIN sampling
+// time". A 32-byte frame (P2709[1] = 13) takes 160 us at 2 MBaud: it fits 250 us, not 125 us, so P0302 =
+// 3 (8 kHz) is refused with the reason in 0x2102, and accepted again at 4 MBaud (80 us).
+TEST_F(MsdTwinsyncIo, MsdTwinsync_2_TheTelegramMustFitTheSamplingTime) {
+    configure(kCouplings[7]);
+    master::CoeClient c(b.master, 0x1001);
+    ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::PhyLinkConfig), 2, 13).abort,
+              protocol::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::PhyLinkConfig), 1, 1).abort,
+              protocol::SdoAbort::None);
+    EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::SwitchingFrequency), 0, 3).abort,
+              protocol::SdoAbort::ParameterIncompatible);
+    const auto msg = c.upload(0x2102, 0);
+    const std::string text(msg.data.begin(), msg.data.end());
+    EXPECT_NE(text.find("125.0 us"), std::string::npos) << text;
+    EXPECT_EQ(par(kMaster, p::SwitchingFrequency).get<std::uint16_t>(), 1) << "unchanged";
+    step(0, 0);
+    EXPECT_EQ(drive(kMaster).servo_period_ns(), 250'000u);
+    ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::PhyLinkConfig), 1, 0).abort,
+              protocol::SdoAbort::None);
+    EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::SwitchingFrequency), 0, 3).abort,
+              protocol::SdoAbort::None);
+    step(0, 0);
+    EXPECT_EQ(drive(kMaster).servo_period_ns(), 125'000u);
+}
+
+// 6.2.10: "The homing is controlled via the master and is also synchronized with the slave. The
+// synchronization of the slave with the position of the master is absolute." The master homes (method 37,
+// the current position is the home position, home offset 0x607C); its position now reads the home offset.
+// The slave, controlled through TWINsync (P0159 = 10) and following the master's position set-point,
+// takes the same reference: it reads the master's position, without moving, and reports itself homed to
+// the master (P2612 HomePositionSet).
+TEST_F(MsdTwinsyncIo, MsdTwinsync_6_2_10_HomingOnTheMasterCarriesOverToTheSlave) {
+    configure(kCouplings[7]);
+    par(kSlave, p::ControlSelector).set<std::uint16_t>(kControlByTwinsync);
+    drive(kSlave).twinsync_port().reconfigure();
+    enable_both();
+    move(50);
+    for (int i = 0; i < 20; ++i)
+        step(0x0F, 0x0F);  // at rest
+    ASSERT_NEAR(drive(kSlave).position_demand(), drive(kMaster).position_demand(), 1);
+    ASSERT_FALSE(par(kMaster, p::SlaveStatus).get<std::uint16_t>() & slave_status::HomePositionSet);
+    e(kMaster, obj::homing_method.index).set<std::int8_t>(37);
+    e(kMaster, obj::home_offset.index).set<std::int32_t>(500'000);
+    const double slave_machine = drive(kSlave).mechanics().position();
+    for (int i = 0; i < 5; ++i)
+        io(0x0F, 6, p0, 0, 0x0F);
+    for (int i = 0; i < 20; ++i)
+        io(0x1F, 6, p0, 0, 0x0F);
+    EXPECT_NEAR(drive(kMaster).position_demand(), 500'000, 1);
+    EXPECT_NEAR(drive(kSlave).position_demand(), 500'000, 1) << "the slave took the master's reference";
+    EXPECT_NEAR(pos(kSlave), pos(kMaster), 1000);
+    // (Without the common reference it would move 485,000 increments, 2.9 rad; it only settles.)
+    EXPECT_NEAR(drive(kSlave).mechanics().position(), slave_machine, 0.01) << "without moving";
+    EXPECT_EQ(drive(kSlave).cia402_state(), State::OperationEnabled);
+    EXPECT_FALSE(drive(kSlave).twinsync_error());
+    EXPECT_TRUE(par(kMaster, p::SlaveStatus).get<std::uint16_t>() & slave_status::HomePositionSet);
+    // And it goes on following the master absolutely, in the new coordinates.
+    p0 = static_cast<std::int32_t>(std::lround(drive(kMaster).position_demand()));
+    for (int i = 0; i < 5; ++i)
+        io(0x0F, 8, p0, 0, 0x0F);
+    move(50);
+    for (int i = 0; i < 20; ++i)
+        step(0x0F, 0x0F);
+    EXPECT_NEAR(drive(kSlave).position_demand(), drive(kMaster).position_demand(), 1);
+    EXPECT_NEAR(drive(kMaster).position_demand(), 500'000 + 50 * 300, 1);
+}
+
+// 6.2.10 with a homing that moves (method 34, the index pulse in positive direction): the slave follows
+// the master's homing motion and takes its reference where the master's coordinates change, in motion.
+TEST_F(MsdTwinsyncIo, MsdTwinsync_6_2_10_SlaveFollowsTheMastersHomingMotionAndItsReference) {
+    configure(kCouplings[7]);
+    par(kSlave, p::ControlSelector).set<std::uint16_t>(kControlByTwinsync);
+    drive(kSlave).twinsync_port().reconfigure();
+    enable_both();
+    e(kMaster, obj::homing_method.index).set<std::int8_t>(34);
+    e(kMaster, obj::home_offset.index).set<std::int32_t>(-1'000'000);
+    e(kMaster, obj::homing_speeds::search_for_switch.index, 1).set<std::uint32_t>(2'000'000);
+    e(kMaster, obj::homing_speeds::search_for_zero.index, 2).set<std::uint32_t>(2'000'000);
+    for (std::size_t d : {kMaster, kSlave})
+        e(d, obj::homing_acceleration.index).set<std::uint32_t>(10'000'000);
+    const double master_machine = drive(kMaster).mechanics().position();
+    const double slave_machine = drive(kSlave).mechanics().position();
+    for (int i = 0; i < 5; ++i)
+        io(0x0F, 6, p0, 0, 0x0F);
+    bool attained = false;
+    for (int i = 0; i < 1500 && !attained; ++i) {
+        io(0x1F, 6, p0, 0, 0x0F);
+        attained = (sw(kMaster) & 0x1400) == 0x1400;  // target reached and homing attained
+    }
+    ASSERT_TRUE(attained);
+    for (int i = 0; i < 20; ++i)
+        io(0x1F, 6, p0, 0, 0x0F);
+    const double master_moved = drive(kMaster).mechanics().position() - master_machine;
+    const double slave_moved = drive(kSlave).mechanics().position() - slave_machine;
+    EXPECT_GT(std::abs(master_moved), 0.1) << "the master moved to its index pulse (rad)";
+    EXPECT_NEAR(slave_moved, master_moved, 0.01) << "the slave moved with it";
+    EXPECT_NEAR(drive(kSlave).position_demand(), drive(kMaster).position_demand(), 1)
+        << "and reads the master's position";
+    EXPECT_LT(drive(kMaster).position_demand(), -500'000) << "in the coordinates of the home offset";
+    EXPECT_EQ(drive(kSlave).cia402_state(), State::OperationEnabled);
+    EXPECT_TRUE(par(kMaster, p::SlaveStatus).get<std::uint16_t>() & slave_status::HomePositionSet);
+}
+
+// Table 6.10 (VE, 12+13): P2581 MasterTorqueTF on the slave filters the master's torque set-point (a
+// first-order lag of that time constant in ms); 0 passes it through.
+TEST_F(MsdTwinsyncIo, MsdTwinsync_6_2_6_1_MasterTorqueTFFiltersTheMastersTorque) {
+    configure(kCouplings[5]);  // VE
+    enable_both();
+    auto slave_torque = [&] { return e(kSlave, obj::torque_demand.index).get<std::int16_t>(); };
+    // The master in CST; an external load (0x2100:5) as large as the torque keeps both axes near rest.
+    auto torque = [&](std::int16_t t, int periods) {
+        for (std::size_t d : {kMaster, kSlave})
+            e(d, 0x2100, 5).set<std::int16_t>(t);
+        for (int i = 0; i < periods; ++i)
+            io(0x0F, 10, p0, t, 0x0F, kCycle);
+    };
+    torque(0, 12);
+    torque(100, 12);
+    EXPECT_NEAR(slave_torque(), 100, 2) << "P2581 = 0: the master's torque";
+    torque(0, 40);
+    EXPECT_NEAR(slave_torque(), 0, 2);
+    par(kSlave, p::MasterTorqueTF).set<float>(5.0f);
+    // The step reaches the slave two periods later (the master's period, then the telegram's): after 22
+    // periods the filter has run 20 periods = 5 ms, one time constant.
+    torque(100, 6);
+    EXPECT_GT(slave_torque(), 10);
+    EXPECT_LT(slave_torque(), 35) << "about 100 (1 - e^(-1/5))";
+    torque(100, 16);
+    EXPECT_NEAR(slave_torque(), 63, 3) << "one time constant";
+    torque(100, 80);
+    EXPECT_NEAR(slave_torque(), 100, 2) << "six time constants";
+    EXPECT_EQ(e(kMaster, obj::torque_demand.index).get<std::int16_t>(), 100);
+}
+
+// 4.1.2: "it is therefore recommended that master and slave be configured and then an initialization be
+// forced ... (P0149) MPRO_DRVCOM_Init". Writing 1 initialises the link again: the slave's synchronisation
+// starts anew (unsynchronised until it has locked to SYNC_OUT again); P0149 reads 0 once done.
+TEST_F(MsdTwinsyncIo, MsdTwinsync_4_1_2_P0149ForcesAnInitialisation) {
+    configure(kCouplings[3]);  // SCON
+    for (int i = 0; i < 20; ++i)
+        step(0, 0);
+    ASSERT_TRUE(drive(kSlave).twinsync_status()->synchronised);
+    ASSERT_TRUE(drive(kSlave).twinsync_status()->link_ok);
+    master::CoeClient c(b.master, 0x1002);
+    ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::DriveComInit), 0, 1).abort,
+              protocol::SdoAbort::None);
+    EXPECT_EQ(par(kSlave, p::DriveComInit).get<std::uint16_t>(), 0);
+    EXPECT_EQ(drive(kSlave).twinsync_status()->initialisations, 1u);
+    step(0, 0);
+    EXPECT_FALSE(drive(kSlave).twinsync_status()->synchronised) << "synchronising again";
+    for (int i = 0; i < 20; ++i)
+        step(0, 0);
+    EXPECT_TRUE(drive(kSlave).twinsync_status()->synchronised);
+    EXPECT_TRUE(drive(kSlave).twinsync_status()->link_ok);
+    EXPECT_NE(c.download_value<std::uint16_t>(object_index(p::DriveComInit), 0, 2).abort,
+              protocol::SdoAbort::None)
+        << "0 or 1";
+    EXPECT_EQ(drive(kSlave).twinsync_status()->initialisations, 1u);
+}
+
+// Tables 6.5-6.11, 6.14: the slave runs with P0301 setpoint mode = IP-Mode (1). With another setpoint
+// mode it does not take TWINsync's set-points (like P0165 not TWINSYNC), and 0x2102 says why.
+TEST_F(MsdTwinsyncIo, MsdTwinsync_6_2_SlaveFollowsOnlyInIpMode) {
+    configure(kCouplings[4]);  // PCON
+    EXPECT_EQ(par(kSlave, p::SetpointMode).get<std::uint16_t>(), kSetpointModeIp) << "default";
+    master::CoeClient c(b.master, 0x1002);
+    ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::SetpointMode), 0, 0).abort,
+              protocol::SdoAbort::None);
+    const auto msg = c.upload(0x2102, 0);
+    const std::string text(msg.data.begin(), msg.data.end());
+    EXPECT_NE(text.find("P0301"), std::string::npos) << text;
+    enable_both();
+    const std::int32_t before = pos(kSlave);
+    move(50);
+    EXPECT_NEAR(pos(kSlave), before, 50) << "not following";
+    ASSERT_EQ(c.download_value<std::uint16_t>(object_index(p::SetpointMode), 0, 1).abort,
+              protocol::SdoAbort::None);
+    for (int i = 0; i < 20; ++i)
+        step(0x0F, 0x0F);  // both at rest: the slave couples
+    const std::int32_t coupled = pos(kSlave);
+    move(50);
+    EXPECT_GT(pos(kSlave) - coupled, 10'000) << "following";
+}
+
+// Tables 6.1 / 6.2 (virtual encoder: P0507 channel 3 = TWINSYNC(6), P0520 / P0521 = CH3(3)) and 4.7
+// (P2697[2], the reference current behind P2609[2]): the parameters exist with their values and ranges.
+TEST_F(MsdTwinsyncIo, MsdTwinsync_6_1_VirtualEncoderParametersAndReferenceCurrent) {
+    master::CoeClient c(b.master, 0x1002);
+    EXPECT_EQ(
+        c.download_value<std::uint16_t>(object_index(p::EncoderChannel3), 0, kEncoderChannel3Twinsync).abort,
+        protocol::SdoAbort::None);
+    EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::CommutationEncoder), 0, kEncoderCh3).abort,
+              protocol::SdoAbort::None);
+    EXPECT_EQ(c.download_value<std::uint16_t>(object_index(p::SpeedEncoder), 0, kEncoderCh3).abort,
+              protocol::SdoAbort::None);
+    EXPECT_NE(c.download_value<std::uint16_t>(object_index(p::EncoderChannel3), 0, 7).abort,
+              protocol::SdoAbort::None);
+    EXPECT_NE(c.download_value<std::uint16_t>(object_index(p::CommutationEncoder), 0, 4).abort,
+              protocol::SdoAbort::None);
+    EXPECT_EQ(par(kSlave, p::EncoderChannel3).get<std::uint16_t>(), kEncoderChannel3Twinsync);
+    const auto current = c.upload(object_index(p::ReferenceValues), 3);
+    ASSERT_EQ(current.data.size(), 4u);
+    float f = 0;
+    std::memcpy(&f, current.data.data(), 4);
+    EXPECT_EQ(f, 90.0f) << "P2697[2] (100 mA)";
+    const auto tf = c.upload(object_index(p::MasterTorqueTF), 0);
+    EXPECT_EQ(tf.data.size(), 4u) << "P2581 Float32";
 }
 
 }  // namespace

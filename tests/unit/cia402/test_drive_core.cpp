@@ -6,6 +6,8 @@
 
 #include "cia402/drive_core.hpp"
 #include "protocol/cia402.hpp"
+#include "twinsync/mapping.hpp"
+#include "twinsync/telegram.hpp"
 
 namespace vecat::cia402 {
 namespace {
@@ -75,6 +77,51 @@ TEST_F(DriveCoreTest, AnInjectedFaultIsRaisedOnceAndClearedByAFaultReset) {
     core.step(io);
     EXPECT_TRUE(io.feedback.cleared);
     EXPECT_EQ(core.state(), State::SwitchOnDisabled);
+}
+
+// TWINsync REFPOS slave (specification 6.2.10) on hand-filled TwinsyncInputs: a jump of the master's
+// position set-point while the master homes (P2611 StartHoming) is a new reference, which the slave takes
+// without moving; without StartHoming it is a set-point the slave follows (absolute synchronisation).
+TEST_F(DriveCoreTest, RefposSlaveTakesTheMastersReferenceOnlyWhileTheMasterHomes) {
+    enable(Mode::CyclicPosition);
+    TwinsyncInputs& t = io.twinsync;
+    t.active = t.follows = t.has_data = t.fresh = t.link_ok = true;
+    t.role = twinsync::Role::Slave;
+    t.mode = twinsync::mode_info(static_cast<std::uint8_t>(twinsync::Setting::PconRefposSlave));
+    t.remote_speed_reference = 5000;
+    t.remote_ref_pos = 0;
+    run_ms(5);  // coupled at standstill
+    t.received_control_word = twinsync::control::StartHoming;
+    run_ms(1);
+    const double machine = core.mechanics().position();
+    t.remote_ref_pos = 100'000;
+    run_ms(5);
+    EXPECT_NEAR(core.position_demand(), 100'000, 1);
+    EXPECT_NEAR(core.position_actual(), 100'000, 50);
+    EXPECT_NEAR(core.mechanics().position(), machine, 1e-3) << "no motion";
+    EXPECT_TRUE(core.twinsync_local(0, false).homed);
+    t.received_control_word = 0;
+    t.remote_ref_pos = 110'000;
+    run_ms(50);
+    EXPECT_NEAR(core.position_demand(), 110'000, 1);
+    EXPECT_GT(core.mechanics().position() - machine, 0.03) << "a jump without homing is a motion";
+}
+
+// The servo period follows set_period_ns (the TWIN sampling time): at 125 us a millisecond of CSV takes
+// eight periods, and the axis moves as far as at 250 us.
+TEST_F(DriveCoreTest, ThePeriodIsTheSamplingTime) {
+    core.set_period_ns(125'000);
+    EXPECT_EQ(core.period_ns(), 125'000u);
+    enable(Mode::CyclicVelocity);
+    io.command.target_velocity = 1 << 20;  // one revolution per second
+    const auto steps = core.steps();
+    for (int i = 0; i < 8 * 500; ++i)
+        core.step(io);
+    EXPECT_EQ(core.steps() - steps, 4000u);
+    const double start = core.position_actual();
+    for (int i = 0; i < 8 * 500; ++i)
+        core.step(io);
+    EXPECT_NEAR(core.position_actual() - start, (1 << 20) / 2.0, (1 << 20) / 100.0) << "0.5 s at 1 rev/s";
 }
 
 }  // namespace

@@ -38,9 +38,25 @@ TEST(TwinLink, FrameMustFitTheSamplingTime) {
     c.receive_pdo_bytes = 0;
     c.baud_selection = 7;
     EXPECT_NE(check_link(c), "");
-    EXPECT_EQ(sampling_time_ns(1), 250'000u);
+}
+
+// Chapter 2: the TWIN sampling time is 250 us or 125 us, 125 us at 8 kHz (P0302 = 3).
+TEST(TwinLink, SamplingTimeIs125UsAt8kHzAnd250UsOtherwise) {
     EXPECT_EQ(sampling_time_ns(3), 125'000u);
-    EXPECT_EQ(sampling_time_ns(5), 125'000u);
+    for (std::uint8_t code : {0, 1, 2, 4, 5})
+        EXPECT_EQ(sampling_time_ns(code), 250'000u) << int{code};
+    EXPECT_FALSE(sampling_time_ns(6));
+    // The payload against the sampling time: a 32-byte frame (26 PDO bytes) takes 160 us at 2 MBaud, which
+    // fits 250 us (16 kHz) but not 125 us (8 kHz); at 4 MBaud (80 us) it fits both.
+    LinkConfig c;
+    c.frame_size_selection = 13;
+    c.baud_selection = 1;
+    c.switching_frequency = 5;
+    EXPECT_EQ(check_link(c), "");
+    c.switching_frequency = 3;
+    EXPECT_NE(check_link(c).find("125.0 us"), std::string::npos) << check_link(c);
+    c.baud_selection = 0;
+    EXPECT_EQ(check_link(c), "");
 }
 
 TEST(TwinLink, ChannelDeliversFromTheNextCycleAndInjectsFaults) {

@@ -121,5 +121,15 @@ TEST(TwinMapping, ModesThatNeedHardwareAreRefusedWithAReason) {
     EXPECT_EQ(mode_info(30)->role, Role::Slave);
 }
 
+// The slave tables with "P0301 Setpoint mode ... IP-Mode(1)" in the slave column: 6.5 (2), 6.6 (4), 6.7 (6),
+// 6.8 (8), 6.9 (11), 6.10 (13), 6.11 (22), 6.14 (30). Masters ("any"), USER and EXT_MAP ("-", "any") and
+// PCON_IP_SLAVE (no table) do not.
+TEST(TwinMapping, SlaveTablesThatRequireIpMode) {
+    for (std::uint8_t s = 0; s <= kLastSetting; ++s) {
+        const bool table = s == 2 || s == 4 || s == 6 || s == 8 || s == 11 || s == 13 || s == 22 || s == 30;
+        EXPECT_EQ(requires_ip_mode(static_cast<Setting>(s)), table) << mode_info(s)->name;
+    }
+}
+
 }  // namespace
 }  // namespace vecat::twinsync
