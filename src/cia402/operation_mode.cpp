@@ -90,4 +90,69 @@ double Axis::clamp_to_software_limits(double p) const {
     return std::clamp(p, software_limit_min(), software_limit_max());
 }
 
+double Axis::modulo_range() const {
+    constexpr auto kMin = std::numeric_limits<std::int32_t>::min();
+    constexpr auto kMax = std::numeric_limits<std::int32_t>::max();
+    const std::int32_t lo = par().position_range_min, hi = par().position_range_max;
+    if (lo >= hi || (lo == kMin && hi == kMax)) return 0;  // linear (the default range)
+    return static_cast<double>(hi) - static_cast<double>(lo);
+}
+
+std::int64_t Axis::wrap_position(std::int64_t p) const {
+    const auto r = static_cast<std::int64_t>(modulo_range());  // exact: a difference of two INT32
+    if (r <= 0) return p;
+    const std::int64_t lo = par().position_range_min;
+    std::int64_t m = (p - lo) % r;
+    if (m < 0) m += r;
+    return m + lo;
+}
+
+namespace {
+
+// x mod r in [0, r).
+double floor_mod(double x, double r) {
+    const double m = x - r * std::floor(x / r);
+    return m >= r ? 0.0 : m;
+}
+
+}  // namespace
+
+double Axis::modulo_target(double target, double from) const {
+    const double r = modulo_range();
+    if (r <= 0) return target;
+    const double lo = par().position_range_min;
+    const double t = target - lo;
+    const double orient = floor_mod(t, r);
+    double delta = orient - floor_mod(from - lo, r);
+    // Whole ranges beyond the range: turns before stopping at the orientation (one direction only).
+    const double turns = (t < 0 || t >= r) ? std::floor(std::abs(t) / r) : 0.0;
+    switch ((par().positioning_option >> kRotaryDirectionShift) & 3u) {
+        case kRotaryOnlyNegative:
+            if (delta > 0) delta -= r;
+            delta -= turns * r;
+            break;
+        case kRotaryOnlyPositive:
+            if (delta < 0) delta += r;
+            delta += turns * r;
+            break;
+        case kRotaryShortest:
+            if (delta > r / 2)
+                delta -= r;
+            else if (delta <= -r / 2)
+                delta += r;
+            break;
+        default:  // as a linear axis within the range
+            break;
+    }
+    return from + delta;
+}
+
+double Axis::modulo_nearest(double target, double from) const {
+    const double r = modulo_range();
+    if (r <= 0) return target;
+    double delta = floor_mod(target - from, r);
+    if (delta > r / 2) delta -= r;
+    return from + delta;
+}
+
 }  // namespace vecat::cia402

@@ -327,6 +327,9 @@ TEST_F(DriveTest, QuickStopDeceleratesWithTheQuickStopRampAndDisables) {
 
 TEST_F(DriveTest, SoftwareLimitStopsTheMoveAndSetsInternalLimit) {
     enable(Mode::ProfilePosition);
+    // 0x2112 = 2: a target beyond 0x607D is clamped to the limit (the vecat drive refuses it by default:
+    // tests/conformance/test_tx1250_nc_ptp.cpp).
+    set<std::uint8_t>(0x2112, 2);
     const std::int32_t start = position();
     set<std::int32_t>(obj::software_position_limit::min, start - 100'000);
     set<std::int32_t>(obj::software_position_limit::max, start + 300'000);
