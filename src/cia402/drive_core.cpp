@@ -458,7 +458,8 @@ void DriveCore::write_feedback(DriveIo& io) {
     fb.statusword = status;
     fb.mode_display = static_cast<std::int8_t>(mode_);
     // A modulo axis (0x607B) shows its positions in the range; it moves on the continuous axis.
-    fb.position_demand = axis_.modulo() ? wrap32(axis_.wrap_position(floor64(round_half_away(d.p)))) : sat32(d.p);
+    fb.position_demand =
+        axis_.modulo() ? wrap32(axis_.wrap_position(floor64(round_half_away(d.p)))) : sat32(d.p);
     fb.position_demand_internal = wrap32(
         axis_.ratios.user_to_increments(static_cast<std::int64_t>(std::llround(d.p - axis_.home_shift))));
     fb.position_internal = wrap32(increments_);

@@ -1,3 +1,6 @@
+// The profile generator (profile_generator.hpp explains the approach). About 650 lines because the planning,
+// the online changes of TX1250 chapter 2 (override and its types, compensation and its stop) and the
+// closed-form evaluation share the runtime table and its state; splitting them would expose that state.
 #include "cia402/profile_generator.hpp"
 
 #include <algorithm>
@@ -198,9 +201,7 @@ void ProfileGenerator::plan_position() {
         return;
     }
     waiting_ = false;
-    // Odd override types refer to the level calculated at the start (TX1250 2.2), even ones to V.
-    const double level = (override_type_ % 2 == 1 && level_ > 0) ? std::min(level_, lim_.velocity) : lim_.velocity;
-    const double vmax = level * override_;
+    const double vmax = override_level() * override_;
 
     // Direct move in the frame s (target ahead at distance d >= 0) from speed v0 >= 0 (or 0 with any a0).
     auto direct = [&](double s, double v0, double a0, double d) {
@@ -400,9 +401,7 @@ void ProfileGenerator::set_override(double fraction) {
         const double t = t_, cruise = cruise_;
         const std::size_t cursor = cursor_;
         plan_position();
-        const double level = override_type_ % 2 == 1 && level_ > 0 ? std::min(level_, lim_.velocity)
-                                                                   : lim_.velocity;
-        if (keep_if_short && !waiting_ && cruise_ < level * override_ * (1 - 1e-9)) {
+        if (keep_if_short && !waiting_ && cruise_ < override_level() * override_ * (1 - 1e-9)) {
             table_ = table;
             t_ = t;
             cursor_ = cursor;
@@ -415,6 +414,11 @@ void ProfileGenerator::set_override(double fraction) {
 
 double ProfileGenerator::override_fraction() const {
     return override_;
+}
+
+double ProfileGenerator::override_level() const {
+    // Odd override types refer to the level calculated at the start (TX1250 2.2), even ones to V.
+    return override_type_ % 2 == 1 && level_ > 0 ? std::min(level_, lim_.velocity) : lim_.velocity;
 }
 
 void ProfileGenerator::set_override_type(int type) {

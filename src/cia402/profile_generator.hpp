@@ -159,6 +159,7 @@ class ProfileGenerator {
     void plan_position();
     void plan_velocity();
     void fold_compensation();
+    double override_level() const;  // what the override scales: V or the level at the start
     void apply_compensation();
 
     Mode mode_ = Mode::Idle;

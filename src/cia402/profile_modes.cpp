@@ -63,7 +63,9 @@ void ProfilePositionMode::new_velocity_and_end_position(Axis& a, double epos) {
     // The logical direction of the positioning: of the motion, else towards the new end position.
     const double v = a.demand.v;
     const double dir = v != 0 ? (v > 0 ? 1.0 : -1.0) : (epos >= pos ? 1.0 : -1.0);
-    const double p = dir * pos, e = dir * epos, ap = dir * static_cast<double>(a.par().activation_position);
+    // On a modulo axis APos is a position in the range: the continuous position nearest to the axis.
+    const double apos = a.modulo_nearest(static_cast<double>(a.par().activation_position), pos);
+    const double p = dir * pos, e = dir * epos, ap = dir * apos;
     const double vnew = std::min(static_cast<double>(a.par().activation_velocity), a.max_velocity());
     activation_.reset();
     velocity_.reset();  // VOld, the profile velocity 0x6081
