@@ -71,6 +71,7 @@ void DriveCore::configure(const DriveIo& io) {
     axis_.nm_per_permille = rated / 1000.0;
     // Velocity threshold 0x606F, at least one unit per second.
     axis_.standstill_velocity = std::max<double>(p.velocity_threshold, 1.0);
+    axis_.set_position_range(p.position_range_min, p.position_range_max);  // 0x607B: modulo or linear
 }
 
 void DriveCore::start(DriveIo& io) {

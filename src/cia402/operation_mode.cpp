@@ -90,21 +90,19 @@ double Axis::clamp_to_software_limits(double p) const {
     return std::clamp(p, software_limit_min(), software_limit_max());
 }
 
-double Axis::modulo_range() const {
+void Axis::set_position_range(std::int32_t lo, std::int32_t hi) {
     constexpr auto kMin = std::numeric_limits<std::int32_t>::min();
     constexpr auto kMax = std::numeric_limits<std::int32_t>::max();
-    const std::int32_t lo = par().position_range_min, hi = par().position_range_max;
-    if (lo >= hi || (lo == kMin && hi == kMax)) return 0;  // linear (the default range)
-    return static_cast<double>(hi) - static_cast<double>(lo);
+    const bool linear = lo >= hi || (lo == kMin && hi == kMax);  // the default range: a linear axis
+    modulo_range_ = linear ? 0.0 : static_cast<double>(hi) - static_cast<double>(lo);
+    range_min_ = lo;
 }
 
-std::int64_t Axis::wrap_position(std::int64_t p) const {
-    const auto r = static_cast<std::int64_t>(modulo_range());  // exact: a difference of two INT32
-    if (r <= 0) return p;
-    const std::int64_t lo = par().position_range_min;
-    std::int64_t m = (p - lo) % r;
+std::int64_t Axis::wrap_in_range(std::int64_t p) const {
+    const auto r = static_cast<std::int64_t>(modulo_range_);  // exact: a difference of two INT32
+    std::int64_t m = (p - range_min_) % r;
     if (m < 0) m += r;
-    return m + lo;
+    return m + range_min_;
 }
 
 namespace {
@@ -120,7 +118,7 @@ double floor_mod(double x, double r) {
 double Axis::modulo_target(double target, double from) const {
     const double r = modulo_range();
     if (r <= 0) return target;
-    const double lo = par().position_range_min;
+    const double lo = range_min_;
     const double t = target - lo;
     const double orient = floor_mod(t, r);
     double delta = orient - floor_mod(from - lo, r);

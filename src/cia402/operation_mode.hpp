@@ -82,11 +82,13 @@ class Axis {
     double software_limit_max() const { return par().software_limit_max.value_or(0); }
     double clamp_to_software_limits(double p) const;
     // Position range limit 0x607B: a range narrower than INT32 (min < max) makes the axis modulo, of
-    // length max - min (max is the same point as min); 0 when the axis is linear.
-    double modulo_range() const;
-    bool modulo() const { return modulo_range() > 0; }
+    // length max - min (max is the same point as min); 0 when the axis is linear. Set from the parameters
+    // by DriveCore::configure, once per advance.
+    void set_position_range(std::int32_t min, std::int32_t max);
+    double modulo_range() const { return modulo_range_; }
+    bool modulo() const { return modulo_range_ > 0; }
     // A position as 0x6062/0x6064 show it: in [min, max) on a modulo axis, unchanged on a linear one.
-    std::int64_t wrap_position(std::int64_t p) const;
+    std::int64_t wrap_position(std::int64_t p) const { return modulo() ? wrap_in_range(p) : p; }
     // Where a profile position target of a modulo axis lies on the continuous axis, from position `from`,
     // by the rotary axis direction option of 0x60F2 (bits 6/7, CiA 402 / ETG.6010): 0 as a linear axis
     // within the range, 1 only negative, 2 only positive, 3 the shortest way (half a range: positive).
@@ -98,6 +100,11 @@ class Axis {
     // core raises the fault and clears it.
     bool target_refused = false;
     double user_velocity_to_rad(double v) const { return ratios.user_to_radians(v); }
+
+  private:
+    std::int64_t wrap_in_range(std::int64_t p) const;
+    double modulo_range_ = 0;
+    std::int32_t range_min_ = 0;
 };
 
 // Statusword bits 10, 12 and 13 as the active mode defines them.

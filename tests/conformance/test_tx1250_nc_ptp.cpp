@@ -92,6 +92,7 @@ struct Tx1250Modulo : Tx1250 {
         Tx1250::SetUp();
         io.parameters.position_range_min = 0;
         io.parameters.position_range_max = R;
+        core.configure(io);  // as the adapter does before each advance
         enable(Mode::ProfilePosition);
     }
     // A move with the rotary axis direction option (0x60F2 bits 6/7); the continuous position it ended
