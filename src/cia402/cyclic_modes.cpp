@@ -23,6 +23,8 @@ void CyclicPositionMode::step(Axis& a, double dt) {
     if (!valid_ || raw != raw_) {
         from_ = valid_ ? a.demand.p : a.actual;
         to_ = static_cast<double>(raw) + offset;
+        // A modulo axis (0x607B): the set-point is a position in the range, nearest to the demand.
+        if (a.modulo()) to_ = a.modulo_nearest(to_, from_);
         raw_ = raw;
         since_ = 0;
         valid_ = true;
@@ -39,7 +41,7 @@ void CyclicPositionMode::step(Axis& a, double dt) {
     double p = from_ + (to_ - from_) * frac;
     // The velocity feed-forward is the demand's own change over this servo period.
     double v = (p - a.demand.p) / dt;
-    const double limited = a.clamp_to_software_limits(p);
+    const double limited = a.modulo() ? p : a.clamp_to_software_limits(p);  // no limits on an endless axis
     if (limited != p) {
         a.internal_limit = true;
         p = limited;

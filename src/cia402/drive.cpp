@@ -125,6 +125,19 @@ struct Drive::Objects {
     V<std::int32_t> compensation_distance = mfr_bind(mfr::position_compensation::distance);
     V<std::uint32_t> compensation_length = mfr_bind(mfr::position_compensation::length);
     V<std::uint8_t> compensation_start = mfr_bind(mfr::position_compensation::start);
+    V<std::uint32_t> compensation_vp = mfr_bind(mfr::position_compensation::process_velocity);
+    V<std::uint32_t> compensation_vk = mfr_bind(mfr::position_compensation::velocity_increase);
+    V<std::uint32_t> compensation_acc = mfr_bind(mfr::position_compensation::acceleration);
+    V<std::uint32_t> compensation_dec = mfr_bind(mfr::position_compensation::deceleration);
+    V<std::uint8_t> compensation_stop = mfr_bind(mfr::position_compensation::stop);
+    V<std::uint8_t> software_limit_reaction = mfr_bind(mfr::software_limit_reaction);
+    V<std::uint8_t> override_type = mfr_bind(mfr::override_type);
+    V<std::int32_t> activation_position = mfr_bind(mfr::activation::position);
+    V<std::uint32_t> activation_velocity = mfr_bind(mfr::activation::velocity);
+    V<std::uint8_t> activation_mode = mfr_bind(mfr::activation::mode);
+    V<std::int32_t> position_range_min = bind(obj::position_range_limit::min);
+    V<std::int32_t> position_range_max = bind(obj::position_range_limit::max);
+    V<std::uint16_t> positioning_option = bind(obj::positioning_option_code);
     V<std::uint32_t> motor_rotor_inertia = mfr_bind(mfr::motor::rotor_inertia);
     V<std::uint32_t> motor_torque_constant = mfr_bind(mfr::motor::torque_constant);
     V<std::uint32_t> motor_load_inertia = mfr_bind(mfr::motor::load_inertia);
@@ -245,8 +258,17 @@ Drive::Drive(const device::DeviceDescription& d,
         o_->compensation_start.entry()->hooks().after_download = [this](Entry& e) {
             if (e.get<std::uint8_t>() == 0) return;
             e.set(std::uint8_t{0});
+            auto u = [](const coe::Value<std::uint32_t>& v) { return static_cast<double>(v.get_or(0)); };
             core_->compensate(static_cast<double>(o_->compensation_distance.get_or(0)),
-                              static_cast<double>(o_->compensation_length.get_or(0)));
+                              u(o_->compensation_length),
+                              {u(o_->compensation_vk), u(o_->compensation_acc), u(o_->compensation_dec),
+                               u(o_->compensation_vp)});
+        };
+    if (o_->compensation_stop.bound())
+        o_->compensation_stop.entry()->hooks().after_download = [this](Entry& e) {
+            if (e.get<std::uint8_t>() == 0) return;
+            e.set(std::uint8_t{0});
+            core_->stop_compensation();
         };
     read_command();
     core_->start(io_);
@@ -405,6 +427,14 @@ void Drive::for_each_parameter(F&& f) {
     f(o.limit_switch_reaction, p.limit_switch_reaction);
     f(o.simulated_fault, p.simulated_fault);
     f(o.velocity_override, p.velocity_override);
+    f(o.software_limit_reaction, p.software_limit_reaction);
+    f(o.override_type, p.override_type);
+    f(o.activation_position, p.activation_position);
+    f(o.activation_velocity, p.activation_velocity);
+    f(o.activation_mode, p.activation_mode);
+    f(o.position_range_min, p.position_range_min);
+    f(o.position_range_max, p.position_range_max);
+    f(o.positioning_option, p.positioning_option);
     // The local TWINsync references (P2602), written with the parameters.
     f(o.tw_local_torque_ref, io_.twinsync.local_torque_reference);
     f(o.tw_local_speed_ref, io_.twinsync.local_speed_reference);

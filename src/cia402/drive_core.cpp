@@ -71,6 +71,7 @@ void DriveCore::configure(const DriveIo& io) {
     axis_.nm_per_permille = rated / 1000.0;
     // Velocity threshold 0x606F, at least one unit per second.
     axis_.standstill_velocity = std::max<double>(p.velocity_threshold, 1.0);
+    axis_.set_position_range(p.position_range_min, p.position_range_max);  // 0x607B: modulo or linear
 }
 
 void DriveCore::start(DriveIo& io) {
@@ -93,12 +94,19 @@ void DriveCore::step(DriveIo& io) {
     run_state_machine(io);
     // Velocity override (TwinCAT NC PTP online change) of the profile modes, in ppm of 100 %.
     const std::uint32_t ov = std::min<std::uint32_t>(io.parameters.velocity_override, 1'000'000);
+    if (io.parameters.override_type != axis_.profile.override_type())
+        axis_.profile.set_override_type(io.parameters.override_type);
     if (ov != override_ppm_) {
         override_ppm_ = ov;
         axis_.profile.set_override(ov * 1e-6);
     }
     select_mode(io.command);
     run_setpoints(io, dt);
+    if (axis_.target_refused) {
+        // A profile position target beyond the software position limits 0x607D (0x2112 = 0).
+        axis_.target_refused = false;
+        raise(io, {fault::ReferenceLimit, error_register::DeviceProfile});
+    }
     if (mode_ == Mode::Homing && hm_.attained()) coupling_.set_homed();
 
     const double previous_inc = previous_machine_inc_;
@@ -113,9 +121,20 @@ void DriveCore::step(DriveIo& io) {
     axis_.previous_controlword = axis_.controlword;
 }
 
-void DriveCore::compensate(double distance, double length) {
+void DriveCore::compensate(double distance, double length, const CompensationLimits& limits) {
+    // 0 = the move's own dynamics: VK = V, AK+ = A+, AK- = A-, VP = the cruise velocity of the move.
+    const ProfileLimits move = axis_.profile_limits();
+    CompensationLimits c = limits;
+    if (!(c.velocity > 0)) c.velocity = move.velocity;
+    if (!(c.acceleration > 0)) c.acceleration = move.acceleration;
+    if (!(c.deceleration > 0)) c.deceleration = move.deceleration;
     // The move now ends at its target plus the achievable part of the compensation.
-    if (axis_.profile.compensate(distance, length) && pp_.moving()) pp_.set_target(axis_.profile.target());
+    if (axis_.profile.compensate(distance, length, c) && pp_.moving()) pp_.set_target(axis_.profile.target());
+}
+
+void DriveCore::stop_compensation() {
+    // The move ends at its target plus what the compensation will have travelled.
+    if (axis_.profile.stop_compensation() && pp_.moving()) pp_.set_target(axis_.profile.target());
 }
 
 void DriveCore::zero_position() {
@@ -439,11 +458,13 @@ void DriveCore::write_feedback(DriveIo& io) {
     const Kinematics& d = axis_.demand;
     fb.statusword = status;
     fb.mode_display = static_cast<std::int8_t>(mode_);
-    fb.position_demand = sat32(d.p);
+    // A modulo axis (0x607B) shows its positions in the range; it moves on the continuous axis.
+    fb.position_demand =
+        axis_.modulo() ? wrap32(axis_.wrap_position(floor64(round_half_away(d.p)))) : sat32(d.p);
     fb.position_demand_internal = wrap32(
         axis_.ratios.user_to_increments(static_cast<std::int64_t>(std::llround(d.p - axis_.home_shift))));
     fb.position_internal = wrap32(increments_);
-    fb.position_actual = wrap32(floor64(axis_.actual));
+    fb.position_actual = wrap32(axis_.wrap_position(floor64(axis_.actual)));
     fb.following_error = sat32(axis_.following_error);
     fb.velocity_demand = sat32(axis_.loop == LoopMode::Velocity ? axis_.velocity_cmd : d.v);
     fb.velocity_actual = sat32(axis_.velocity);

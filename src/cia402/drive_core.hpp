@@ -48,9 +48,11 @@ class DriveCore {
     void set_period_ns(std::uint64_t ns) { period_ns_ = ns > 0 ? ns : kPeriodNs; }
     std::uint64_t period_ns() const { return period_ns_; }
 
-    // Position compensation 0x2111 (TwinCAT NC PTP online change): the move ends at its target plus the
-    // achievable part of `distance`, spread over `length`.
-    void compensate(double distance, double length);
+    // Position compensation 0x2111 (TwinCAT NC PTP 2.5): the move ends at its target plus the achievable
+    // part of `distance`, spread over `length`, with the compensation's dynamics (a 0 field: the move's).
+    void compensate(double distance, double length, const CompensationLimits& limits = {});
+    // Compensation stop 0x2111:8 (TX1250 2.5).
+    void stop_compensation();
     // The actual position reads 0 from now on (HIWIN 0x2060 0->1, multi-turn position to zero).
     void zero_position();
 

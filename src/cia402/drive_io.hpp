@@ -42,6 +42,15 @@ inline constexpr std::uint16_t ReferenceLimit = 0x8612;  // reference limit (lim
 bool injectable(std::uint16_t code) noexcept;
 }  // namespace fault
 
+// 0x2112, a profile position target beyond the software position limits 0x607D (src/cia402/README.md,
+// "Targets beyond the software position limits"): refused in every case but Clamp (the set-point is not
+// acknowledged, statusword bit 11 until a target is accepted).
+namespace limit_reaction {
+inline constexpr std::uint8_t Fault = 0;   // refused, and the fault 0x8612 (TX1250 2.1: "an error")
+inline constexpr std::uint8_t Refuse = 1;  // refused, no fault: the axis goes on with what it did
+inline constexpr std::uint8_t Clamp = 2;   // accepted, the target clamped to the limit
+}  // namespace limit_reaction
+
 // Statusword bits (CiA 402 6.3.3), protocol/cia402.hpp.
 namespace sw = protocol::cia402::sw;
 
@@ -120,6 +129,22 @@ struct DriveParameters {
     std::uint8_t limit_switch_reaction = 0;                                         // 0x2100:7 (1: fault)
     std::uint16_t simulated_fault = 0;                                              // 0x2101
     std::uint32_t velocity_override = 1'000'000;                                    // 0x2110, ppm
+    // 0x2112: what a profile position target beyond 0x607D gets (limit_reaction). Without the object it
+    // is clamped to the limit, as the drive always did.
+    std::uint8_t software_limit_reaction = limit_reaction::Clamp;
+    // 0x2113: the override type of TX1250 2.2 (1-4; out of range reads as 4).
+    std::uint8_t override_type = 4;
+    // 0x2114:1-3: new velocity at an activation position (TX1250 2.4): APos, VNew, mode (1: each new
+    // profile position set-point is a "new velocity and new end position" request; 0: off).
+    std::int32_t activation_position = 0;
+    std::uint32_t activation_velocity = 0;
+    std::uint8_t activation_mode = 0;
+    // 0x607B:1/2: position range limit; min < max and narrower than INT32 makes the axis modulo
+    // (range max - min: max is the same point as min). 0x60F2: positioning option code (bits 6/7: the
+    // rotary axis direction option).
+    std::int32_t position_range_min = std::numeric_limits<std::int32_t>::min();
+    std::int32_t position_range_max = std::numeric_limits<std::int32_t>::max();
+    std::uint16_t positioning_option = 0;
     bool fieldbus_synchronised = false;  // the slave's cycle runs on SYNC0/SYNC1 (0x1C32:1)
 };
 

@@ -90,4 +90,67 @@ double Axis::clamp_to_software_limits(double p) const {
     return std::clamp(p, software_limit_min(), software_limit_max());
 }
 
+void Axis::set_position_range(std::int32_t lo, std::int32_t hi) {
+    constexpr auto kMin = std::numeric_limits<std::int32_t>::min();
+    constexpr auto kMax = std::numeric_limits<std::int32_t>::max();
+    const bool linear = lo >= hi || (lo == kMin && hi == kMax);  // the default range: a linear axis
+    modulo_range_ = linear ? 0.0 : static_cast<double>(hi) - static_cast<double>(lo);
+    range_min_ = lo;
+}
+
+std::int64_t Axis::wrap_in_range(std::int64_t p) const {
+    const auto r = static_cast<std::int64_t>(modulo_range_);  // exact: a difference of two INT32
+    std::int64_t m = (p - range_min_) % r;
+    if (m < 0) m += r;
+    return m + range_min_;
+}
+
+namespace {
+
+// x mod r in [0, r).
+double floor_mod(double x, double r) {
+    const double m = x - r * std::floor(x / r);
+    return m >= r ? 0.0 : m;
+}
+
+}  // namespace
+
+double Axis::modulo_target(double target, double from) const {
+    const double r = modulo_range();
+    if (r <= 0) return target;
+    const double lo = range_min_;
+    const double t = target - lo;
+    const double orient = floor_mod(t, r);
+    double delta = orient - floor_mod(from - lo, r);
+    // Whole ranges beyond the range: turns before stopping at the orientation (one direction only).
+    const double turns = (t < 0 || t >= r) ? std::floor(std::abs(t) / r) : 0.0;
+    switch ((par().positioning_option >> kRotaryDirectionShift) & 3u) {
+        case kRotaryOnlyNegative:
+            if (delta > 0) delta -= r;
+            delta -= turns * r;
+            break;
+        case kRotaryOnlyPositive:
+            if (delta < 0) delta += r;
+            delta += turns * r;
+            break;
+        case kRotaryShortest:
+            if (delta > r / 2)
+                delta -= r;
+            else if (delta <= -r / 2)
+                delta += r;
+            break;
+        default:  // as a linear axis within the range
+            break;
+    }
+    return from + delta;
+}
+
+double Axis::modulo_nearest(double target, double from) const {
+    const double r = modulo_range();
+    if (r <= 0) return target;
+    double delta = floor_mod(target - from, r);
+    if (delta > r / 2) delta -= r;
+    return from + delta;
+}
+
 }  // namespace vecat::cia402

@@ -22,6 +22,10 @@ class Axis {
   public:
     static constexpr std::uint64_t kPeriodNs = 250'000;  // the servo period
     static constexpr double kPeriod = kPeriodNs * 1e-9;  // s
+    // 0x60F2 bits 6/7, the rotary axis direction option (CiA 402 / ETG.6010 table 78).
+    static constexpr unsigned kRotaryDirectionShift = 6;
+    static constexpr unsigned kRotaryLinear = 0, kRotaryOnlyNegative = 1, kRotaryOnlyPositive = 2,
+                              kRotaryShortest = 3;
 
     // The parameters and command of this period (the adapter's DriveIo; set by DriveCore).
     const DriveIo* io = nullptr;
@@ -77,7 +81,30 @@ class Axis {
     double software_limit_min() const { return par().software_limit_min.value_or(0); }
     double software_limit_max() const { return par().software_limit_max.value_or(0); }
     double clamp_to_software_limits(double p) const;
+    // Position range limit 0x607B: a range narrower than INT32 (min < max) makes the axis modulo, of
+    // length max - min (max is the same point as min); 0 when the axis is linear. Set from the parameters
+    // by DriveCore::configure, once per advance.
+    void set_position_range(std::int32_t min, std::int32_t max);
+    double modulo_range() const { return modulo_range_; }
+    bool modulo() const { return modulo_range_ > 0; }
+    // A position as 0x6062/0x6064 show it: in [min, max) on a modulo axis, unchanged on a linear one.
+    std::int64_t wrap_position(std::int64_t p) const { return modulo() ? wrap_in_range(p) : p; }
+    // Where a profile position target of a modulo axis lies on the continuous axis, from position `from`,
+    // by the rotary axis direction option of 0x60F2 (bits 6/7, CiA 402 / ETG.6010): 0 as a linear axis
+    // within the range, 1 only negative, 2 only positive, 3 the shortest way (half a range: positive).
+    // With only one direction a target beyond the range adds its whole ranges as turns (TX1250 2.1).
+    double modulo_target(double target, double from) const;
+    // The continuous position nearest to `from` of a position given in the range (cyclic set-points).
+    double modulo_nearest(double target, double from) const;
+    // Set by profile position when a target beyond 0x607D was refused with limit_reaction::Fault; the
+    // core raises the fault and clears it.
+    bool target_refused = false;
     double user_velocity_to_rad(double v) const { return ratios.user_to_radians(v); }
+
+  private:
+    std::int64_t wrap_in_range(std::int64_t p) const;
+    double modulo_range_ = 0;
+    std::int32_t range_min_ = 0;
 };
 
 // Statusword bits 10, 12 and 13 as the active mode defines them.

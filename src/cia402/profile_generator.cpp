@@ -1,3 +1,6 @@
+// The profile generator (profile_generator.hpp explains the approach). About 650 lines because the planning,
+// the online changes of TX1250 chapter 2 (override and its types, compensation and its stop) and the
+// closed-form evaluation share the runtime table and its state; splitting them would expose that state.
 #include "cia402/profile_generator.hpp"
 
 #include <algorithm>
@@ -198,7 +201,7 @@ void ProfileGenerator::plan_position() {
         return;
     }
     waiting_ = false;
-    const double vmax = lim_.velocity * override_;
+    const double vmax = override_level() * override_;
 
     // Direct move in the frame s (target ahead at distance d >= 0) from speed v0 >= 0 (or 0 with any a0).
     auto direct = [&](double s, double v0, double a0, double d) {
@@ -338,7 +341,14 @@ bool ProfileGenerator::move_to(double target, const ProfileLimits& lim) {
     mode_ = Mode::Position;
     lim_ = lim;
     target_ = target;
+    // The level of this move at override 1 (V, or less when the distance is short), for the odd types.
+    const double f = override_;
+    override_ = 1;
+    level_ = 0;
     plan_position();
+    level_ = cruise_;
+    override_ = f;
+    if (f != 1) plan_position();
     out_ = base_;
     return true;
 }
@@ -384,7 +394,19 @@ void ProfileGenerator::set_override(double fraction) {
     override_ = std::clamp(fraction, 0.0, 1.0);
     if (mode_ == Mode::Position) {
         if (done() || in_brake_phase()) return;  // the manual: not in the brake phase
+        // Types 1 and 2: "if the new velocity level is not achievable, the old runtime table is maintained
+        // without notification" (a move held by override 0 takes the achievable level: it must go on).
+        const bool keep_if_short = override_type_ <= 2 && !waiting_;
+        const Table table = table_;
+        const double t = t_, cruise = cruise_;
+        const std::size_t cursor = cursor_;
         plan_position();
+        if (keep_if_short && !waiting_ && cruise_ < override_level() * override_ * (1 - 1e-9)) {
+            table_ = table;
+            t_ = t;
+            cursor_ = cursor;
+            cruise_ = cruise;
+        }
     } else if (mode_ == Mode::Velocity) {
         plan_velocity();
     }
@@ -392,6 +414,15 @@ void ProfileGenerator::set_override(double fraction) {
 
 double ProfileGenerator::override_fraction() const {
     return override_;
+}
+
+double ProfileGenerator::override_level() const {
+    // Odd override types refer to the level calculated at the start (TX1250 2.2), even ones to V.
+    return override_type_ % 2 == 1 && level_ > 0 ? std::min(level_, lim_.velocity) : lim_.velocity;
+}
+
+void ProfileGenerator::set_override_type(int type) {
+    override_type_ = type >= 1 && type <= 4 ? type : 4;
 }
 
 bool ProfileGenerator::compensate(double d, double l) {
@@ -433,6 +464,27 @@ bool ProfileGenerator::compensate(double d, double l, const CompensationLimits& 
     k.t2 = std::max(0.0, T - k.t1 - k.t3);
     k.distance = want <= reach ? want : k.rise * k.t1 * k.t1 / 2 + k.peak * k.t2 + k.fall * k.t3 * k.t3 / 2;
     comp_ = k;
+    return true;
+}
+
+bool ProfileGenerator::stop_compensation() {
+    if (!comp_.active) return false;
+    Compensation& k = comp_;
+    const double tau = k.tau(base_.p);
+    if (tau >= k.t1 + k.t2) return false;  // already in its falling ramp
+    // The rise (or the hold) ends now and the fall follows at once.
+    if (tau < k.t1) {
+        k.t1 = tau;
+        k.peak = k.rise * tau;
+        k.t2 = 0;
+    } else {
+        k.t2 = tau - k.t1;
+    }
+    k.t3 = k.peak / k.fall;
+    k.duration = k.t1 + k.t2 + k.t3;
+    k.length = k.duration * k.vp;
+    k.distance = k.rise * k.t1 * k.t1 / 2 + k.peak * k.t2 + k.fall * k.t3 * k.t3 / 2;
+    if (!(k.distance > 0)) k.active = false;  // nothing compensated yet
     return true;
 }
 

@@ -20,9 +20,11 @@
 // - No jerk rescaling is ever needed: a table exists for every J > 0 (the stop-and-return covers every
 //   target that cannot be reached directly), and the sampled |da|/dt never exceeds J even when jerk phases
 //   are shorter than a cycle, because the table is evaluated exactly.
-// - Override f (0..1): the velocity limit becomes f V and the table is replanned from the current state,
-//   unless a stop is active or the brake phase (phase B) of the move was reached; f = 0 brakes to rest and
-//   the move waits for f > 0. run_at profiles are scaled by the override at any time.
+// - Override f (0..1): the velocity limit becomes f V (or f times the level calculated at the start, by
+//   the override type) and the table is replanned from the current state, unless a stop is active or the
+//   brake phase (phase B) of the move was reached; f = 0 brakes to rest and the move waits for f > 0.
+//   Types 1/2 keep the old table when the new level is not achievable. run_at profiles are scaled by the
+//   override at any time.
 // - Position compensation: a trapezoidal velocity profile g(tau) of the compensation (slopes AK+/AK-,
 //   peak <= VK, length T = L/VP) is superposed as a function of the distance s travelled by the basic move
 //   since the compensation started: offset = g(s/VP). This is the manual's "linear path control": the
@@ -77,6 +79,12 @@ class ProfileGenerator {
     // when it cannot act now (brake phase, stop); it then applies to the next move.
     void set_override(double fraction);
     double override_fraction() const;
+    // The override type of TX1250 2.2 (1-4, others read as 4): odd types scale the velocity level
+    // calculated (and possibly reduced) at the start of the move, even types the velocity V the user
+    // commanded; types 1 and 2 keep the current table when the new level is not achievable, types 3 and 4
+    // go to the largest achievable level below it. Takes effect at the next override change or move.
+    void set_override_type(int type);
+    int override_type() const { return override_type_; }
     // Position compensation (TwinCAT NC PTP 2.5): an extra distance d travelled within a length l of the
     // basic move, both counted along its direction (d > 0 travels further, d < 0 less; L > the rest of the
     // move is cut to the rest). false when it cannot start (no move, stop, already compensating); when d is
@@ -88,6 +96,10 @@ class ProfileGenerator {
     // none.
     double compensation() const;
     bool compensating() const { return comp_.active; }
+    // Compensation stop (TX1250 2.5): a compensation that has not reached its falling ramp starts it now,
+    // so the distance compensated becomes what is travelled until that ramp ends. false when there is no
+    // compensation or it is already in its falling ramp.
+    bool stop_compensation();
     // Forget every plan and stand at k (the drive follows the actual position while disabled). Until the
     // next command step() holds k unchanged.
     void reset(const Kinematics& k);
@@ -147,6 +159,7 @@ class ProfileGenerator {
     void plan_position();
     void plan_velocity();
     void fold_compensation();
+    double override_level() const;  // what the override scales: V or the level at the start
     void apply_compensation();
 
     Mode mode_ = Mode::Idle;
@@ -159,6 +172,8 @@ class ProfileGenerator {
     double target_ = 0;
     double velocity_ = 0;  // run_at command
     double override_ = 1;
+    int override_type_ = 4;
+    double level_ = 0;  // the velocity level calculated at the start of the move, at override 1
     double cruise_ = 0;
     bool waiting_ = false;  // position move held by override 0
     Compensation comp_;

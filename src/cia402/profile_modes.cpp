@@ -13,35 +13,100 @@ void ProfilePositionMode::reset() {
     moving_ = false;
     pending_target_.reset();
     setpoint_ack_ = false;
+    refused_ = false;
+    velocity_.reset();
+    activation_.reset();
 }
 
 void ProfilePositionMode::disable() {
     // The acknowledge stays until the master takes bit 4 back.
     moving_ = false;
     pending_target_.reset();
+    activation_.reset();
 }
 
 void ProfilePositionMode::start_move(Axis& a, double target) {
     target_ = target;
     moving_ = true;
-    a.profile.move_to(target, a.profile_limits());
+    ProfileLimits l = a.profile_limits();
+    if (velocity_) l.velocity = *velocity_;
+    a.profile.move_to(target, l);
+}
+
+std::optional<double> ProfilePositionMode::accept(Axis& a, std::uint16_t c) {
+    double target = static_cast<double>(a.cmd().target_position);
+    const bool queued = moving_ && !(c & cw::ChangeSetImmediately) && !a.halted;
+    if (c & cw::Relative) {
+        target += target_;
+    } else if (a.modulo()) {
+        // A modulo axis (0x607B): the target is an orientation, reached as 0x60F2 says, from where the
+        // axis will be when the move starts.
+        return a.modulo_target(target, queued ? target_ : a.demand.p);
+    }
+    if (a.modulo()) return target;  // no software limits on an endless axis
+    const double clamped = a.clamp_to_software_limits(target);
+    if (clamped == target) return target;
+    // Beyond the software position limits (0x607D). TX1250 2.1, start parameters note 4: "the start is
+    // refused and an error is generated"; the set-point is not acknowledged (bit 12 stays 0).
+    const std::uint8_t reaction = a.par().software_limit_reaction;
+    if (reaction == limit_reaction::Clamp) {
+        a.internal_limit = true;
+        return clamped;
+    }
+    refused_ = true;
+    if (reaction == limit_reaction::Fault) a.target_refused = true;
+    return std::nullopt;
+}
+
+void ProfilePositionMode::new_velocity_and_end_position(Axis& a, double epos) {
+    const double pos = a.demand.p;
+    // The logical direction of the positioning: of the motion, else towards the new end position.
+    const double v = a.demand.v;
+    const double dir = v != 0 ? (v > 0 ? 1.0 : -1.0) : (epos >= pos ? 1.0 : -1.0);
+    // On a modulo axis APos is a position in the range: the continuous position nearest to the axis.
+    const double apos = a.modulo_nearest(static_cast<double>(a.par().activation_position), pos);
+    const double p = dir * pos, e = dir * epos, ap = dir * apos;
+    const double vnew = std::min(static_cast<double>(a.par().activation_velocity), a.max_velocity());
+    activation_.reset();
+    velocity_.reset();  // VOld, the profile velocity 0x6081
+    if (e < p) {
+        // Cases 3, 5, 6 (APos <= EPos <= Pos, EPos <= APos <= Pos, EPos <= Pos <= APos): stop, and back
+        // to EPos with VOld (the generator's stop and return).
+    } else if (ap <= p) {
+        velocity_ = vnew;  // case 2, APos <= Pos <= EPos: APos already crossed, VNew at once
+    } else if (ap <= e) {
+        activation_ = dir * ap;  // case 1, Pos <= APos <= EPos: VNew once APos is crossed
+        activation_dir_ = dir;
+        activation_velocity_ = vnew;
+    }  // else case 4, Pos <= EPos <= APos: the new end position with VOld only
+    start_move(a, epos);
 }
 
 void ProfilePositionMode::step(Axis& a, double dt) {
     const std::uint16_t c = a.controlword;
     if (a.rising(cw::NewSetpoint) && !pending_target_) {
-        double target = static_cast<double>(a.cmd().target_position);
-        if (c & cw::Relative) target += target_;
-        const double clamped = a.clamp_to_software_limits(target);
-        if (clamped != target) a.internal_limit = true;
-        setpoint_ack_ = true;
-        if (!a.blocked(clamped - a.actual)) {
-            if (!moving_ || (c & cw::ChangeSetImmediately) || a.halted)
-                start_move(a, clamped);
-            else
-                pending_target_ = clamped;  // set of set-points: executed after the current one
+        // TX1250 2.4: VNew must be above 0 (and is limited to the maximum velocity).
+        const bool nvp = a.par().activation_mode == 1 && a.par().activation_velocity > 0;
+        if (const auto target = accept(a, c)) {
+            refused_ = false;
+            setpoint_ack_ = true;
+            if (!a.blocked(*target - a.actual)) {
+                if (!moving_ || (c & cw::ChangeSetImmediately) || a.halted) {
+                    if (nvp) {
+                        new_velocity_and_end_position(a, *target);
+                    } else {
+                        // A plain new set-point ends a pending activation (TX1250 2.4, special features).
+                        velocity_.reset();
+                        activation_.reset();
+                        start_move(a, *target);
+                    }
+                } else {
+                    pending_target_ = *target;  // set of set-points: executed after the current one
+                }
+            }
         }
     }
+    if (refused_) a.internal_limit = true;
     // Set-point acknowledge: cleared once the master took bit 4 back and the buffer is free again.
     if (!(c & cw::NewSetpoint) && !pending_target_) setpoint_ack_ = false;
 
@@ -71,15 +136,23 @@ void ProfilePositionMode::step(Axis& a, double dt) {
     a.loop = LoopMode::Position;
     a.torque_ff = 0;
     a.demand = a.profile.step(dt);
+    if (activation_ && moving_ && activation_dir_ * (a.demand.p - *activation_) >= 0) {
+        // TX1250 2.4 case 1: APos crossed, the rest of the move at VNew.
+        activation_.reset();
+        velocity_ = activation_velocity_;
+        start_move(a, target_);
+    }
     if (moving_ && a.profile.done()) {
         moving_ = false;
+        activation_.reset();
         if (pending_target_) {
+            velocity_.reset();
             start_move(a, *pending_target_);
             pending_target_.reset();
         }
     }
     if (a.positive_limit || a.negative_limit) a.internal_limit = true;
-    if (a.software_limits_enabled() &&
+    if (!a.modulo() && a.software_limits_enabled() &&
         (a.actual <= a.software_limit_min() || a.actual >= a.software_limit_max()))
         a.internal_limit = true;
 }

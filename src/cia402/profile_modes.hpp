@@ -25,13 +25,23 @@ class ProfilePositionMode final : public OperationMode {
     void set_target(double t) { target_ = t; }
 
   private:
+    // The target of a new set-point (relative, modulo), or nothing when it is refused (0x607D, 0x2112).
+    std::optional<double> accept(Axis& a, std::uint16_t controlword);
     void start_move(Axis& a, double target);
+    // TX1250 2.4, new velocity and new end position: the six cases of APos (0x2114:1) and the new end
+    // position against the axis, along the direction of the positioning.
+    void new_velocity_and_end_position(Axis& a, double end_position);
 
     bool setpoint_ack_ = false;             // statusword bit 12
+    bool refused_ = false;                  // the last set-point was beyond 0x607D: bit 11
     std::optional<double> pending_target_;  // set of set-points: the buffered next target
     bool moving_ = false;
     double target_ = 0;  // kept across modes: a relative move adds to the last target
     double position_window_time_ = 0;
+    std::optional<double> velocity_;  // the move's velocity instead of 0x6081 (TX1250 2.4: VNew)
+    // TX1250 2.4 case 1: VNew once the axis crosses APos moving in direction activation_dir_.
+    std::optional<double> activation_;
+    double activation_dir_ = 1, activation_velocity_ = 0;
 };
 
 // Profile velocity (PV, mode 3): target velocity 0x60FF through the profile generator. Bit 10 once the

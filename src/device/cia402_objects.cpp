@@ -70,10 +70,24 @@ std::vector<ObjectDescription> cia402_drive_objects() {
     // TwinCAT NC PTP online changes as manufacturer functions of the profile modes.
     o.push_back(
         make_ranged_var(mfr::velocity_override, "Velocity override (ppm)", RWM, 1'000'000, 0, 1'000'000));
-    o.push_back(make_record(mfr::position_compensation::index, "Position compensation",
-                            {make_entry(mfr::position_compensation::distance, "Compensation distance", RW, 0),
-                             make_entry(mfr::position_compensation::length, "Compensation length", RW, 0),
-                             make_entry(mfr::position_compensation::start, "Start compensation", RW, 0)}));
+    {
+        namespace pc = mfr::position_compensation;
+        o.push_back(make_record(pc::index, "Position compensation",
+                                {make_entry(pc::distance, "Compensation distance", RW, 0),
+                                 make_entry(pc::length, "Compensation length", RW, 0),
+                                 make_entry(pc::start, "Start compensation", RW, 0),
+                                 make_entry(pc::process_velocity, "Process velocity", RW, 0),
+                                 make_entry(pc::velocity_increase, "Velocity increase", RW, 0),
+                                 make_entry(pc::acceleration, "Compensation acceleration", RW, 0),
+                                 make_entry(pc::deceleration, "Compensation deceleration", RW, 0),
+                                 make_entry(pc::stop, "Stop compensation", RW, 0)}));
+    }
+    o.push_back(make_ranged_var(mfr::software_limit_reaction, "Software limit reaction", RW, 0, 0, 2));
+    o.push_back(make_ranged_var(mfr::override_type, "Override type", RW, 4, 1, 4));
+    o.push_back(make_record(mfr::activation::index, "New velocity at activation position",
+                            {make_entry(mfr::activation::position, "Activation position", RW, 0),
+                             make_entry(mfr::activation::velocity, "New velocity", RW, 0),
+                             make_entry(mfr::activation::mode, "Activation mode", RW, 0)}));
     o.push_back(make_var(mfr::drive_temperature, "Drive temperature (0.1 C)", ROM, 350));
     o.push_back(make_var(mfr::dc_bus_voltage, "DC bus voltage (0.1 V)", ROM, 3250));
     {
@@ -189,6 +203,7 @@ std::vector<ObjectDescription> cia402_drive_objects() {
     o.push_back(make_var(obj::max_deceleration, "Max deceleration", RW, 100'000'000));
     o.push_back(make_var(obj::positive_torque_limit_value, "Positive torque limit value", RWM, 3000));
     o.push_back(make_var(obj::negative_torque_limit_value, "Negative torque limit value", RWM, 3000));
+    o.push_back(make_var(obj::positioning_option_code, "Positioning option code", RW, 0));
     o.push_back(make_var(obj::following_error_actual_value, "Following error actual value", ROM));
     o.push_back(make_var(obj::position_demand_internal_value, "Position demand internal value", ROM));
     o.push_back(make_var(obj::digital_inputs, "Digital inputs", ROM));

@@ -52,6 +52,23 @@ inline constexpr std::uint16_t index = 0x2111;
 inline constexpr ObjectId<DT::Integer32> distance{index, 1};
 inline constexpr ObjectId<DT::Unsigned32> length{index, 2};
 inline constexpr ObjectId<DT::Unsigned8> start{index, 3};
+// TX1250 2.5 start parameters (0 = the move's own): VP, VK, AK+, AK-; and the compensation stop.
+inline constexpr ObjectId<DT::Unsigned32> process_velocity{index, 4};
+inline constexpr ObjectId<DT::Unsigned32> velocity_increase{index, 5};
+inline constexpr ObjectId<DT::Unsigned32> acceleration{index, 6};
+inline constexpr ObjectId<DT::Unsigned32> deceleration{index, 7};
+inline constexpr ObjectId<DT::Unsigned8> stop{index, 8};
 }  // namespace position_compensation
+// A profile position target beyond 0x607D: 0 refused with the fault 0x8612, 1 refused, 2 clamped.
+inline constexpr ObjectId<DT::Unsigned8> software_limit_reaction{0x2112};
+// The override type of TX1250 2.2 (1-4).
+inline constexpr ObjectId<DT::Unsigned8> override_type{0x2113};
+// New velocity at an activation position (TX1250 2.4).
+namespace activation {
+inline constexpr std::uint16_t index = 0x2114;
+inline constexpr ObjectId<DT::Integer32> position{index, 1};
+inline constexpr ObjectId<DT::Unsigned32> velocity{index, 2};
+inline constexpr ObjectId<DT::Unsigned8> mode{index, 3};
+}  // namespace activation
 
 }  // namespace vecat::device::mfr

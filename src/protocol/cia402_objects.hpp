@@ -112,6 +112,8 @@ inline constexpr ObjectId<DT::Unsigned32> max_acceleration{0x60C5};
 inline constexpr ObjectId<DT::Unsigned32> max_deceleration{0x60C6};
 inline constexpr ObjectId<DT::Unsigned16> positive_torque_limit_value{0x60E0};
 inline constexpr ObjectId<DT::Unsigned16> negative_torque_limit_value{0x60E1};
+// Positioning option code (CiA 402 / ETG.6010 figure 25): bits 6/7 the rotary axis direction option.
+inline constexpr ObjectId<DT::Unsigned16> positioning_option_code{0x60F2};
 inline constexpr ObjectId<DT::Integer32> following_error_actual_value{0x60F4};
 inline constexpr ObjectId<DT::Integer32> position_demand_internal_value{0x60FC};
 inline constexpr ObjectId<DT::Unsigned32> digital_inputs{0x60FD};

@@ -22,7 +22,151 @@ struct Tx1250 : DriveCoreBench {
         io.command.controlword = cmd::EnableOperation;
     }
     double demand_velocity() const { return io.feedback.velocity_demand; }
+    // Runs until target reached (at most limit_ms), calling each(ms) after every millisecond.
+    template <class F>
+    void run_to_target(int limit_ms, F&& each) {
+        for (int ms = 0; ms < limit_ms && !target_reached(); ++ms) {
+            run_ms(1);
+            each(ms);
+        }
+    }
+    // The largest demand velocity until target reached.
+    double peak_velocity(int limit_ms) {
+        double peak = 0;
+        run_to_target(limit_ms, [&](int) { peak = std::max(peak, std::abs(demand_velocity())); });
+        return peak;
+    }
 };
+
+// 2.1 Start parameters, note 4: "If the target position P is outside of the software limit switches
+// (Pmin, Pmax), the start is refused and an error is generated." A profile position target beyond 0x607D
+// is not acknowledged (statusword bit 12 stays 0), the axis does not move, and the drive faults with 0x8612
+// (0x2112 = 0, the vecat drive's default).
+TEST_F(Tx1250, Tx1250_2_1_TargetBeyondTheSoftwareLimitIsRefusedWithAnError) {
+    io.parameters.software_limit_min = -4 * kRev;
+    io.parameters.software_limit_max = 4 * kRev;
+    io.parameters.software_limit_reaction = limit_reaction::Fault;
+    enable(Mode::ProfilePosition);
+    const std::int32_t start = io.feedback.position_actual;
+    io.command.target_position = 6 * kRev;
+    io.command.controlword = cmd::EnableOperation | cw::NewSetpoint;
+    std::uint16_t raised = 0;
+    bool acknowledged = false;
+    for (int i = 0; i < 400; ++i) {
+        core.step(io);
+        if (io.feedback.raised) raised = io.feedback.raised->code;
+        acknowledged = acknowledged || (io.feedback.statusword & sw::Bit12);
+    }
+    EXPECT_FALSE(acknowledged);
+    EXPECT_EQ(raised, fault::ReferenceLimit);
+    EXPECT_EQ(core.state(), State::Fault);
+    EXPECT_NEAR(io.feedback.position_actual, start, 50) << "the start is refused: no motion";
+}
+
+// The same refusal without the error (0x2112 = 1): no acknowledge, bit 11 "internal limit active" while
+// the refused set-point is the last one; the next target within the limits is accepted and reached.
+TEST_F(Tx1250, Tx1250_2_1_TargetBeyondTheSoftwareLimitIsRefusedWithoutFault) {
+    io.parameters.software_limit_min = -4 * kRev;
+    io.parameters.software_limit_max = 4 * kRev;
+    io.parameters.software_limit_reaction = limit_reaction::Refuse;
+    enable(Mode::ProfilePosition);
+    io.command.target_position = -5 * kRev;
+    io.command.controlword = cmd::EnableOperation | cw::NewSetpoint;
+    run_ms(50);
+    EXPECT_FALSE(io.feedback.statusword & sw::Bit12);
+    EXPECT_TRUE(io.feedback.statusword & sw::InternalLimit);
+    EXPECT_EQ(core.state(), State::OperationEnabled);
+    EXPECT_LT(std::abs(demand_velocity()), 1);
+    io.command.controlword = cmd::EnableOperation;
+    run_ms(1);
+    start_move(kRev);
+    EXPECT_FALSE(io.feedback.statusword & sw::InternalLimit);
+    run_to_target(3000, [](int) {});
+    EXPECT_NEAR(io.feedback.position_actual, kRev, 100);
+}
+
+// A modulo axis: 0x607B [0, R) (TX1250 2.1: "the position can also be displayed in modulo values").
+struct Tx1250Modulo : Tx1250 {
+    static constexpr std::int32_t R = kRev;
+    void SetUp() override {
+        Tx1250::SetUp();
+        io.parameters.position_range_min = 0;
+        io.parameters.position_range_max = R;
+        core.configure(io);  // as the adapter does before each advance
+        enable(Mode::ProfilePosition);
+    }
+    // A move with the rotary axis direction option (0x60F2 bits 6/7); the continuous position it ended
+    // at, and the smallest and largest demand velocity on the way.
+    double move(std::int32_t target, unsigned direction, double& vmin, double& vmax) {
+        io.parameters.positioning_option = static_cast<std::uint16_t>(direction << 6);
+        start_move(target);
+        vmin = vmax = 0;
+        run_to_target(8000, [&](int) {
+            vmin = std::min(vmin, demand_velocity());
+            vmax = std::max(vmax, demand_velocity());
+        });
+        EXPECT_TRUE(target_reached());
+        return core.position_actual();
+    }
+};
+
+// 0x6064 (and 0x6062) wrap in the range while the axis turns on.
+TEST_F(Tx1250Modulo, Tx1250_2_1_ModuloPositionWrapsInTheRange) {
+    io.command.mode = static_cast<std::int8_t>(Mode::ProfileVelocity);
+    io.command.target_velocity = 2 * kRev;
+    int wraps = 0;
+    std::int32_t last = io.feedback.position_actual;
+    for (int ms = 0; ms < 2000; ++ms) {
+        run_ms(1);
+        const std::int32_t p = io.feedback.position_actual;
+        ASSERT_GE(p, 0);
+        ASSERT_LT(p, R);
+        ASSERT_GE(io.feedback.position_demand, 0);
+        ASSERT_LT(io.feedback.position_demand, R);
+        if (p < last - R / 2) ++wraps;
+        last = p;
+    }
+    EXPECT_GE(wraps, 3) << "about 3.9 turns in 2 s at 2 rev/s";
+    EXPECT_GT(core.position_actual(), 3 * R) << "the axis itself moves on";
+}
+
+// Only positive (0x60F2 bit 7): from 0.75 R to 0.25 R the axis goes forward over the end of the range.
+TEST_F(Tx1250Modulo, Tx1250_2_1_ModuloOnlyPositiveGoesOverTheRangeEnd) {
+    double lo = 0, hi = 0;
+    ASSERT_NEAR(move(3 * R / 4, Axis::kRotaryLinear, lo, hi), 0.75 * R, 100);
+    EXPECT_NEAR(move(R / 4, Axis::kRotaryOnlyPositive, lo, hi), 1.25 * R, 100);
+    EXPECT_GE(lo, -1) << "never backwards";
+    EXPECT_NEAR(io.feedback.position_actual, R / 4, 100);
+}
+
+// Only negative (0x60F2 bit 6): from 0 to 0.75 R the axis goes backwards a quarter of the range.
+TEST_F(Tx1250Modulo, Tx1250_2_1_ModuloOnlyNegativeGoesBackwards) {
+    double lo = 0, hi = 0;
+    EXPECT_NEAR(move(3 * R / 4, Axis::kRotaryOnlyNegative, lo, hi), -0.25 * R, 100);
+    EXPECT_LE(hi, 1) << "never forwards";
+    EXPECT_NEAR(io.feedback.position_actual, 3 * R / 4, 100);
+}
+
+// The shortest way (bits 6 and 7): 0 -> 0.9 R is 0.1 R backwards; half a range goes positive (CiA 402).
+// As a linear axis (0), 0.9 R -> 0.1 R stays in the range: 0.8 R backwards.
+TEST_F(Tx1250Modulo, Tx1250_2_1_ModuloShortestWayAndLinear) {
+    double lo = 0, hi = 0;
+    EXPECT_NEAR(move(9 * R / 10, Axis::kRotaryShortest, lo, hi), -0.1 * R, 100);
+    EXPECT_NEAR(io.feedback.position_actual, 9 * R / 10, 100);
+    EXPECT_NEAR(move(R / 10, Axis::kRotaryLinear, lo, hi), -0.9 * R, 100);
+    EXPECT_NEAR(io.feedback.position_actual, R / 10, 100);
+    EXPECT_NEAR(move(6 * R / 10, Axis::kRotaryShortest, lo, hi), -0.4 * R, 100) << "half a range: positive";
+    EXPECT_GE(lo, -1);
+}
+
+// "If a modulo position is specified as being greater than or equal to the modulo factor, the target
+// position is ... only reached after the modulo position has been passed over once or several times":
+// 2.5 R with only positive makes two whole turns and stops at 0.5 R.
+TEST_F(Tx1250Modulo, Tx1250_2_1_ModuloTargetBeyondTheRangeAddsTurns) {
+    double lo = 0, hi = 0;
+    EXPECT_NEAR(move(5 * R / 2, Axis::kRotaryOnlyPositive, lo, hi), 2.5 * R, 100);
+    EXPECT_NEAR(io.feedback.position_actual, R / 2, 100);
+}
 
 // 2.2 Override: the override scales the target velocity online (0x2110, ppm of 100 %), "reaching the new
 // velocity level as quickly as possible"; back to 100 % the axis returns to V.
@@ -37,6 +181,50 @@ TEST_F(Tx1250, Tx1250_2_2_OverrideChangesTheVelocityOnline) {
     io.parameters.velocity_override = 1'000'000;
     run_ms(300);
     EXPECT_NEAR(demand_velocity(), 2 * kRev, 1);
+}
+
+// 2.2 Override types (0x2113): types 1 and 3 scale "the target velocity level calculated and possibly
+// reduced at axis start", types 2 and 4 "the target velocity specified by the user". A move of 0.1 rev
+// cannot reach V = 2 rev/s (trapezoid, A = 20 rev/s^2: sqrt(A d) = 1.41 rev/s); at 50 % type 1 cruises at
+// half of that level, type 2 at half of V.
+TEST_F(Tx1250, Tx1250_2_2_OverrideTypesReferToTheReducedOrTheUserVelocity) {
+    enable(Mode::ProfilePosition);
+    io.parameters.velocity_override = 500'000;
+    const double level = std::sqrt(20.0 * 0.1) * kRev;
+    for (std::uint8_t type : {1, 2, 3, 4}) {
+        io.parameters.override_type = type;
+        const std::int32_t from = io.feedback.position_actual;
+        start_move(from + kRev / 10);
+        const double peak = peak_velocity(3000);
+        const double expected = 0.5 * (type % 2 == 1 ? level : 2.0 * kRev);
+        EXPECT_NEAR(peak, expected, 0.01 * kRev) << "type " << int(type);
+        EXPECT_NEAR(io.feedback.position_actual, from + kRev / 10, 100);
+    }
+}
+
+// 2.2 Override types 1/2 vs 3/4 when the new level is not achievable: a move at 20 % of V close to its
+// end gets 100 %. Types 1 and 2 keep the old runtime table "without notification"; types 3 and 4 go to
+// "a smaller optimal velocity level" above the old one.
+TEST_F(Tx1250, Tx1250_2_2_OverrideNotAchievableKeepsTheTableOrReducesTheLevel) {
+    enable(Mode::ProfilePosition);
+    for (std::uint8_t type : {1, 2, 3, 4}) {
+        io.parameters.override_type = type;
+        io.parameters.velocity_override = 200'000;
+        run_ms(1);
+        const std::int32_t from = io.feedback.position_actual;
+        const std::int32_t target = from + kRev;
+        start_move(target);
+        // 0.1 rev before the target: reaching 2 rev/s and braking from it would take about 0.2 rev.
+        for (int ms = 0; ms < 5000 && io.feedback.position_demand < target - kRev / 10; ++ms)
+            run_ms(1);
+        io.parameters.velocity_override = 1'000'000;
+        const double peak = peak_velocity(3000);
+        if (type <= 2)
+            EXPECT_NEAR(peak, 0.4 * kRev, 0.01 * kRev) << "type " << int(type) << " keeps its table";
+        else
+            EXPECT_GT(peak, 0.6 * kRev) << "type " << int(type) << " speeds up as far as it can";
+        EXPECT_NEAR(io.feedback.position_actual, target, 100);
+    }
 }
 
 // 2.2 Stop: "stop is realized via override 0.0"; the axis stops on its braking ramp, holds, and goes on to
@@ -91,6 +279,132 @@ TEST_F(Tx1250, Tx1250_2_5_PositionCompensationAddsTheDistance) {
     core.compensate(d, 4.0 * kRev);
     run_ms(6000);
     EXPECT_NEAR(io.feedback.position_actual, target + d, 100);
+    EXPECT_TRUE(target_reached());
+}
+
+// 2.4 New velocity and new end position (0x2114: APos, VNew, mode 1). A move from 0 to 10 rev at
+// VOld = 2 rev/s is at Pos = 2.1 rev when the request comes (a new set-point with "change set
+// immediately"); VNew = 1 rev/s. Each case of the manual, positive logical direction.
+struct Tx1250NewVelocity : Tx1250 {
+    void SetUp() override {
+        Tx1250::SetUp();
+        enable(Mode::ProfilePosition);
+        start_move(10 * kRev);
+        run_ms(1100);
+        ASSERT_NEAR(io.feedback.position_demand, 2.1 * kRev, 0.05 * kRev);
+    }
+    // The request; then the demand velocity at each of the probe positions passed, the extreme velocities
+    // and the end position.
+    struct Seen {
+        double at[2] = {0, 0};
+        double vmin = 0, vmax = 0;
+        double end = 0;
+    };
+    Seen request(double epos, double apos, double probe1 = 0, double probe2 = 0) {
+        io.parameters.activation_mode = 1;
+        io.parameters.activation_position = static_cast<std::int32_t>(apos * kRev);
+        io.parameters.activation_velocity = kRev;
+        start_move(static_cast<std::int32_t>(epos * kRev), cw::ChangeSetImmediately);
+        Seen s;
+        const double probes[2] = {probe1 * kRev, probe2 * kRev};
+        run_to_target(20000, [&](int) {
+            const double p = io.feedback.position_demand, v = demand_velocity();
+            for (int i = 0; i < 2; ++i)
+                if (probes[i] != 0 && s.at[i] == 0 && p >= probes[i]) s.at[i] = v;
+            s.vmin = std::min(s.vmin, v);
+            s.vmax = std::max(s.vmax, v);
+        });
+        EXPECT_TRUE(target_reached());
+        s.end = io.feedback.position_actual;
+        return s;
+    }
+};
+
+// Case 1, Pos <= APos <= EPos: "the new target velocity is activated once position APos has been crossed".
+TEST_F(Tx1250NewVelocity, Tx1250_2_4_Case1_NewVelocityAfterTheActivationPosition) {
+    const Seen s = request(8, 4, 3.5, 5);
+    EXPECT_NEAR(s.at[0], 2 * kRev, 0.02 * kRev) << "VOld before APos";
+    EXPECT_NEAR(s.at[1], kRev, 0.02 * kRev) << "VNew after APos";
+    EXPECT_NEAR(s.end, 8 * kRev, 100);
+}
+
+// Case 2, APos <= Pos <= EPos: "the activation position has already been crossed, and the target
+// velocity NewV is activated instantaneously".
+TEST_F(Tx1250NewVelocity, Tx1250_2_4_Case2_ActivationPositionCrossedNewVelocityAtOnce) {
+    const Seen s = request(8, 1, 2.5, 5);
+    EXPECT_NEAR(s.at[0], kRev, 0.02 * kRev);
+    EXPECT_NEAR(s.at[1], kRev, 0.02 * kRev);
+    EXPECT_NEAR(s.end, 8 * kRev, 100);
+}
+
+// Case 3, APos <= EPos <= Pos: "a stop is activated, and the system is returned automatically with the
+// old target velocity VOld".
+TEST_F(Tx1250NewVelocity, Tx1250_2_4_Case3_BehindStopsAndReturnsWithTheOldVelocity) {
+    const Seen s = request(1, 0.5);
+    EXPECT_NEAR(s.vmin, -2 * kRev, 0.02 * kRev) << "back at VOld";
+    EXPECT_NEAR(s.end, kRev, 100);
+}
+
+// Case 4, Pos <= EPos <= APos: "only the new end position and the old target velocity VOld is activated,
+// but not the new target velocity".
+TEST_F(Tx1250NewVelocity, Tx1250_2_4_Case4_ActivationPositionBeyondTheEndKeepsTheOldVelocity) {
+    const Seen s = request(6, 8, 3, 5);
+    EXPECT_NEAR(s.at[0], 2 * kRev, 0.02 * kRev);
+    EXPECT_NEAR(s.at[1], 2 * kRev, 0.02 * kRev);
+    EXPECT_NEAR(s.end, 6 * kRev, 100);
+}
+
+// Case 5, EPos <= APos <= Pos: "a stop is activated, and the system is returned automatically with the
+// old target velocity VOld to the new end position" (VNew at APos on the way back: "not implemented").
+TEST_F(Tx1250NewVelocity, Tx1250_2_4_Case5_BehindWithActivationBetweenReturnsWithTheOldVelocity) {
+    const Seen s = request(0.5, 1);
+    EXPECT_NEAR(s.vmin, -2 * kRev, 0.02 * kRev);
+    EXPECT_NEAR(s.end, 0.5 * kRev, 100);
+}
+
+// Case 6, EPos <= Pos <= APos: "a stop is activated, and the system is returned automatically with the
+// old target velocity to the new end position".
+TEST_F(Tx1250NewVelocity, Tx1250_2_4_Case6_BehindWithActivationAheadReturnsWithTheOldVelocity) {
+    const Seen s = request(1, 5);
+    EXPECT_NEAR(s.vmin, -2 * kRev, 0.02 * kRev);
+    EXPECT_NEAR(s.end, kRev, 100);
+}
+
+// 2.5 Start parameters: the compensation's own velocity increase VK and slopes AK+/AK- (0x2111:4-7). "If
+// the position compensation cannot be carried out with the specified compensation parameters, then the
+// maximum possible compensation is automatically carried out": VK = 0.2 rev/s over L = 2 rev at VP = V
+// = 2 rev/s (T = 1 s), AK+ = AK- = 20 rev/s^2 compensates VK (T - VK/AK) = 0.198 rev of D = 1 rev.
+TEST_F(Tx1250, Tx1250_2_5_CompensationDynamicsGiveTheMaximumPossibleDistance) {
+    enable(Mode::ProfilePosition);
+    const std::int32_t target = 8 * kRev;
+    start_move(target);
+    run_ms(300);
+    CompensationLimits c;
+    c.velocity = 0.2 * kRev;
+    c.acceleration = c.deceleration = 20.0 * kRev;
+    c.process_velocity = 2.0 * kRev;
+    core.compensate(1.0 * kRev, 2.0 * kRev, c);
+    run_ms(6000);
+    EXPECT_NEAR(io.feedback.position_actual, target + 0.198 * kRev, 200);
+    EXPECT_TRUE(target_reached());
+}
+
+// 2.5 Compensation stop (0x2111:8): "terminates axis compensation ... by replacing the distance to be
+// compensated D with the actually compensated distance at the end of the compensation". Stopped after a
+// quarter of L, the move ends short of target + D but beyond the target.
+TEST_F(Tx1250, Tx1250_2_5_CompensationStopKeepsWhatWasCompensated) {
+    enable(Mode::ProfilePosition);
+    const std::int32_t target = 8 * kRev;
+    start_move(target);
+    run_ms(300);
+    const double d = 0.5 * kRev;
+    core.compensate(d, 4.0 * kRev);
+    run_ms(500);  // a quarter of L = 4 rev at 2 rev/s
+    core.stop_compensation();
+    run_ms(6000);
+    const double compensated = io.feedback.position_actual - target;
+    EXPECT_GT(compensated, 0.05 * kRev);
+    EXPECT_LT(compensated, 0.6 * d);
     EXPECT_TRUE(target_reached());
 }
 

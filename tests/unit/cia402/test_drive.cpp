@@ -2,7 +2,7 @@
 // against the simulated mechanics, limits, faults, touch probe and the factor group. Most tests drive the
 // dictionary directly in PREOP (the drive runs on the slave's timer ticks, like a master using SDO); the
 // cyclic modes are also tested end to end through process data in OP.
-// Long (about 740 lines) because it is one fixture for the whole drive: each test is short and reads alone.
+// Long (about 810 lines) because it is one fixture for the whole drive: each test is short and reads alone.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -327,6 +327,9 @@ TEST_F(DriveTest, QuickStopDeceleratesWithTheQuickStopRampAndDisables) {
 
 TEST_F(DriveTest, SoftwareLimitStopsTheMoveAndSetsInternalLimit) {
     enable(Mode::ProfilePosition);
+    // 0x2112 = 2: a target beyond 0x607D is clamped to the limit (the vecat drive refuses it by default:
+    // tests/conformance/test_tx1250_nc_ptp.cpp).
+    set<std::uint8_t>(0x2112, 2);
     const std::int32_t start = position();
     set<std::int32_t>(obj::software_position_limit::min, start - 100'000);
     set<std::int32_t>(obj::software_position_limit::max, start + 300'000);
@@ -338,6 +341,96 @@ TEST_F(DriveTest, SoftwareLimitStopsTheMoveAndSetsInternalLimit) {
     ASSERT_GT(pp_move(start), 0);
     EXPECT_NEAR(position(), start, 100);
     EXPECT_FALSE(statusword() & sw::InternalLimit);
+}
+
+// The TX1250 objects through the dictionary (their behaviours: tests/conformance/test_tx1250_nc_ptp.cpp).
+// 0x2112 = 0 by default: a target beyond 0x607D is not acknowledged and faults with 0x8612.
+TEST_F(DriveTest, TargetBeyondTheSoftwareLimitFaultsWith8612) {
+    enable(Mode::ProfilePosition);
+    EXPECT_EQ(e(0x2112).get<std::uint8_t>(), 0);
+    const std::int32_t start = position();
+    set<std::int32_t>(obj::software_position_limit::min, start - 100'000);
+    set<std::int32_t>(obj::software_position_limit::max, start + 300'000);
+    set<std::int32_t>(obj::target_position, start + 2'000'000);
+    set<std::uint16_t>(obj::controlword, 0x1F);
+    bool acknowledged = false;
+    ASSERT_GT(run_until([&] { return drive().cia402_state() == State::Fault; }, 500,
+                        [&] { acknowledged = acknowledged || (statusword() & sw::Bit12); }),
+              0);
+    EXPECT_FALSE(acknowledged);
+    EXPECT_EQ(e(obj::error_code).get<std::uint16_t>(), fault::ReferenceLimit);
+    EXPECT_NEAR(position(), start, 100);
+}
+
+// 0x607B makes the axis modulo (0x6064 in the range), 0x60F2 bit 7 only positive; 0x2114 with mode 1
+// makes the next set-point "new velocity and new end position" (case 2: VNew at once).
+TEST_F(DriveTest, ModuloRangeDirectionOptionAndNewVelocityObjects) {
+    constexpr std::int32_t R = 1 << 20;
+    set<std::int32_t>(obj::position_range_limit::min, 0);
+    set<std::int32_t>(obj::position_range_limit::max, R);
+    set<std::uint16_t>(obj::positioning_option_code, 0x80);
+    enable(Mode::ProfilePosition);
+    set<std::uint32_t>(obj::profile_velocity, 400'000);
+    ASSERT_GE(position(), 0);
+    ASSERT_LT(position(), R);
+    const double from = drive().position_actual();
+    const std::int32_t target = (position() + R - R / 4) % R;  // a quarter behind: 3/4 R forward
+    double vmin = 0;
+    ASSERT_GT(pp_move(target), 0);
+    EXPECT_NEAR(position(), target, 100);
+    EXPECT_NEAR(drive().position_actual() - from, 0.75 * R, 100);
+    // APos an eighth of the range behind the axis (in the range: the nearest position), EPos half a range
+    // ahead: case 2, VNew = 100000 at once.
+    set<std::int32_t>(0x2114, (position() + R - R / 8) % R, 1);
+    set<std::uint32_t>(0x2114, 100'000, 2);
+    set<std::uint8_t>(0x2114, 1, 3);
+    set<std::uint16_t>(obj::positioning_option_code, 0x80);
+    set<std::int32_t>(obj::target_position, (position() + R / 2) % R);
+    set<std::uint16_t>(obj::controlword, 0x1F);
+    run_ms(300);
+    EXPECT_NEAR(e(obj::velocity_demand_value).get<std::int32_t>(), 100'000, 200);
+    set<std::uint16_t>(obj::controlword, 0x0F);
+    ASSERT_GT(
+        run_until([&] { return statusword() & sw::TargetReached; }, 10000,
+                  [&] { vmin = std::min<double>(vmin, e(obj::velocity_demand_value).get<std::int32_t>()); }),
+        0);
+    EXPECT_GE(vmin, 0);
+}
+
+// 0x2111:4-8: the compensation's velocity increase limits the distance; the compensation stop.
+TEST_F(DriveTest, PositionCompensationDynamicsAndStopObjects) {
+    enable(Mode::ProfilePosition);
+    set<std::uint32_t>(obj::profile_velocity, 400'000);
+    const std::int32_t start = position();
+    master::CoeClient c(b.master, 0x1001);
+    // D = 200000 over L = 400000 at VP = 400000 (T = 1 s) with VK = 50000: at most about 50000.
+    ASSERT_EQ(c.download_value<std::int32_t>(0x2111, 1, 200'000).abort, protocol::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint32_t>(0x2111, 2, 400'000).abort, protocol::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint32_t>(0x2111, 4, 400'000).abort, protocol::SdoAbort::None);
+    ASSERT_EQ(c.download_value<std::uint32_t>(0x2111, 5, 50'000).abort, protocol::SdoAbort::None);
+    set<std::int32_t>(obj::target_position, start + 1'800'000);
+    set<std::uint16_t>(obj::controlword, 0x1F);
+    run_ms(200);
+    set<std::uint16_t>(obj::controlword, 0x0F);
+    ASSERT_EQ(c.download_value<std::uint8_t>(0x2111, 3, 1).abort, protocol::SdoAbort::None);
+    ASSERT_GT(run_until([&] { return statusword() & sw::TargetReached; }, 10000), 0);
+    const double first = position() - (start + 1'800'000);
+    EXPECT_GT(first, 40'000);
+    EXPECT_LT(first, 50'500);
+    // The same, stopped early with 0x2111:8: less is compensated.
+    const std::int32_t again = position();
+    set<std::int32_t>(obj::target_position, again + 1'800'000);
+    set<std::uint16_t>(obj::controlword, 0x1F);
+    run_ms(200);
+    set<std::uint16_t>(obj::controlword, 0x0F);
+    ASSERT_EQ(c.download_value<std::uint8_t>(0x2111, 3, 1).abort, protocol::SdoAbort::None);
+    run_ms(300);
+    ASSERT_EQ(c.download_value<std::uint8_t>(0x2111, 8, 1).abort, protocol::SdoAbort::None);
+    EXPECT_EQ(e(0x2111, 8).get<std::uint8_t>(), 0);
+    ASSERT_GT(run_until([&] { return statusword() & sw::TargetReached; }, 10000), 0);
+    const double second = position() - (again + 1'800'000);
+    EXPECT_GT(second, 5'000);
+    EXPECT_LT(second, first - 10'000);
 }
 
 TEST_F(DriveTest, HardwareLimitSwitchBlocksItsDirectionOnly) {

@@ -454,6 +454,43 @@ TEST(ProfileOverride, TwentyToHundred) {
     EXPECT_EQ(w.failures(), 0) << w.first();
 }
 
+// TX1250 2.2, the four override types: odd ones scale the level calculated at the start (here reduced:
+// 0 -> 500 cannot reach V = 2000 with A = 5000), even ones V; types 1/2 keep the table when the new level
+// is not achievable, 3/4 take the largest achievable one.
+TEST(ProfileOverride, TypesScaleTheLevelOrTheVelocityAndKeepOrReduce) {
+    const ProfileLimits lim = limits(2000, 5000, 5000, 0);
+    const double level = std::sqrt(5000.0 * 500);  // the triangle's peak
+    for (int type = 1; type <= 4; ++type) {
+        ProfileGenerator g = at_rest();
+        g.set_override_type(type);
+        g.set_override(0.5);
+        ASSERT_TRUE(g.move_to(500, lim));
+        EXPECT_NEAR(g.cruise_velocity(), 0.5 * (type % 2 == 1 ? level : 2000), 1e-6 * level) << type;
+        EXPECT_GT(run_to_end(g, 1e-3, 100000), 0);
+        EXPECT_EQ(g.state().p, 500);
+    }
+    // 20 % of V up to 100 % 100 before the end of 0 -> 5000: 2000 is not achievable any more.
+    for (int type = 1; type <= 4; ++type) {
+        ProfileGenerator g = at_rest();
+        g.set_override_type(type);
+        g.set_override(0.2);
+        ASSERT_TRUE(g.move_to(5000, lim));
+        while (g.state().p < 4900)
+            g.step(1e-3);
+        g.set_override(1.0);
+        if (type <= 2)
+            EXPECT_NEAR(g.cruise_velocity(), 400, 1e-9) << type << ": the old table";
+        else
+            EXPECT_GT(g.cruise_velocity(), 600) << type << ": the largest achievable level";
+        EXPECT_LT(g.cruise_velocity(), 2000) << type;
+        EXPECT_GT(run_to_end(g, 1e-3, 100000), 0);
+        EXPECT_EQ(g.state().p, 5000);
+    }
+    ProfileGenerator g;
+    g.set_override_type(7);
+    EXPECT_EQ(g.override_type(), 4);
+}
+
 TEST(ProfileOverride, ZeroStopsAndResumes) {
     const ProfileLimits lim = limits(2000, 5000, 5000, 50000);
     ProfileGenerator g = at_rest();
@@ -592,6 +629,41 @@ TEST(ProfileCompensation, PartialIsTheMaximumPossible) {
     EXPECT_NEAR(v.compensation, 100 * (2.5 - 100 * (1 / 1000.0 + 1 / 2000.0)), 1e-9);
     EXPECT_NEAR(v.final_p, 10000 + v.compensation, 1e-9);
     EXPECT_NEAR(v.max_comp_velocity, 100, 1e-6);
+}
+
+// TX1250 2.5, compensation stop: the rise or hold ends at once, the falling ramp follows, and D becomes
+// what is compensated until it ends. The manual's full compensation (VK = 300, AK+ = 500, AK- = 1000,
+// VP = 2000, L = 5000, D = 250) stopped 1 s after its start: the hold at the peak ended at tau = 1 s.
+TEST(ProfileCompensation, StopKeepsTheDistanceCompensatedUntilTheFallEnds) {
+    const ProfileLimits lim = limits(2000, 1000, 1000, 10000);
+    ProfileGenerator g = at_rest();
+    g.move_to(10000, lim);
+    for (int i = 0; i < 2500; ++i)
+        g.step(1e-3);
+    ASSERT_NEAR(g.state().v, 2000, 1e-9);
+    ASSERT_TRUE(g.compensate(250, 5000, {300, 500, 1000, 2000}));
+    for (int i = 0; i < 1000; ++i)
+        g.step(1e-3);
+    ASSERT_TRUE(g.stop_compensation());
+    const double T = 2.5, c = 1 / 1000.0 + 1 / 2000.0;
+    const double peak = 2 * 250 / (T + std::sqrt(T * T - 4 * c * 250)), t1 = peak / 500, tau = 1.0;
+    const double expected = peak * t1 / 2 + peak * (tau - t1) + peak * peak / (2 * 1000);
+    EXPECT_NEAR(g.compensation(), expected, 1e-6);
+    EXPECT_NEAR(g.target(), 10000 + expected, 1e-6);
+    EXPECT_GT(run_to_end(g, 1e-3, 100000), 0);
+    EXPECT_NEAR(g.state().p, 10000 + expected, 1e-6);
+    EXPECT_FALSE(g.stop_compensation()) << "none left";
+    // In the falling ramp it is too late.
+    ProfileGenerator h = at_rest();
+    h.move_to(10000, lim);
+    for (int i = 0; i < 2500; ++i)
+        h.step(1e-3);
+    ASSERT_TRUE(h.compensate(250, 5000, {300, 500, 1000, 2000}));
+    for (int i = 0; i < 2450; ++i)  // the fall takes peak / 1000 = 0.1 s before tau = 2.5 s
+        h.step(1e-3);
+    EXPECT_FALSE(h.stop_compensation());
+    EXPECT_GT(run_to_end(h, 1e-3, 100000), 0);
+    EXPECT_EQ(h.state().p, 10250);
 }
 
 TEST(ProfileCompensation, RefusalsAndDefaults) {
