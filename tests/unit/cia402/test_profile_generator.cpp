@@ -1,3 +1,7 @@
+// The jerk-limited profile generator alone (no drive, no EtherCAT): the seven-phase profile, new targets
+// in motion, override and its four types, position compensation and its stop (TX1250 2.1-2.5).
+// Long (about 1,000 lines): one generator fixture for every profile case; the drive-level tests of the same
+// behaviours are in tests/conformance/test_tx1250_nc_ptp.cpp.
 #include "cia402/profile_generator.hpp"
 
 #include <algorithm>
