@@ -2,8 +2,7 @@
 // against the simulated mechanics, limits, faults, touch probe and the factor group. Most tests drive the
 // dictionary directly in PREOP (the drive runs on the slave's timer ticks, like a master using SDO); the
 // cyclic modes are also tested end to end through process data in OP.
-// Long (about 840 lines): one dictionary-driven fixture for every mode and object of the drive.
-// Long (about 810 lines) because it is one fixture for the whole drive: each test is short and reads alone.
+// Long (about 840 lines) because it is one fixture for the whole drive: each test is short and reads alone.
 #include <gtest/gtest.h>
 
 #include <cmath>
