@@ -491,25 +491,27 @@ void Slave::service_mailbox() {
     post_replies();
 }
 
+template <class F>
+void Slave::for_each_sending_protocol(F&& f) const {
+    // Outside BOOT: the application's CoE (emergencies, SDO information) and the slave's own protocols.
+    if (state_ == AlState::Boot) return;
+    if (auto* coe = app_->mailbox_protocol(MailboxType::CoE); coe && coe->has_output()) f(*coe);
+    for (const auto& p : own_protocols_)
+        if (p->has_output()) f(*p);
+}
+
 void Slave::post_replies() {
     if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0) return;
-    if (state_ != AlState::Boot) {
-        if (auto* coe = app_->mailbox_protocol(MailboxType::CoE); coe && coe->has_output()) coe->poll(*sink_);
-        for (auto& p : own_protocols_)
-            if (p->has_output()) p->poll(*sink_);
-    }
+    for_each_sending_protocol([&](MailboxProtocol& p) { p.poll(*sink_); });
     if (q_count_ > 0) send_pending_replies();
 }
 
 bool Slave::mailbox_output_pending() const {
     if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0 || state_ == AlState::Init) return false;
     if (esc_.sm_mailbox_full(static_cast<unsigned>(sm_mbx_in_))) return false;  // the master has not read
-    if (q_count_ > 0) return true;
-    if (state_ == AlState::Boot) return false;
-    if (auto* coe = app_->mailbox_protocol(MailboxType::CoE); coe && coe->has_output()) return true;
-    for (const auto& p : own_protocols_)
-        if (p->has_output()) return true;
-    return false;
+    bool pending = q_count_ > 0;
+    for_each_sending_protocol([&](MailboxProtocol&) { pending = true; });
+    return pending;
 }
 
 void Slave::send_pending_replies() {

@@ -209,6 +209,9 @@ class Slave {
     void service_mailbox();
     void send_pending_replies();
     void post_replies();  // the protocols' own messages (emergencies, SDO information) and queued replies
+    // Calls f(protocol) for each protocol that has a message of its own to send now (has_output).
+    template <class F>
+    void for_each_sending_protocol(F&& f) const;
     void exchange_process_data(std::uint64_t now_ns);
     void try_enter_op(std::uint64_t now_ns);
     void set_sm_group(bool mailbox, bool active);
