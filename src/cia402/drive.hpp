@@ -46,6 +46,8 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     // The servo period now: kServoPeriodNs, or the TWIN sampling time of P0302 (125 us at 8 kHz).
     std::uint64_t servo_period_ns() const { return period_ns_; }
     std::uint64_t simulated_time_ns() const { return sim_ns_; }
+    // The next servo period: a frame that reads the drive at or after it finds it stepped up to then.
+    std::uint64_t next_cycle_ns() const override { return started_ ? sim_ns_ + period_ns_ : 0; }
     // The TWINsync option card of this drive, and its status (nullptr when no cable is connected).
     twinsync::Port& twinsync_port() { return *twin_; }
     const twinsync::LinkStatus* twinsync_status() const override {

@@ -35,6 +35,7 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     last_run_ns_.push_back(0);
     deadline_ns_.push_back(0);
     pulse_ns_.push_back(0);
+    cycle_ns_.push_back(0);
     latched_.push_back(0);
     // A line: port 0 of the new slave to port 1 of the one before.
     parent_.push_back(static_cast<int>(i) - 1);
@@ -241,6 +242,7 @@ void Segment::set_firmware_halted(std::size_t i, bool halted) {
     halted_[i] = halted ? 1 : 0;
     deadline_ns_[i] = 0;
     pulse_ns_[i] = 0;
+    cycle_ns_[i] = 0;
 }
 
 bool Segment::restart_slave(std::size_t i) {
@@ -255,6 +257,7 @@ bool Segment::restart_slave(std::size_t i) {
     slaves_[i] = std::move(fresh);
     deadline_ns_[i] = 0;
     pulse_ns_[i] = 0;
+    cycle_ns_[i] = 0;
     ++slaves_epoch_;
     slaves_[i]->esc().set_port_change_counter(&port_epoch_);
     slaves_[i]->esc().set_address_change_counter(&address_epoch_);
@@ -576,6 +579,8 @@ void Segment::run(std::size_t k, std::uint64_t now_ns) {
                                  : std::min(slaves_[k]->next_event_ns(now_ns + local_cycle_ns_),
                                             now_ns + kMaxLagCycles * local_cycle_ns_);
     pulse_ns_[k] = slaves_[k]->esc().dc().next_pulse_host_ns();
+    const std::uint64_t cycle = halted_[k] ? 0 : slaves_[k]->next_cycle_ns();
+    cycle_ns_[k] = cycle != 0 ? cycle : now_ns + local_cycle_ns_;
 }
 
 void Segment::tick(std::uint64_t now_ns) {
@@ -589,7 +594,7 @@ bool Segment::deadline_due(std::size_t k, std::uint64_t now_ns) const {
 
 bool Segment::stale(std::size_t k, std::uint64_t now_ns) const {
     // (The pulse as of the last run, with a microsecond to spare for the drift of the DC unit since.)
-    return now_ns - last_run_ns_[k] >= local_cycle_ns_ || pulse_ns_[k] <= now_ns + 1'000;
+    return cycle_ns_[k] <= now_ns || pulse_ns_[k] <= now_ns + 1'000;
 }
 
 void Segment::catch_up(std::uint64_t now_ns) {

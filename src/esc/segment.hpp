@@ -90,9 +90,10 @@ class Segment {
     // (it runs after the frame, above), its own cycle (a drive's servo periods, inputs that follow a
     // signal), and deadlines (the process data watchdog, SYNC pulses piling up, the application's
     // timeouts). Its own cycle needs no run of its own: every run catches up with the periods since the
-    // last one, and before a frame reaches the ESCs each slave whose last run is local_cycle_ns or more
-    // ago runs, as do the slaves with a SYNC pulse or a deadline due, so that the frame reads what a timer
-    // at the local cycle would have left (a SYNC pulse is taken at its own time, whenever the run is). Only
+    // last one, and before a frame reaches the ESCs each slave that the frame reads and whose own cycle is
+    // due runs (Application::next_cycle_ns; without one, a last run local_cycle_ns or more ago), as do the
+    // slaves with a SYNC pulse or a deadline due, so that the frame reads every cycle up to its own time,
+    // as if the slaves ran on timers (a SYNC pulse is taken at its own time, whenever the run is). Only
     // deadlines need a run on time: next_firmware_ns() is the earliest, and tick() runs them. A server then
     // wakes up for frames and deadlines, not for every period of every drive.
     void set_local_cycle_ns(std::uint64_t ns) { local_cycle_ns_ = ns ? ns : 1; }
@@ -280,6 +281,9 @@ class Segment {
     std::vector<std::uint64_t> deadline_ns_;
     // Per slave: its next SYNC pulse as of its last run (a frame that starts or moves SYNC addresses it).
     std::vector<std::uint64_t> pulse_ns_;
+    // Per slave: its application's next own cycle as of its last run (Application::next_cycle_ns), or its
+    // last run plus the local cycle; 0: stale now.
+    std::vector<std::uint64_t> cycle_ns_;
     std::uint64_t local_cycle_ns_ = 250'000;
     // A slave that no frame reads runs at the latest this many local cycles after its last run: the work
     // of one run (the cycles it catches up) stays bounded, whichever slave a frame then reads.

@@ -70,6 +70,11 @@ class Application {
     // application's own (a timeout, a loss of SYNC events), or DistributedClock::kNever. Its own cycle
     // needs none: it catches up at every run (Segment::set_local_cycle_ns). Asked after each run.
     virtual std::uint64_t next_event_ns() const { return DistributedClock::kNever; }
+    // The host time of the application's next own cycle (a drive's servo period): a frame that reads the
+    // slave at or after it finds the slave caught up first, so that it reads every cycle up to its own time.
+    // 0: the application does not say; the segment then takes a run a local cycle old as stale
+    // (Segment::set_local_cycle_ns). Asked after each run.
+    virtual std::uint64_t next_cycle_ns() const { return 0; }
 };
 
 // A process image without behaviour: keeps the last outputs and serves inputs set from outside.
@@ -157,6 +162,7 @@ class Slave {
     // what one run takes, the AL control read after its latency, the application's deadlines; poll_ns
     // while a transition waits on conditions that are polled (SAFEOP -> OP).
     std::uint64_t next_event_ns(std::uint64_t poll_ns) const;
+    std::uint64_t next_cycle_ns() const { return app_->next_cycle_ns(); }  // Application::next_cycle_ns
     // The SYNC pulses up to until_ns to the application, in time order (run() does this first; the segment
     // calls it ahead for coupled applications).
     void deliver_sync_pulses(std::uint64_t until_ns);

@@ -85,6 +85,12 @@ constexpr std::uint64_t kLinkCheckNs = 10'000'000;
 // How long the firmware may go without a run when no frame comes (ServeOptions::catch_up_budget_us). The
 // work a run does grows with the time since the last one (the slaves' cycles to catch up); work_ns took
 // gap_ns of backlog. The period follows the estimate that keeps that work at the budget, smoothed.
+//
+// The budget is at least the frame's own time on a real line: at 100 Mbit/s each byte takes 80 ns on the
+// wire, and a frame 20 bytes more (preamble and inter-frame gap, IEEE 802.3). A real line cannot answer a
+// frame before that time has passed, so work up to it in the reply path leaves vecat's answer no later
+// than hardware's, and the loop need not wake up between frames for it: a full frame of process data
+// (1,514 bytes) allows 123 us. A small frame (a few drives) keeps the configured budget.
 class CatchUp {
   public:
     explicit CatchUp(const ServeOptions& opt)
@@ -93,14 +99,20 @@ class CatchUp {
           budget_ns_(static_cast<std::uint64_t>(std::max<std::int64_t>(opt.catch_up_budget_us, 0)) * 1000),
           period_ns_(min_ns_) {}
     std::uint64_t period_ns() const { return period_ns_; }
-    void learn(std::uint64_t gap_ns, std::uint64_t work_ns) {
+    // After a frame of frame_bytes (0: a tick; it is held to the last frame's budget).
+    void learn(std::uint64_t gap_ns, std::uint64_t work_ns, std::size_t frame_bytes) {
+        if (frame_bytes != 0)
+            frame_budget_ns_ = std::max(budget_ns_, (frame_bytes + kFrameOverheadBytes) * kWireNsPerByte);
         if (gap_ns < min_ns_) return;  // runs close together say little of the backlog
-        const std::uint64_t estimate = work_ns == 0 ? max_ns_ : gap_ns / work_ns * budget_ns_;
+        const std::uint64_t estimate = work_ns == 0 ? max_ns_ : gap_ns / work_ns * frame_budget_ns_;
         period_ns_ = std::clamp((3 * period_ns_ + std::min(estimate, max_ns_)) / 4, min_ns_, max_ns_);
     }
 
   private:
+    static constexpr std::uint64_t kWireNsPerByte = 80;       // 100 Mbit/s
+    static constexpr std::uint64_t kFrameOverheadBytes = 20;  // preamble, start delimiter, inter-frame gap
     std::uint64_t min_ns_, max_ns_, budget_ns_, period_ns_;
+    std::uint64_t frame_budget_ns_ = budget_ns_;
 };
 
 }  // namespace
@@ -183,7 +195,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
                 to = seg.reply_port() == esc::MasterPort::Secondary ? 1 : 0;
             }
             // The reply path's work, the slaves' catch-up before the frame included (not the send).
-            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now);
+            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now, len);
             if (reply) {
                 if (to) ++st.sent_secondary;
                 send_to_master(to ? *opt.secondary : sock, opt, ConstBytes(buf.data(), len), st, at);
@@ -217,7 +229,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             const bool reply = opt.filter ? opt.filter->process_frame(Bytes(buf.data(), buf.size()), len, at)
                                           : seg.process_frame(Bytes(buf.data(), buf.size()), len, at);
             // The reply path's work, the slaves' catch-up before the frame included (not the send).
-            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now);
+            catch_up.learn(at - std::min(at, last_tick), monotonic_ns() - now, len);
             if (reply && opt.downstream && seg.frame_goes_downstream()) {
                 // Port 1 of the last slave has a link: the frame goes on along the line.
                 if (opt.downstream->send(ConstBytes(buf.data(), len)))
@@ -234,7 +246,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             seg.tick(now);
             if (opt.counters) bump(opt.counters->ticks);
             if (opt.filter) opt.filter->tick(now);
-            catch_up.learn(now - std::min(now, last_tick), monotonic_ns() - now);
+            catch_up.learn(now - std::min(now, last_tick), monotonic_ns() - now, 0);
             last_tick = now;
             last_time = std::max(last_time, now);
         }

@@ -38,9 +38,10 @@ struct ServeOptions {
     // Firmware when it is needed: the loop wakes up for frames, for the slaves' deadlines
     // (Segment::next_firmware_ns) and the faults' timeline, and otherwise only so often that the firmware
     // work a frame finds waiting (the slaves' cycles since their last run, done before the frame is
-    // processed) stays near this budget: between tick_us and kMaxCatchUpUs apart, from what that work
-    // cost so far. A few drives at 1 kHz wake the loop once per frame; a large network gets ticks between
-    // frames as before.
+    // processed) stays near this budget, or near the frame's own time on a real 100 Mbit/s line if that
+    // is longer (its reply is then no later than hardware's): between tick_us and kMaxCatchUpUs apart,
+    // from what that work cost so far. A few drives at 1 kHz wake the loop once per frame; a large
+    // network's catch-up goes into its frames of process data, as long as each fits the frame's time.
     std::int64_t catch_up_budget_us = 20;
     static constexpr std::int64_t kMaxCatchUpUs = 10'000;
     PcapngWriter* pcap = nullptr;   // capture of every frame in and out

@@ -7,9 +7,11 @@
 #include <array>
 #include <cstdint>
 
+#include "cia402/drive.hpp"
 #include "common/bytes.hpp"
 #include "esc/segment.hpp"
 #include "network_support.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "protocol/frame.hpp"
 #include "protocol/registers.hpp"
 
@@ -92,6 +94,75 @@ TEST_F(Cycling, ASlaveThatNoFrameReadsStillRunsWithinItsLagBound) {
     seg().tick(now);
     EXPECT_LE(seg().next_firmware_ns(), now + 16 * seg().local_cycle_ns());
     EXPECT_GT(seg().next_firmware_ns(), now);
+}
+
+TEST_F(Cycling, AFrameReadsEveryServoPeriodUpToItsOwnTime) {
+    // The drive says when its next servo period is due (Application::next_cycle_ns). A frame at that time,
+    // even less than a local cycle after the drive's last run, finds the period stepped.
+    auto* drive = dynamic_cast<cia402::Drive*>(&seg().slave(2).app());
+    ASSERT_NE(drive, nullptr);
+    const std::uint64_t next = drive->next_cycle_ns();
+    // The drive's firmware last runs 100 us before that (a write of AL control gives it work).
+    s.link.set_time(next - 100'000);
+    ASSERT_TRUE(s.master.write16(s.master.slaves()[2].station, protocol::addr(Reg::AlControl),
+                                 static_cast<std::uint16_t>(AlState::Op)));
+    ASSERT_LT(drive->simulated_time_ns(), next);
+    // A read of AL status (which gives the firmware no work after it) at that time.
+    s.link.set_time(next);
+    EXPECT_EQ(s.master.read_al_status(s.master.slaves()[2].station).state(), AlState::Op);
+    EXPECT_EQ(drive->simulated_time_ns(), next);
+}
+
+// Two copies of one network, the firmware of one of them also run between frames (a server's catch-up
+// ticks, 600 us and 150 us before each frame): the master reads the same bytes from both in every cycle,
+// with the drive moving in cyclic synchronous position mode. When the firmware runs does not change what
+// a frame reads, only where the work is done.
+TEST(FirmwareBetweenFrames, TheMasterReadsTheSameAsWithoutIt) {
+    constexpr std::uint64_t kStart = 1'000'000'000;
+    test::ServedNetwork plain{kNetwork, test::ServedNetwork::From::Text, kStart};
+    test::ServedNetwork ticked{kNetwork, test::ServedNetwork::From::Text, kStart};
+    for (test::ServedNetwork* n : {&plain, &ticked})
+        ASSERT_TRUE(n->master.startup(AlState::Op));
+    const auto& rx = plain.master.slaves()[2].out_entries;
+    const auto* cw = master::find_entry(rx, protocol::obj::controlword.index);
+    const auto* mode = master::find_entry(rx, protocol::obj::modes_of_operation.index);
+    const auto* target = master::find_entry(rx, protocol::obj::target_position.index);
+    ASSERT_NE(cw, nullptr);
+    ASSERT_NE(mode, nullptr);
+    ASSERT_NE(target, nullptr);
+    ASSERT_EQ(plain.link.now_ns(), ticked.link.now_ns()) << "both start-ups took the same time";
+    std::int32_t position = 0;
+    std::size_t differences = 0;
+    std::uint64_t in_frames[2] = {0, 0};  // firmware runs while the frames were processed
+    for (int i = 0; i < 400; ++i) {
+        const std::uint16_t control = i < 5 ? 0x06 : i < 10 ? 0x07 : 0x0F;
+        if (i >= 20) position += 2'000;
+        const std::uint64_t t = plain.link.now_ns() + kMs;
+        for (test::ServedNetwork* n : {&plain, &ticked}) {
+            st_le16(n->master.outputs(2).data() + cw->bit_offset / 8, control);
+            n->master.outputs(2)[mode->bit_offset / 8] = 8;  // cyclic synchronous position
+            st_le32(n->master.outputs(2).data() + target->bit_offset / 8,
+                    static_cast<std::uint32_t>(position));
+            if (n == &ticked) {
+                n->built.segment->tick(t - 600'000);
+                n->built.segment->tick(t - 150'000);
+            }
+            n->link.set_time(t);
+            const std::uint64_t before = n->built.segment->counters().firmware_runs;
+            ASSERT_EQ(n->master.exchange_process_data().value_or(0), n->master.expected_wkc());
+            in_frames[n == &ticked] += n->built.segment->counters().firmware_runs - before;
+        }
+        for (std::size_t k = 0; k < 3; ++k) {
+            const ConstBytes a = plain.master.inputs(k), b = ticked.master.inputs(k);
+            if (!std::equal(a.begin(), a.end(), b.begin(), b.end())) ++differences;
+        }
+    }
+    EXPECT_EQ(differences, 0u);
+    // The drive did move, and the ticks did take work out of the frames.
+    auto* drive = dynamic_cast<cia402::Drive*>(&plain.built.segment->slave(2).app());
+    ASSERT_NE(drive, nullptr);
+    EXPECT_GT(drive->position_actual(), 500'000);
+    EXPECT_LT(in_frames[1], in_frames[0]);
 }
 
 }  // namespace
