@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
+#include "device/drive_objects.hpp"
 #include "drive_core_bench.hpp"
 #include "unit/cia402/twin_bench.hpp"
 
@@ -435,6 +437,114 @@ TEST_F(Tx1250Group, Tx1250_3_1_AnErrorHaltsTheWholeGroup) {
     EXPECT_EQ(drive(1).cia402_state(), State::Fault);
     EXPECT_LT(std::abs(drive(0).velocity_actual()), 100);
     EXPECT_LT(std::abs(drive(1).velocity_actual()), 100);
+}
+
+// 3.3 Cyclic slave axes: a linear slave axis (PCON over TWINsync) whose coupling factor, the gear
+// P2653/P2654, changes while coupled and moving. The slave is switched on by its own EtherCAT controlword
+// (P0159 = 0, profile velocity mode, which it ignores while coupled) so that it can be halted alone once
+// decoupled; AccBound 0x2115 bounds the acceleration a change of the factor causes.
+struct Tx1250CyclicSlave : TwinBench {
+    Tx1250CyclicSlave() : TwinBench(&position_line) {}
+    static constexpr std::uint32_t kAccBound = 4'000'000;  // units/s^2
+    static constexpr int kStep = 400;                      // the master's way per 1 ms cycle
+    std::int32_t p = 0;                                    // the master's position set-point
+
+    void SetUp() override {
+        TwinBench::SetUp();
+        namespace tp = twinsync::p;
+        par(1, tp::ControlSelector).set<std::uint16_t>(0);
+        par(1, tp::GearNumerator).set<std::int32_t>(1000);  // factor 1000/1000
+        par(1, tp::GearDenominator).set<std::int32_t>(1000);
+        par(0, tp::Config).set<std::uint32_t>(twinsync::kConfigNoSlaveStateCheck);
+        drive(1).twinsync_port().reconfigure();
+        e(1, device::mfr::coupling_acc_bound.index).set<std::uint32_t>(kAccBound);
+        p = pos(0);
+        for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
+            for (int i = 0; i < 5; ++i)
+                cycle(cw, p, cw, 3, 0);
+        for (int i = 0; i < 50; ++i)
+            cycle(0x0F, p, 0x0F, 3, 0);  // both at rest: the slave couples
+        ASSERT_EQ(drive(0).cia402_state(), State::OperationEnabled);
+        ASSERT_EQ(drive(1).cia402_state(), State::OperationEnabled);
+    }
+    void numerator(std::int32_t n) { par(1, twinsync::p::GearNumerator).set<std::int32_t>(n); }
+    // n cycles with the master advancing `step` a cycle; the slave's position before and after each.
+    std::vector<double> run(int n, int step = kStep, std::uint16_t cw1 = 0x0F) {
+        std::vector<double> x{static_cast<double>(pos(1))};
+        for (int i = 0; i < n; ++i) {
+            cycle(0x0F, p += step, cw1, 3, 0);
+            x.push_back(pos(1));
+        }
+        return x;
+    }
+    // The slave's velocity (units/s) over the w ms from sample i.
+    static double velocity(const std::vector<double>& x, std::size_t i, std::size_t w) {
+        return (x[i + w] - x[i]) / (static_cast<double>(w) * 1e-3);
+    }
+    // The largest acceleration (units/s^2) between consecutive 10 ms velocities: a second difference,
+    // an average of the acceleration over 20 ms that smooths the loops' ripple of a few increments.
+    static double peak_acceleration(const std::vector<double>& x) {
+        double peak = 0;
+        for (std::size_t i = 0; i + 20 < x.size(); ++i)
+            peak = std::max(peak, std::abs(velocity(x, i + 10, 10) - velocity(x, i, 10)) / 10e-3);
+        return peak;
+    }
+    static double largest_step(const std::vector<double>& x) {
+        double s = 0;
+        for (std::size_t i = 1; i < x.size(); ++i)
+            s = std::max(s, std::abs(x[i] - x[i - 1]));
+        return s;
+    }
+};
+
+// "Each online change of the coupling factor causes a discontinuity in the velocity ... the coupling
+// factor arriving via the cyclic interface is therefore smoothed (= filtered). Smoothing is parameterized
+// by limiting the amount of the slave axis acceleration." A factor step from 1 to 2 at 400,000 units/s:
+// the slave accelerates by 400,000 units/s at AccBound (4,000,000 units/s^2, so in about 100 ms) and no
+// faster, then moves at twice the master's velocity; its position never jumps.
+TEST_F(Tx1250CyclicSlave, Tx1250_3_3_FactorStepAtSpeedIsSmoothedToAccBound) {
+    const std::vector<double> cruise = run(300);
+    EXPECT_NEAR(velocity(cruise, 250, 50), 1000.0 * kStep, 0.01 * 1000.0 * kStep) << "factor 1";
+    numerator(2000);
+    const std::vector<double> x = run(400);
+    const double peak = peak_acceleration(x);
+    // The set-point's acceleration is AccBound (4.0e6 through the ramp); the position loop, which has no
+    // acceleration feed-forward from TWINsync, overshoots it by about 15 % where the ramp starts.
+    EXPECT_LE(peak, 1.2 * kAccBound);
+    EXPECT_GE(peak, 0.8 * kAccBound) << "the factor moves at the bound, not slower";
+    // Half-way through the smoothing the slave is between the two velocities.
+    EXPECT_NEAR(velocity(x, 45, 10), 1.5 * 1000.0 * kStep, 0.1 * 1000.0 * kStep);
+    // Afterwards: factor x master velocity.
+    EXPECT_NEAR(velocity(x, 300, 100), 2.0 * 1000.0 * kStep, 0.01 * 1000.0 * kStep);
+    // No position jump: no cycle moves more than the new factor's way (plus the loops' ripple).
+    EXPECT_LE(largest_step(x), 2.0 * kStep * 1.05);
+    // Without AccBound the factor applies at once (a linear slave axis, 3.2): back to 1 within a few ms.
+    e(1, device::mfr::coupling_acc_bound.index).set<std::uint32_t>(0);
+    numerator(1000);
+    const std::vector<double> y = run(100);
+    EXPECT_GT(peak_acceleration(y), 2.0 * kAccBound);
+    EXPECT_NEAR(velocity(y, 50, 50), 1000.0 * kStep, 0.01 * 1000.0 * kStep);
+}
+
+// 3.3 "the decoupling can be done online: the slave is thereby converted into a master, which continues
+// to move as if it were still a slave, but which can also be stopped independently of the former master."
+// Decoupled (P0165 back to EtherCAT) half-way through the smoothing of a factor step, the slave goes on at
+// the velocity of the factor it had reached, though the master stops; then it is halted on its own.
+TEST_F(Tx1250CyclicSlave, Tx1250_3_3_OnlineDecouplingGoesOnThenStopsAlone) {
+    run(300);
+    numerator(2000);
+    const std::vector<double> x = run(50);
+    const double v_decouple = velocity(x, 40, 10);
+    ASSERT_GT(v_decouple, 1.2 * 1000.0 * kStep);
+    ASSERT_LT(v_decouple, 1.8 * 1000.0 * kStep) << "still smoothing";
+    par(1, twinsync::p::SetpointSelector).set<std::uint16_t>(0);
+    const std::vector<double> free = run(100, 0);  // the master stops (at its CSP set-point)
+    EXPECT_NEAR(velocity(free, 50, 50), v_decouple, 0.05 * v_decouple) << "goes on as if still coupled";
+    EXPECT_EQ(drive(1).cia402_state(), State::OperationEnabled);
+    run(300, 0, 0x10F);  // halt (controlword bit 8) of the slave alone
+    const std::vector<double> halted = run(50, 0, 0x10F);
+    EXPECT_LE(halted.back() - halted.front(), 5.0) << "stopped";
+    EXPECT_EQ(drive(1).cia402_state(), State::OperationEnabled);
 }
 
 }  // namespace
