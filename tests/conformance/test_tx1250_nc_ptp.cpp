@@ -10,6 +10,7 @@
 
 #include "device/drive_objects.hpp"
 #include "drive_core_bench.hpp"
+#include "master/coe_client.hpp"
 #include "unit/cia402/twin_bench.hpp"
 
 namespace vecat::cia402::conformance {
@@ -448,10 +449,13 @@ struct Tx1250CyclicSlave : TwinBench {
     static constexpr std::uint32_t kAccBound = 4'000'000;  // units/s^2
     static constexpr int kStep = 400;                      // the master's way per 1 ms cycle
     std::int32_t p = 0;                                    // the master's position set-point
+    bool factor_in_pdo = false;  // the gear numerator P2653 in the slave drive's RxPDO (0x1602)
+    static constexpr std::size_t kFactorOffset = 16;  // after RxPDO 0x1600 (16 bytes)
 
     void SetUp() override {
         TwinBench::SetUp();
         namespace tp = twinsync::p;
+        if (factor_in_pdo) map_factor();
         par(1, tp::ControlSelector).set<std::uint16_t>(0);
         par(1, tp::GearNumerator).set<std::int32_t>(1000);  // factor 1000/1000
         par(1, tp::GearDenominator).set<std::int32_t>(1000);
@@ -467,7 +471,42 @@ struct Tx1250CyclicSlave : TwinBench {
         ASSERT_EQ(drive(0).cia402_state(), State::OperationEnabled);
         ASSERT_EQ(drive(1).cia402_state(), State::OperationEnabled);
     }
-    void numerator(std::int32_t n) { par(1, twinsync::p::GearNumerator).set<std::int32_t>(n); }
+    void numerator(std::int32_t n) {
+        if (factor_in_pdo)
+            st_le32(b.master.outputs(1).data() + kFactorOffset, static_cast<std::uint32_t>(n));
+        else
+            par(1, twinsync::p::GearNumerator).set<std::int32_t>(n);
+    }
+    // The PLC's cyclic interface: P2653 (object 0x2A5D) mapped into RxPDO 0x1602 and assigned after 0x1600
+    // (ETG.1020 PDO mapping by SDO in PRE-OPERATIONAL), then back to OPERATIONAL.
+    void map_factor() {
+        ASSERT_TRUE(b.master.request_state(protocol::AlState::PreOp));
+        master::CoeClient c(b.master, 0x1002);
+        const auto gear =
+            static_cast<std::uint32_t>(twinsync::object_index(twinsync::p::GearNumerator)) << 16 | 32u;
+        ASSERT_TRUE(c.download_value<std::uint8_t>(0x1602, 0, 0).ok());
+        ASSERT_TRUE(c.download_value<std::uint32_t>(0x1602, 1, gear).ok());
+        ASSERT_TRUE(c.download_value<std::uint8_t>(0x1602, 0, 1).ok());
+        ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C12, 0, 0).ok());
+        ASSERT_TRUE(c.download_value<std::uint16_t>(0x1C12, 1, 0x1600).ok());
+        ASSERT_TRUE(c.download_value<std::uint16_t>(0x1C12, 2, 0x1602).ok());
+        ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C12, 0, 2).ok());
+        // As a master re-mapping in PRE-OPERATIONAL: the process data SyncManagers of both drives are
+        // deactivated (activate register 0x0806 = 0) before they are configured with the new length.
+        for (std::uint16_t station : {std::uint16_t{0x1001}, std::uint16_t{0x1002}})
+            for (unsigned sm : {2u, 3u}) {
+                std::uint8_t off[1] = {0};
+                ASSERT_EQ(b.master.fpwr(station, static_cast<std::uint16_t>(protocol::sm_addr(sm) + 6), off),
+                          1);
+            }
+        ASSERT_TRUE(b.master.configure_process_data());
+        ASSERT_EQ(b.master.outputs(1).size(), kFactorOffset + 4);
+        ASSERT_TRUE(b.master.request_state(protocol::AlState::SafeOp))
+            << "AL status code " << b.master.read_al_status(0x1002).code;
+        numerator(1000);
+        b.master.exchange_process_data();
+        ASSERT_TRUE(b.master.request_state(protocol::AlState::Op));
+    }
     // n cycles with the master advancing `step` a cycle; the slave's position before and after each.
     std::vector<double> run(int n, int step = kStep, std::uint16_t cw1 = 0x0F) {
         std::vector<double> x{static_cast<double>(pos(1))};
@@ -545,6 +584,23 @@ TEST_F(Tx1250CyclicSlave, Tx1250_3_3_OnlineDecouplingGoesOnThenStopsAlone) {
     const std::vector<double> halted = run(50, 0, 0x10F);
     EXPECT_LE(halted.back() - halted.front(), 5.0) << "stopped";
     EXPECT_EQ(drive(1).cia402_state(), State::OperationEnabled);
+}
+
+// 3.3: the coupling factor "set through the cyclic PLC-NC interface within the PLC cycle". The gear
+// numerator P2653 is RxPDO-mappable: written in every process data cycle, it is the factor the slave
+// follows (smoothed as above), without an SDO.
+struct Tx1250CyclicSlaveByPdo : Tx1250CyclicSlave {
+    Tx1250CyclicSlaveByPdo() { factor_in_pdo = true; }
+};
+
+TEST_F(Tx1250CyclicSlaveByPdo, Tx1250_3_3_FactorArrivesInTheRxPdo) {
+    const std::vector<double> cruise = run(300);
+    EXPECT_NEAR(velocity(cruise, 250, 50), 1000.0 * kStep, 0.01 * 1000.0 * kStep);
+    numerator(1500);  // 1.5 in the next cycle's outputs
+    const std::vector<double> x = run(300);
+    EXPECT_EQ(par(1, twinsync::p::GearNumerator).get<std::int32_t>(), 1500);
+    EXPECT_LE(peak_acceleration(x), 1.2 * kAccBound);
+    EXPECT_NEAR(velocity(x, 200, 100), 1.5 * 1000.0 * kStep, 0.01 * 1000.0 * kStep);
 }
 
 }  // namespace
