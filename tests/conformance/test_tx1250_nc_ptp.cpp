@@ -1,7 +1,8 @@
 // Conformance to the Beckhoff TwinCAT 2 NC PTP manual TX1250 (../shared/seeds/002_e8a90447e16f9bd4.txt):
 // the profile generator of the drive's profile modes follows the NC's master axis (chapter 2), and two
 // drives coupled by TWINsync behave as its master/slave groups (chapter 3). One test per behaviour, named
-// after the section it checks.
+// after the section it checks. About 600 lines: the manual's sections in one file, in its order, so that
+// the index in README.md points to one place (the benches of chapter 3 are small fixtures on TwinBench).
 #include <gtest/gtest.h>
 
 #include <algorithm>
