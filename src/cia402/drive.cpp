@@ -137,6 +137,7 @@ struct Drive::Objects {
     V<std::int32_t> activation_position = mfr_bind(mfr::activation::position);
     V<std::uint32_t> activation_velocity = mfr_bind(mfr::activation::velocity);
     V<std::uint8_t> activation_mode = mfr_bind(mfr::activation::mode);
+    V<std::uint32_t> coupling_acc_bound = mfr_bind(mfr::coupling_acc_bound);
     V<std::int32_t> position_range_min = bind(obj::position_range_limit::min);
     V<std::int32_t> position_range_max = bind(obj::position_range_limit::max);
     V<std::uint16_t> positioning_option = bind(obj::positioning_option_code);
@@ -434,6 +435,7 @@ void Drive::for_each_parameter(F&& f) {
     f(o.activation_position, p.activation_position);
     f(o.activation_velocity, p.activation_velocity);
     f(o.activation_mode, p.activation_mode);
+    f(o.coupling_acc_bound, p.coupling_acc_bound);
     f(o.position_range_min, p.position_range_min);
     f(o.position_range_max, p.position_range_max);
     f(o.positioning_option, p.positioning_option);

@@ -109,9 +109,12 @@ void DriveCore::step(DriveIo& io) {
     }
     if (mode_ == Mode::Homing && hm_.attained()) coupling_.set_homed();
 
+    // The touch probe and the index latch what the encoder measures: nothing while it is lost, and not
+    // the jump of the period in which it is read again.
+    const bool encoder_was_valid = encoder_valid_;
     const double previous_inc = previous_machine_inc_;
     run_mechanics(io, dt);
-    run_touch_probe(io, previous_inc, previous_machine_inc_);
+    run_touch_probe(io, encoder_was_valid ? previous_inc : previous_machine_inc_, previous_machine_inc_);
     write_feedback(io);
     // The TWINsync values every cycle while the link is on; otherwise only for SDO reads, every 4 ms.
     if (io.twinsync.active || steps_ % 16 == 0) {
@@ -234,6 +237,8 @@ void DriveCore::run_state_machine(DriveIo& io) {
     if (now != before) {
         if (before == State::Fault && now == State::SwitchOnDisabled) {
             active_fault_ = 0;
+            // The reset re-initialises the encoder evaluation: the actual values are measured again.
+            if (mech_.encoder_ok()) encoder_valid_ = true;
             coupling_.clear_error();
             io.feedback.cleared = true;
         }
@@ -389,11 +394,21 @@ void DriveCore::run_mechanics(const DriveIo& io, double dt) {
             break;
     }
     mech_.step(dt);
-    const double machine_inc = machine_increments();
-    previous_machine_inc_ = machine_inc;
-    increments_ = floor64(machine_inc);
-    axis_.actual = static_cast<double>(axis_.ratios.increments_to_user(increments_)) + axis_.home_shift;
-    axis_.velocity = axis_.ratios.radians_to_user(mech_.velocity());
+    // The drive knows the motion only through its encoder. Lost (fault 0x7305), it cannot know it: the
+    // position actual values (0x6063/0x6064) stay at the last measured one and the velocity actual value
+    // (0x606C) reads 0, until a fault reset once the encoder is back (README, "Fault reaction without an
+    // encoder"). The simulated motor goes on moving (mechanics()); the limit switches are wired to the
+    // machine and still see it.
+    if (!mech_.encoder_ok()) encoder_valid_ = false;
+    if (encoder_valid_) {
+        const double machine_inc = machine_increments();
+        previous_machine_inc_ = machine_inc;
+        increments_ = floor64(machine_inc);
+        axis_.actual = static_cast<double>(axis_.ratios.increments_to_user(increments_)) + axis_.home_shift;
+        axis_.velocity = axis_.ratios.radians_to_user(mech_.velocity());
+    } else {
+        axis_.velocity = 0;
+    }
     if (axis_.loop != LoopMode::Position)
         axis_.demand = {axis_.actual, axis_.loop == LoopMode::Velocity ? axis_.velocity_cmd : axis_.velocity,
                         0.0};

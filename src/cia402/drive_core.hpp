@@ -111,7 +111,9 @@ class DriveCore {
     std::uint64_t period_ns_ = kPeriodNs;
     std::uint32_t override_ppm_ = 1'000'000;
     std::int64_t increments_ = 0;
-    double previous_machine_inc_ = 0;
+    double previous_machine_inc_ = 0;  // the machine position the encoder measured last
+    // The actual values are measured: false from an encoder fault (0x7305) until the fault reset.
+    bool encoder_valid_ = true;
     std::uint8_t probe_inputs_ = 0;
     double speed_zero_time_ = 0;
     double temperature_ = 350.0;  // 0.1 C

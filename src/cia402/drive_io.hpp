@@ -139,6 +139,9 @@ struct DriveParameters {
     std::int32_t activation_position = 0;
     std::uint32_t activation_velocity = 0;
     std::uint8_t activation_mode = 0;
+    // 0x2115 AccBound (TX1250 3.3): the TWINsync PCON slave's acceleration caused by a change of its
+    // coupling factor P2653/P2654 is at most this (user units/s^2); 0: the factor applies at once.
+    std::uint32_t coupling_acc_bound = 0;
     // 0x607B:1/2: position range limit; min < max and narrower than INT32 makes the axis modulo
     // (range max - min: max is the same point as min). 0x60F2: positioning option code (bits 6/7: the
     // rotary axis direction option).

@@ -193,19 +193,28 @@ void TwinsyncCoupling::follow(Axis& a, const TwinsyncInputs& t, double dt) {
         case Follow::PositionDelta: {
             // PCON: increments of the master's actual position, corrected by the resolution factors
             // (P0270/P2652), geared (P2653/P2654), reversed by P2583, integrated onto the coupling position.
+            // The coupling factor (TX1250 3.2.2) is the whole of it; it may change while coupled (the
+            // gear is read every cycle: TX1250 3.3, the cyclic slave axis), smoothed by AccBound.
             const std::int32_t master = t.remote_act_pos;
-            const double k =
+            const double commanded =
                 inv * static_cast<double>(t.local_resolution) / std::max<double>(t.remote_resolution, 1.0) *
                 static_cast<double>(t.gear_numerator) / std::max<double>(t.gear_denominator, 1.0);
-            const double v = k * rpm_to_user(speed(t.remote_act_speed));
+            const double master_speed = rpm_to_user(speed(t.remote_act_speed));
             if (!a.coupled) {
-                if (std::abs(v) > still_remote || std::abs(a.velocity) > still) return hold_for_coupling(a);
+                if (std::abs(commanded * master_speed) > still_remote || std::abs(a.velocity) > still)
+                    return hold_for_coupling(a);
                 a.coupled = true;
                 master_last_ = master;
+                factor_ = commanded;  // the factor is set at coupling (3.2.2)
             }
             const auto delta = static_cast<std::int32_t>(static_cast<std::uint32_t>(master) -
                                                          static_cast<std::uint32_t>(master_last_));
             master_last_ = master;
+            smooth_factor(commanded, delta, a.par().coupling_acc_bound, dt);
+            const double k = factor_;
+            const double v = k * master_speed;
+            // slave = k x master + offset with the offset re-based at each change of k: the increments are
+            // added with the factor of their period, so a new factor changes the slope, never the position.
             double p = a.demand.p + k * delta;
             // Re-synchronisation (P2611 bit 12, rising): the slave takes the master position itself.
             if ((control_ & twinsync::control::ReSyncPosition) &&
@@ -252,6 +261,24 @@ void TwinsyncCoupling::follow(Axis& a, const TwinsyncInputs& t, double dt) {
         case Follow::ByControlMode:
             break;
     }
+}
+
+// TX1250 3.3: "the coupling factor arriving via the cyclic interface is therefore smoothed (= filtered).
+// Smoothing is parameterized by limiting the amount of the slave axis acceleration" (AccBound, 0x2115).
+// The slave moves k x delta in a period of dt in which the master moved delta increments, so a change dk
+// of the factor changes its velocity by dk x delta / dt: the applied factor moves towards the commanded
+// one by at most AccBound x dt^2 / |delta| per period (|delta| counted as at least one increment), which
+// bounds that acceleration by AccBound. The master's own acceleration times the factor is the master's
+// profile (3.3 asks for AccBound >= max |factor| x the master's acceleration for stability). 0: at once.
+void TwinsyncCoupling::smooth_factor(double commanded, std::int32_t delta, std::uint32_t acc_bound,
+                                     double dt) {
+    if (acc_bound == 0) {
+        factor_ = commanded;
+        return;
+    }
+    const double moved = std::max(1.0, std::abs(static_cast<double>(delta)));
+    const double step = static_cast<double>(acc_bound) * dt * dt / moved;
+    factor_ += std::clamp(commanded - factor_, -step, step);
 }
 
 bool TwinsyncCoupling::continue_motion(Axis& a, double dt) {

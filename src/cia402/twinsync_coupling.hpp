@@ -3,9 +3,10 @@
 //   - the controlword: a slave controlled through TWINsync (P0159) obeys the master drive's control word
 //     P2611; a master keeps its enable back until its slave is in state Control (unless P2651 bit 2);
 //   - the set-points: a slave on TWINsync's set-points (P0165) follows its master drive in position
-//     (absolute or in increments), speed (with speed-up or torque precontrol) or torque, coupling only at
-//     standstill of both axes; decoupled in motion it goes on at its velocity until it is stopped, halted
-//     or given a new set-point;
+//     (absolute or in increments, the latter with a coupling factor that may change while coupled,
+//     smoothed by AccBound 0x2115: TX1250 3.3), speed (with speed-up or torque precontrol) or torque,
+//     coupling only at standstill of both axes; decoupled in motion it goes on at its velocity until it is
+//     stopped, halted or given a new set-point;
 //   - the errors of the monitoring (40-xx, 39-xx) become faults in state Control (chapter 7);
 //   - the local values the telegram sends (P2596-P2601, P4220, P2650) and the drive's state for the
 //     port (twinsync::LocalState).
@@ -65,9 +66,12 @@ class TwinsyncCoupling {
     void hold_for_coupling(Axis& a);
     // REFPOS (6.2.10): the master's homing carries over to the slave; see follow().
     void take_master_reference(Axis& a, const TwinsyncInputs& t, double dt);
+    // PCON (TX1250 3.3): moves the applied coupling factor towards the commanded one within AccBound.
+    void smooth_factor(double commanded, std::int32_t delta, std::uint32_t acc_bound, double dt);
 
     std::optional<twinsync::ErrorId> error_;
     std::int32_t master_last_ = 0;  // master position at the previous cycle (PCON increments)
+    double factor_ = 1;             // PCON: the coupling factor applied (smoothed by AccBound, 0x2115)
     std::uint16_t control_ = 0, previous_control_ = 0;
     bool continuing_ = false, continue_halting_ = false;
     double continue_velocity_ = 0;

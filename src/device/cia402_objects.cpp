@@ -88,6 +88,7 @@ std::vector<ObjectDescription> cia402_drive_objects() {
                             {make_entry(mfr::activation::position, "Activation position", RW, 0),
                              make_entry(mfr::activation::velocity, "New velocity", RW, 0),
                              make_entry(mfr::activation::mode, "Activation mode", RW, 0)}));
+    o.push_back(make_var(mfr::coupling_acc_bound, "Coupling factor acceleration bound (units/s^2)", RW, 0));
     o.push_back(make_var(mfr::drive_temperature, "Drive temperature (0.1 C)", ROM, 350));
     o.push_back(make_var(mfr::dc_bus_voltage, "DC bus voltage (0.1 V)", ROM, 3250));
     {

@@ -70,5 +70,8 @@ inline constexpr ObjectId<DT::Integer32> position{index, 1};
 inline constexpr ObjectId<DT::Unsigned32> velocity{index, 2};
 inline constexpr ObjectId<DT::Unsigned8> mode{index, 3};
 }  // namespace activation
+// TX1250 3.3 cyclic slave axis: AccBound, the bound of the slave's acceleration that a change of the
+// coupling factor causes (user units/s^2; 0 = none: the factor applies at once, a linear slave axis, 3.2).
+inline constexpr ObjectId<DT::Unsigned32> coupling_acc_bound{0x2115};
 
 }  // namespace vecat::device::mfr

@@ -135,7 +135,10 @@ std::vector<ObjectDescription> twinsync_objects() {
     o.push_back(var(tp::Config, "TOPT_TWIN_Config", DT::Unsigned32, RW));
     o.push_back(
         ranged(tp::RemoteResolution, "Resolution factor (master)", DT::Unsigned32, RW, 1, 1, 0x7FFFFFFF));
-    o.push_back(var(tp::GearNumerator, "Electronic gear numerator", DT::Integer32, RW, 1));
+    // The coupling factor of a PCON slave may arrive cyclically (TwinCAT NC's cyclic slave axis, TX1250
+    // 3.3; smoothed by AccBound 0x2115): the numerator is RxPDO-mappable, the denominator its scale.
+    o.push_back(
+        var(tp::GearNumerator, "Electronic gear numerator", DT::Integer32, RW | access::RxPdoMappable, 1));
     o.push_back(
         ranged(tp::GearDenominator, "Electronic gear denominator", DT::Integer32, RW, 1, 1, 0x7FFFFFFF));
     // Section 4.1.6 / table 4.7: P2609[2], the partner's reference current, is "see P2697[2]": this

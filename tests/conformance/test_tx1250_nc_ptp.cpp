@@ -1,13 +1,17 @@
 // Conformance to the Beckhoff TwinCAT 2 NC PTP manual TX1250 (../shared/seeds/002_e8a90447e16f9bd4.txt):
 // the profile generator of the drive's profile modes follows the NC's master axis (chapter 2), and two
 // drives coupled by TWINsync behave as its master/slave groups (chapter 3). One test per behaviour, named
-// after the section it checks.
+// after the section it checks. About 600 lines: the manual's sections in one file, in its order, so that
+// the index in README.md points to one place (the benches of chapter 3 are small fixtures on TwinBench).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
+#include "device/drive_objects.hpp"
 #include "drive_core_bench.hpp"
+#include "master/coe_client.hpp"
 #include "unit/cia402/twin_bench.hpp"
 
 namespace vecat::cia402::conformance {
@@ -435,6 +439,169 @@ TEST_F(Tx1250Group, Tx1250_3_1_AnErrorHaltsTheWholeGroup) {
     EXPECT_EQ(drive(1).cia402_state(), State::Fault);
     EXPECT_LT(std::abs(drive(0).velocity_actual()), 100);
     EXPECT_LT(std::abs(drive(1).velocity_actual()), 100);
+}
+
+// 3.3 Cyclic slave axes: a linear slave axis (PCON over TWINsync) whose coupling factor, the gear
+// P2653/P2654, changes while coupled and moving. The slave is switched on by its own EtherCAT controlword
+// (P0159 = 0, profile velocity mode, which it ignores while coupled) so that it can be halted alone once
+// decoupled; AccBound 0x2115 bounds the acceleration a change of the factor causes.
+struct Tx1250CyclicSlave : TwinBench {
+    Tx1250CyclicSlave() : TwinBench(&position_line) {}
+    static constexpr std::uint32_t kAccBound = 4'000'000;  // units/s^2
+    static constexpr int kStep = 400;                      // the master's way per 1 ms cycle
+    std::int32_t p = 0;                                    // the master's position set-point
+    bool factor_in_pdo = false;  // the gear numerator P2653 in the slave drive's RxPDO (0x1602)
+    static constexpr std::size_t kFactorOffset = 16;  // after RxPDO 0x1600 (16 bytes)
+
+    void SetUp() override {
+        TwinBench::SetUp();
+        namespace tp = twinsync::p;
+        if (factor_in_pdo) map_factor();
+        par(1, tp::ControlSelector).set<std::uint16_t>(0);
+        par(1, tp::GearNumerator).set<std::int32_t>(1000);  // factor 1000/1000
+        par(1, tp::GearDenominator).set<std::int32_t>(1000);
+        par(0, tp::Config).set<std::uint32_t>(twinsync::kConfigNoSlaveStateCheck);
+        drive(1).twinsync_port().reconfigure();
+        e(1, device::mfr::coupling_acc_bound.index).set<std::uint32_t>(kAccBound);
+        p = pos(0);
+        for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
+            for (int i = 0; i < 5; ++i)
+                cycle(cw, p, cw, 3, 0);
+        for (int i = 0; i < 50; ++i)
+            cycle(0x0F, p, 0x0F, 3, 0);  // both at rest: the slave couples
+        ASSERT_EQ(drive(0).cia402_state(), State::OperationEnabled);
+        ASSERT_EQ(drive(1).cia402_state(), State::OperationEnabled);
+    }
+    void numerator(std::int32_t n) {
+        if (factor_in_pdo)
+            st_le32(b.master.outputs(1).data() + kFactorOffset, static_cast<std::uint32_t>(n));
+        else
+            par(1, twinsync::p::GearNumerator).set<std::int32_t>(n);
+    }
+    // The PLC's cyclic interface: P2653 (object 0x2A5D) mapped into RxPDO 0x1602 and assigned after 0x1600
+    // (ETG.1020 PDO mapping by SDO in PRE-OPERATIONAL), then back to OPERATIONAL.
+    void map_factor() {
+        ASSERT_TRUE(b.master.request_state(protocol::AlState::PreOp));
+        master::CoeClient c(b.master, 0x1002);
+        const auto gear =
+            static_cast<std::uint32_t>(twinsync::object_index(twinsync::p::GearNumerator)) << 16 | 32u;
+        ASSERT_TRUE(c.download_value<std::uint8_t>(0x1602, 0, 0).ok());
+        ASSERT_TRUE(c.download_value<std::uint32_t>(0x1602, 1, gear).ok());
+        ASSERT_TRUE(c.download_value<std::uint8_t>(0x1602, 0, 1).ok());
+        ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C12, 0, 0).ok());
+        ASSERT_TRUE(c.download_value<std::uint16_t>(0x1C12, 1, 0x1600).ok());
+        ASSERT_TRUE(c.download_value<std::uint16_t>(0x1C12, 2, 0x1602).ok());
+        ASSERT_TRUE(c.download_value<std::uint8_t>(0x1C12, 0, 2).ok());
+        // As a master re-mapping in PRE-OPERATIONAL: the process data SyncManagers of both drives are
+        // deactivated (activate register 0x0806 = 0) before they are configured with the new length.
+        for (std::uint16_t station : {std::uint16_t{0x1001}, std::uint16_t{0x1002}})
+            for (unsigned sm : {2u, 3u}) {
+                std::uint8_t off[1] = {0};
+                ASSERT_EQ(b.master.fpwr(station, static_cast<std::uint16_t>(protocol::sm_addr(sm) + 6), off),
+                          1);
+            }
+        ASSERT_TRUE(b.master.configure_process_data());
+        ASSERT_EQ(b.master.outputs(1).size(), kFactorOffset + 4);
+        ASSERT_TRUE(b.master.request_state(protocol::AlState::SafeOp))
+            << "AL status code " << b.master.read_al_status(0x1002).code;
+        numerator(1000);
+        b.master.exchange_process_data();
+        ASSERT_TRUE(b.master.request_state(protocol::AlState::Op));
+    }
+    // n cycles with the master advancing `step` a cycle; the slave's position before and after each.
+    std::vector<double> run(int n, int step = kStep, std::uint16_t cw1 = 0x0F) {
+        std::vector<double> x{static_cast<double>(pos(1))};
+        for (int i = 0; i < n; ++i) {
+            cycle(0x0F, p += step, cw1, 3, 0);
+            x.push_back(pos(1));
+        }
+        return x;
+    }
+    // The slave's velocity (units/s) over the w ms from sample i.
+    static double velocity(const std::vector<double>& x, std::size_t i, std::size_t w) {
+        return (x[i + w] - x[i]) / (static_cast<double>(w) * 1e-3);
+    }
+    // The largest acceleration (units/s^2) between consecutive 10 ms velocities: a second difference,
+    // an average of the acceleration over 20 ms that smooths the loops' ripple of a few increments.
+    static double peak_acceleration(const std::vector<double>& x) {
+        double peak = 0;
+        for (std::size_t i = 0; i + 20 < x.size(); ++i)
+            peak = std::max(peak, std::abs(velocity(x, i + 10, 10) - velocity(x, i, 10)) / 10e-3);
+        return peak;
+    }
+    static double largest_step(const std::vector<double>& x) {
+        double s = 0;
+        for (std::size_t i = 1; i < x.size(); ++i)
+            s = std::max(s, std::abs(x[i] - x[i - 1]));
+        return s;
+    }
+};
+
+// "Each online change of the coupling factor causes a discontinuity in the velocity ... the coupling
+// factor arriving via the cyclic interface is therefore smoothed (= filtered). Smoothing is parameterized
+// by limiting the amount of the slave axis acceleration." A factor step from 1 to 2 at 400,000 units/s:
+// the slave accelerates by 400,000 units/s at AccBound (4,000,000 units/s^2, so in about 100 ms) and no
+// faster, then moves at twice the master's velocity; its position never jumps.
+TEST_F(Tx1250CyclicSlave, Tx1250_3_3_FactorStepAtSpeedIsSmoothedToAccBound) {
+    const std::vector<double> cruise = run(300);
+    EXPECT_NEAR(velocity(cruise, 250, 50), 1000.0 * kStep, 0.01 * 1000.0 * kStep) << "factor 1";
+    numerator(2000);
+    const std::vector<double> x = run(400);
+    const double peak = peak_acceleration(x);
+    // The set-point's acceleration is AccBound (4.0e6 through the ramp); the position loop, which has no
+    // acceleration feed-forward from TWINsync, overshoots it by about 15 % where the ramp starts.
+    EXPECT_LE(peak, 1.2 * kAccBound);
+    EXPECT_GE(peak, 0.8 * kAccBound) << "the factor moves at the bound, not slower";
+    // Half-way through the smoothing the slave is between the two velocities.
+    EXPECT_NEAR(velocity(x, 45, 10), 1.5 * 1000.0 * kStep, 0.1 * 1000.0 * kStep);
+    // Afterwards: factor x master velocity.
+    EXPECT_NEAR(velocity(x, 300, 100), 2.0 * 1000.0 * kStep, 0.01 * 1000.0 * kStep);
+    // No position jump: no cycle moves more than the new factor's way (plus the loops' ripple).
+    EXPECT_LE(largest_step(x), 2.0 * kStep * 1.05);
+    // Without AccBound the factor applies at once (a linear slave axis, 3.2): back to 1 within a few ms.
+    e(1, device::mfr::coupling_acc_bound.index).set<std::uint32_t>(0);
+    numerator(1000);
+    const std::vector<double> y = run(100);
+    EXPECT_GT(peak_acceleration(y), 2.0 * kAccBound);
+    EXPECT_NEAR(velocity(y, 50, 50), 1000.0 * kStep, 0.01 * 1000.0 * kStep);
+}
+
+// 3.3 "the decoupling can be done online: the slave is thereby converted into a master, which continues
+// to move as if it were still a slave, but which can also be stopped independently of the former master."
+// Decoupled (P0165 back to EtherCAT) half-way through the smoothing of a factor step, the slave goes on at
+// the velocity of the factor it had reached, though the master stops; then it is halted on its own.
+TEST_F(Tx1250CyclicSlave, Tx1250_3_3_OnlineDecouplingGoesOnThenStopsAlone) {
+    run(300);
+    numerator(2000);
+    const std::vector<double> x = run(50);
+    const double v_decouple = velocity(x, 40, 10);
+    ASSERT_GT(v_decouple, 1.2 * 1000.0 * kStep);
+    ASSERT_LT(v_decouple, 1.8 * 1000.0 * kStep) << "still smoothing";
+    par(1, twinsync::p::SetpointSelector).set<std::uint16_t>(0);
+    const std::vector<double> free = run(100, 0);  // the master stops (at its CSP set-point)
+    EXPECT_NEAR(velocity(free, 50, 50), v_decouple, 0.05 * v_decouple) << "goes on as if still coupled";
+    EXPECT_EQ(drive(1).cia402_state(), State::OperationEnabled);
+    run(300, 0, 0x10F);  // halt (controlword bit 8) of the slave alone
+    const std::vector<double> halted = run(50, 0, 0x10F);
+    EXPECT_LE(halted.back() - halted.front(), 5.0) << "stopped";
+    EXPECT_EQ(drive(1).cia402_state(), State::OperationEnabled);
+}
+
+// 3.3: the coupling factor "set through the cyclic PLC-NC interface within the PLC cycle". The gear
+// numerator P2653 is RxPDO-mappable: written in every process data cycle, it is the factor the slave
+// follows (smoothed as above), without an SDO.
+struct Tx1250CyclicSlaveByPdo : Tx1250CyclicSlave {
+    Tx1250CyclicSlaveByPdo() { factor_in_pdo = true; }
+};
+
+TEST_F(Tx1250CyclicSlaveByPdo, Tx1250_3_3_FactorArrivesInTheRxPdo) {
+    const std::vector<double> cruise = run(300);
+    EXPECT_NEAR(velocity(cruise, 250, 50), 1000.0 * kStep, 0.01 * 1000.0 * kStep);
+    numerator(1500);  // 1.5 in the next cycle's outputs
+    const std::vector<double> x = run(300);
+    EXPECT_EQ(par(1, twinsync::p::GearNumerator).get<std::int32_t>(), 1500);
+    EXPECT_LE(peak_acceleration(x), 1.2 * kAccBound);
+    EXPECT_NEAR(velocity(x, 200, 100), 1.5 * 1000.0 * kStep, 0.01 * 1000.0 * kStep);
 }
 
 }  // namespace

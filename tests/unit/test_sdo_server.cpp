@@ -1042,10 +1042,10 @@ TEST_F(Sdo, OdListLengths) {
     EXPECT_EQ(ld_le16(r.data.data() + 6), count(device::access::TxPdoMappable));
     EXPECT_EQ(ld_le16(r.data.data() + 8), count(device::access::Backup));
     EXPECT_EQ(ld_le16(r.data.data() + 10), count(device::access::Settings));
-    // The default drive: 169 objects (61 of them TWINsync, 0x1010/0x1011, the TX1250 objects
-    // 0x2112-0x2114 and 0x60F2), 28 RxPDO-mappable, 50 TxPDO-mappable (26 of them TWINsync values), none
-    // backup/settings.
-    EXPECT_EQ(r.data, cat({le16(0), le16(169), le16(28), le16(50), le16(0), le16(0)}));
+    // The default drive: 170 objects (61 of them TWINsync, 0x1010/0x1011, the TX1250 objects
+    // 0x2112-0x2115 and 0x60F2), 29 RxPDO-mappable (the gear numerator P2653 among them, TX1250 3.3), 50
+    // TxPDO-mappable (26 of them TWINsync values), none backup/settings.
+    EXPECT_EQ(r.data, cat({le16(0), le16(170), le16(29), le16(50), le16(0), le16(0)}));
 }
 
 TEST_F(Sdo, OdListOfPdoMappableObjects) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "cia402/drive_core.hpp"
 #include "protocol/cia402.hpp"
@@ -77,6 +78,48 @@ TEST_F(DriveCoreTest, AnInjectedFaultIsRaisedOnceAndClearedByAFaultReset) {
     core.step(io);
     EXPECT_TRUE(io.feedback.cleared);
     EXPECT_EQ(core.state(), State::SwitchOnDisabled);
+}
+
+// An encoder fault (0x7305) at speed: the drive cannot know the motion any more. 0x6063/0x6064 stay at the
+// last measured position and 0x606C reads 0 while the simulated motor coasts on (src/cia402/README.md,
+// "Fault reaction without an encoder"); cleared and reset, the encoder is read again, with the reference
+// it had: the actual values are the motor's true position and motion.
+TEST_F(DriveCoreTest, AnEncoderFaultFreezesTheActualValuesUntilTheFaultReset) {
+    constexpr double kRev = 1 << 20;
+    auto true_position = [&] { return core.mechanics().position() / (2 * std::numbers::pi) * kRev; };
+    auto true_velocity = [&] { return core.mechanics().velocity() / (2 * std::numbers::pi) * kRev; };
+    enable(Mode::ProfileVelocity);
+    io.command.target_velocity = 1 << 20;  // one revolution per second
+    run_ms(500);
+    ASSERT_NEAR(io.feedback.velocity_actual, kRev, kRev / 50);
+    io.parameters.simulated_fault = fault::Encoder;
+    core.step(io);
+    const std::int32_t frozen = io.feedback.position_actual;
+    const std::int32_t frozen_internal = io.feedback.position_internal;
+    EXPECT_EQ(io.feedback.velocity_actual, 0);
+    EXPECT_GT(true_velocity(), 0.5 * kRev) << "the motor coasts on (friction stops it in a few ms)";
+    run_ms(20);
+    EXPECT_EQ(core.state(), State::Fault);
+    EXPECT_GT(true_position() - frozen, 100.0);
+    EXPECT_EQ(io.feedback.position_actual, frozen);
+    EXPECT_EQ(io.feedback.position_internal, frozen_internal);
+    EXPECT_EQ(io.feedback.velocity_actual, 0);
+    // The cause gone, the drive still in FAULT: nothing is measured until the fault reset.
+    io.parameters.simulated_fault = 0;
+    run_ms(1);
+    EXPECT_EQ(io.feedback.position_actual, frozen);
+    io.command.controlword = cmd::FaultReset;
+    core.step(io);
+    ASSERT_EQ(core.state(), State::SwitchOnDisabled);
+    EXPECT_NEAR(io.feedback.position_actual, true_position(), 1.0);
+    EXPECT_NEAR(io.feedback.velocity_actual, true_velocity(), 1.0);
+    EXPECT_GT(io.feedback.position_actual - frozen, 100);
+    // And measured from then on: the axis can be enabled again and moves.
+    io.command.controlword = 0;
+    run_ms(3000);  // friction stops the coasting motor
+    enable(Mode::ProfileVelocity);
+    run_ms(500);
+    EXPECT_NEAR(io.feedback.velocity_actual, kRev, kRev / 50);
 }
 
 // TWINsync REFPOS slave (specification 6.2.10) on hand-filled TwinsyncInputs: a jump of the master's
