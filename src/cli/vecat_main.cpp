@@ -515,7 +515,7 @@ int main(int argc, char** argv) {
         c->add_option(
             "--device", device_type,
             "Device of the ESI file by its Type name; without --esi a built-in drive: drive (the "
-            "vecat drive, the default), hiwin-d2 (the HIWIN D2 CoE drive) soe-drive (the AX5000-like SoE "
+            "vecat drive, the default), hiwin-d2 (the HIWIN D2 CoE drive), soe-drive (the AX5000-like SoE "
             "drive) or soe-drive-2 (the same with two axes, AX5206-like)");
         c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
         c->add_option("--revision", revision,
