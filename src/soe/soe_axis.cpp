@@ -139,21 +139,21 @@ void SoeAxis::read_parameters() {
     core_->configure(io_);
 }
 
-// The controlword that takes the core's state machine towards what S-0-0134 asks: drive enable (bit 14)
-// off: torque off at once (disable voltage); drive on (bit 15) off: shut down (logic ready); both on: power
-// ready, then in operation; halt (bit 13 = 0) holds the axis. An S-0-0099 reset sends the fault reset edge.
+// The controlword that takes the core's state machine towards what S-0-0134 asks (IEC 61800-7-204): drive
+// enable (bit 14) off: torque off at once (disable voltage, logic ready); enable on, drive on (bit 15) off:
+// power on without torque (switched on; from operation, "disable operation" brakes the axis first); both on:
+// in operation; halt (bit 13 = 0) holds the axis. An S-0-0099 reset sends the fault reset edge.
 std::uint16_t SoeAxis::core_controlword() const {
     const State s = core_->state();
     if (fault_reset_ && s == State::Fault) return cmd::FaultReset;
+    const bool on = (control_ & control::DriveOn) != 0;
     std::uint16_t c = cmd::DisableVoltage;
     if ((control_ & control::DriveEnable) == 0)
         c = cmd::DisableVoltage;
-    else if ((control_ & control::DriveOn) == 0)
-        c = cmd::Shutdown;
     else if (s == State::SwitchOnDisabled || s == State::NotReadyToSwitchOn)
         c = cmd::Shutdown;  // transition 2 first
-    else if (s == State::ReadyToSwitchOn)
-        c = cmd::SwitchOn;  // transition 3
+    else if (s == State::ReadyToSwitchOn || !on)
+        c = cmd::SwitchOn;  // transition 3 (or 5 from operation)
     else
         c = cmd::EnableOperation;  // transition 4
     if ((control_ & control::Run) == 0) c |= cw::Halt;

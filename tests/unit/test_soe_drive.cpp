@@ -55,9 +55,13 @@ TEST(SoeDriveCore, ControlWordBitsWalkTheStateMachine) {
     r.op();
     r.cycle(5);
     EXPECT_EQ(readiness(ld_le16(r.in().data())), status::LogicReady);
-    st_le16(r.out().data(), control::DriveOn);  // drive on without enable: the power section stays off
+    st_le16(r.out().data(), control::DriveOn);  // drive on without enable: nothing is powered
     r.cycle(5);
     EXPECT_EQ(readiness(ld_le16(r.in().data())), status::LogicReady);
+    st_le16(r.out().data(), control::DriveEnable);  // enable without drive on: power, no torque
+    r.cycle(5);
+    EXPECT_EQ(readiness(ld_le16(r.in().data())), status::PowerReady);
+    EXPECT_EQ(r.drive().axis().core().state(), protocol::cia402::State::SwitchedOn);
     st_le16(r.out().data(), control::DriveOn | control::DriveEnable);  // halted, but in operation
     r.cycle(5);
     EXPECT_EQ(readiness(ld_le16(r.in().data())), status::InOperation);
@@ -67,7 +71,10 @@ TEST(SoeDriveCore, ControlWordBitsWalkTheStateMachine) {
     EXPECT_EQ(readiness(ld_le16(r.in().data())), status::InOperation);
     EXPECT_EQ(ld_le16(r.in().data()) & status::ModeMask, 0);  // the primary mode (bits 8-9 = 0)
     EXPECT_EQ(r.drive().axis().core().mode(), protocol::cia402::Mode::CyclicPosition);
-    // Enable off: torque off at once, logic ready.
+    // Drive on off: the axis brakes, then power ready without torque; enable off: torque off, logic ready.
+    st_le16(r.out().data(), control::DriveEnable | control::Run);
+    r.cycle(20);
+    EXPECT_EQ(readiness(ld_le16(r.in().data())), status::PowerReady);
     st_le16(r.out().data(), control::DriveOn);
     r.cycle(5);
     EXPECT_EQ(readiness(ld_le16(r.in().data())), status::LogicReady);
