@@ -21,7 +21,7 @@ set(LAYER_esc protocol device)     # the emulated ESC, the slave, the segment
 set(LAYER_coe esc device)          # object dictionary, SDO server, PDO mapping
 set(LAYER_foe esc)                 # FoE server, its files, the bootloader of the BOOT state
 set(LAYER_eoe esc net)             # EoE server, the device's IP responder, its TAP interface
-set(LAYER_soe esc)                 # SoE server, the IDN model, the SoE drive (an application)
+set(LAYER_soe esc drive_core)      # SoE server, the IDN model, the SoE drive (an application on the drive core)
 set(LAYER_motion protocol)         # profile generator, mechanics, homing, CiA 402 state machine, touch probe
 set(LAYER_drive_core motion twinsync)  # the drive core, its operation modes, the TWINsync coupling: no EtherCAT
 set(LAYER_cia402 drive_core coe twinsync)  # the CoE adapter of the drive core, the TWINsync port

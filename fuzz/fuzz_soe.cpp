@@ -1,7 +1,7 @@
 // Fuzz target: SoE (ETG.1000.6 5.6). The parser of protocol/soe.hpp and the attribute word on raw bytes,
-// and the SoE drive of one slave (src/soe: its server, its IDNs, its telegrams and commands) behind its
-// mailbox, brought to PREOP like a master does. The input is a sequence of steps, each an opcode byte and
-// its argument:
+// and the two-axis SoE drive of one slave (src/soe: its server, drive numbers 0 and 1 with their IDNs,
+// telegrams, commands and drive cores; 2-7 answered 0x800A) behind its mailbox, brought to PREOP like a
+// master does. The input is a sequence of steps, each an opcode byte and its argument:
 //   0, 1  an SoE message into SM0: header byte (opcode, incomplete, error, drive), elements, 16-bit IDN or
 //         fragments left, length-prefixed data
 //   2     a whole mailbox write (length-prefixed bytes, padded to the SM0 length: any type, any header)
@@ -73,7 +73,7 @@ void parsers(ConstBytes c) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    static const auto model = esc::DeviceModel::of(device::soe_drive());
+    static const auto model = esc::DeviceModel::of(device::soe_drive(2));
     static const auto& dev = *model.description;
     static const auto sm0 = dev.sync_managers.at(0);
     static const auto sm1 = dev.sync_managers.at(1);
@@ -139,8 +139,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         const auto s = static_cast<std::uint8_t>(slave.state());
         VECAT_FUZZ_CHECK(s == 1 || s == 2 || s == 3 || s == 4 || s == 8);
         VECAT_FUZZ_CHECK(drive->server()->buffered() <= soe::SoeServer::kMaxTransfer + 1024 + 8);
-        // The MDT and AT stay what the configuration lists say, within the lists' maximum.
-        VECAT_FUZZ_CHECK(drive->output_bytes() <= 2 + 8 * 8 && drive->input_bytes() <= 2 + 8 * 8);
+        // The MDT and AT stay what the configuration lists say, within the lists' maximum (two axes).
+        VECAT_FUZZ_CHECK(drive->output_bytes() <= 2 * (2 + 8 * 8) && drive->input_bytes() <= 2 * (2 + 8 * 8));
     }
     return 0;
 }

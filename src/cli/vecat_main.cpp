@@ -62,8 +62,10 @@ void install_signals() {
     sigaction(SIGTERM, &sa, nullptr);
 }
 
-// The built-in SoE drive's name for --device (src/soe: not a CiA 402 drive, served by its own application).
+// The built-in SoE drives' names for --device (src/soe: not CiA 402 drives over CoE, served by their own
+// application): one axis, two axes.
 constexpr const char* kSoeDrive = "soe-drive";
+constexpr const char* kSoeDrive2 = "soe-drive-2";
 
 // The device to emulate: a built-in drive (--device NAME, the vecat drive without it), or one device of
 // a vendor ESI file.
@@ -74,10 +76,11 @@ std::optional<vecat::device::DeviceDescription> load_device(const std::string& e
         if (!sel.type) return vecat::device::default_drive();
         if (auto d = vecat::device::builtin_drive(*sel.type)) return d;
         if (*sel.type == kSoeDrive) return vecat::device::soe_drive();
+        if (*sel.type == kSoeDrive2) return vecat::device::soe_drive(2);
         std::string names;
         for (auto n : vecat::device::builtin_drive_names())
             names += (names.empty() ? "" : ", ") + std::string(n);
-        names += std::string(", ") + kSoeDrive;
+        names += std::string(", ") + kSoeDrive + ", " + kSoeDrive2;
         fmt::print(stderr, "vecat: --device {}: no such built-in device (without --esi: {})\n", *sel.type,
                    names);
         return std::nullopt;
@@ -256,7 +259,7 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             }
         }
         const auto& dev = *loaded;
-        if (esi_path.empty() && sel.type == kSoeDrive)
+        if (esi_path.empty() && (sel.type == kSoeDrive || sel.type == kSoeDrive2))
             seg = vecat::esc::make_segment(vecat::esc::DeviceModel::of(dev), slaves, {},
                                            vecat::soe::make_soe_drive);
         else
@@ -512,8 +515,8 @@ int main(int argc, char** argv) {
         c->add_option(
             "--device", device_type,
             "Device of the ESI file by its Type name; without --esi a built-in drive: drive (the "
-            "vecat drive, the default), hiwin-d2 (the HIWIN D2 CoE drive) or soe-drive (the AX5000-like SoE "
-            "drive)");
+            "vecat drive, the default), hiwin-d2 (the HIWIN D2 CoE drive), soe-drive (the AX5000-like SoE "
+            "drive) or soe-drive-2 (the same with two axes, AX5206-like)");
         c->add_option("--product", product, "Device of the ESI file by its product code (0x... accepted)");
         c->add_option("--revision", revision,
                       "Revision of that device (0x... accepted); without it the file's first one. An error "

@@ -377,26 +377,38 @@ const MappedEntry* find_entry(const std::vector<MappedEntry>& entries, std::uint
 }
 
 bool Master::read_pdo_sizes_soe(SlaveInfo& s) {
-    // Like SOEM's ecx_readIDNmap (drive 0): S-0-0024 lists the IDNs of the MDT, S-0-0016 those of the AT; the
-    // attribute of each gives its length; the control and status word (16 bits each) are not listed.
+    // Like SOEM's ecx_readIDNmap: for each drive number 0-7, S-0-0024 lists the IDNs of its MDT, S-0-0016
+    // those of its AT; the attribute of each gives its length; the control and status word (16 bits each)
+    // are not listed. A drive that answers with an error (0x800A: no such drive) adds nothing; the blocks
+    // of the drives follow one another in the SyncManagers.
     SoeClient c(*this, s.station);
-    auto bytes_of = [&](protocol::Idn list, unsigned& bytes) {
-        const auto r = c.read(0, protocol::soe_element::Value, list);
+    auto bytes_of = [&](std::uint8_t drive, protocol::Idn list, unsigned& bytes) {
+        const auto r = c.read(drive, protocol::soe_element::Value, list);
         if (!r.ok() || r.data.size() < protocol::kSoeListHeaderSize) return false;
         const std::size_t current = ld_le16(r.data.data());
-        bytes = 2;
+        bytes += 2;
         for (std::size_t i = 0; i + 1 < current && protocol::kSoeListHeaderSize + i + 1 < r.data.size();
              i += 2) {
             const protocol::Idn idn{ld_le16(r.data.data() + protocol::kSoeListHeaderSize + i)};
-            const auto a = c.read(0, protocol::soe_element::Attribute, idn);
+            const auto a = c.read(drive, protocol::soe_element::Attribute, idn);
             if (!a.ok() || a.data.size() < 4) return false;
             const auto attr = protocol::SoeAttribute::unpack(ld_le32(a.data.data()));
             if (!attr.list) bytes += static_cast<unsigned>(attr.element_size());
         }
         return true;
     };
-    if (!bytes_of(protocol::s_idn(24), s.out_bytes) || !bytes_of(protocol::s_idn(16), s.in_bytes))
-        return false;
+    constexpr std::uint8_t kDrives = 8;  // the 3-bit drive number of the SoE header
+    s.out_bytes = 0;
+    s.in_bytes = 0;
+    bool any = false;
+    for (std::uint8_t d = 0; d < kDrives; ++d) {
+        unsigned out = 0, in = 0;
+        if (!bytes_of(d, protocol::s_idn(24), out) || !bytes_of(d, protocol::s_idn(16), in)) continue;
+        s.out_bytes += out;
+        s.in_bytes += in;
+        any = true;
+    }
+    if (!any) return false;
     // The MDT goes through the SII's output SyncManager, the AT through its input one.
     s.out_entries.clear();
     s.in_entries.clear();

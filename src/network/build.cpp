@@ -120,6 +120,9 @@ Made make_device(const DeviceEntry& e, const std::string& file, const std::strin
         case Source::SoeDrive:
             d = device::soe_drive();
             break;
+        case Source::SoeDrive2:
+            d = device::soe_drive(2);
+            break;
         case Source::Esi: {
             esi::DeviceSelector sel;
             sel.type = e.esi_type;
@@ -218,14 +221,15 @@ Made make_device(const DeviceEntry& e, const std::string& file, const std::strin
     m.model = esc::DeviceModel::of(d);
     m.esc.port_descriptor =
         descriptor(default_ports(e.source), e.source == Source::Drive || e.source == Source::HiwinD2 ||
-                                                    e.source == Source::SoeDrive || e.source == Source::Esi
+                                                    e.source == Source::SoeDrive ||
+                                                    e.source == Source::SoeDrive2 || e.source == Source::Esi
                                                 ? kPortMii
                                                 : kPortEbus);
     if (drive)
         m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
             return std::unique_ptr<esc::Application>(std::make_unique<cia402::Drive>(dd, objects));
         };
-    else if (e.source == Source::SoeDrive)
+    else if (e.source == Source::SoeDrive || e.source == Source::SoeDrive2)
         m.factory = soe::make_soe_drive;
     else
         m.factory = process_image;

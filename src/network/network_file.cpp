@@ -26,9 +26,10 @@ struct Kind {
 };
 // The values of device: (built-in devices).
 constexpr Kind kBuiltIn[] = {
-    {"drive", Source::Drive},          {"coupler", Source::Coupler},        {"junction", Source::Junction},
-    {"digital-in", Source::DigitalIn}, {"digital-out", Source::DigitalOut}, {"analog-in", Source::AnalogIn},
-    {"analog-out", Source::AnalogOut}, {"hiwin-d2", Source::HiwinD2},       {"soe-drive", Source::SoeDrive},
+    {"drive", Source::Drive},           {"coupler", Source::Coupler},        {"junction", Source::Junction},
+    {"digital-in", Source::DigitalIn},  {"digital-out", Source::DigitalOut}, {"analog-in", Source::AnalogIn},
+    {"analog-out", Source::AnalogOut},  {"hiwin-d2", Source::HiwinD2},       {"soe-drive", Source::SoeDrive},
+    {"soe-drive-2", Source::SoeDrive2},
 };
 
 bool is_io(Source s) {
@@ -372,6 +373,8 @@ std::string_view to_string(Source s) noexcept {
             return "hiwin-d2";
         case Source::SoeDrive:
             return "soe-drive";
+        case Source::SoeDrive2:
+            return "soe-drive-2";
         case Source::Esi:
             return "esi";
         case Source::Sii:

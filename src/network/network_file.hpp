@@ -41,6 +41,7 @@ enum class Source : std::uint8_t {
     Drive,       // the built-in vecat CiA 402 drive
     HiwinD2,     // built in: the HIWIN D2 CoE drive (device/hiwin_d2.hpp) on the vecat drive core
     SoeDrive,    // built in: the AX5000-like SoE drive (device/soe_drive.hpp, src/soe)
+    SoeDrive2,   // built in: the same with two axes, drive numbers 0 and 1 (AX5206-like)
     Esi,         // a device of a vendor ESI file (type / product / revision)
     Sii,         // a raw SII EEPROM dump, with the process data its categories describe
     Coupler,     // built in: EK1100-like coupler without PDI

@@ -1,8 +1,9 @@
 // The IDN table of the SoE drive: names, attributes, units, limits and defaults of the IDNs it knows
-// (IEC 61800-7-204 numbers and names; P-0-0100 is vecat's data container for long transfers).
+// (IEC 61800-7-204 numbers and names; P-0-0100 is vecat's data container for long transfers, P-0-0101 the
+// execution time of a procedure command). The units: soe_axis.hpp (kIncrementsPerRevolution...).
 #include <string_view>
 
-#include "soe/soe_drive.hpp"
+#include "soe/soe_axis.hpp"
 
 namespace vecat::soe {
 
@@ -107,19 +108,28 @@ std::vector<IdnEntry> drive_idns() {
     v.push_back(idn_list(idn::MdtConfiguration, "Configuration list of the MDT", {idn::PositionCommand.raw},
                          kMaxMapped, true));
     v.push_back(text(idn::ManufacturerVersion, "Manufacturer version", "vecat SoE drive 0.1"));
+    // The operation modes S-0-0134 bits 8-9 select: position (feedback 1), velocity, torque control.
+    v.push_back(value(idn::PrimaryOperationMode, "Primary operation mode", fixed(1, T::Binary, true), "",
+                      op_mode::PositionFeedback1));
+    v.push_back(value(idn::SecondaryOperationMode1, "Secondary operation mode 1", fixed(1, T::Binary, true),
+                      "", op_mode::Velocity));
+    v.push_back(value(idn::SecondaryOperationMode2, "Secondary operation mode 2", fixed(1, T::Binary, true),
+                      "", op_mode::Torque));
+    v.push_back(value(idn::SecondaryOperationMode3, "Secondary operation mode 3", fixed(1, T::Binary, true),
+                      "", op_mode::None));
+    // Velocities in 0.0001 rpm (4 decimals).
     v.push_back(
-        value(idn::PrimaryOperationMode, "Primary operation mode", fixed(1, T::Binary, true), "", 0x0003));
-    v.push_back(value(idn::VelocityCommand, "Velocity command value", fixed(2, T::Signed), "rpm", 0));
-    v.push_back(
-        read_only(value(idn::VelocityFeedback, "Velocity feedback value 1", fixed(2, T::Signed), "rpm", 0)));
+        value(idn::VelocityCommand, "Velocity command value", fixed(2, T::Signed, false, 4), "rpm", 0));
+    v.push_back(read_only(
+        value(idn::VelocityFeedback, "Velocity feedback value 1", fixed(2, T::Signed, false, 4), "rpm", 0)));
     v.push_back(value(idn::PositionCommand, "Position command value", fixed(2, T::Signed), "inc", 0));
     v.push_back(
         read_only(value(idn::PositionFeedback, "Position feedback value 1", fixed(2, T::Signed), "inc", 0)));
     v.push_back(value(idn::TorqueCommand, "Torque command value", fixed(1, T::Signed, false, 1), "%", 0));
     v.push_back(read_only(
         value(idn::TorqueFeedback, "Torque feedback value", fixed(1, T::Signed, false, 1), "%", 0)));
-    v.push_back(value(idn::VelocityLimit, "Bipolar velocity limit value", fixed(2, T::Unsigned), "rpm", 6000,
-                      0, 0x7FFFFFFF));
+    v.push_back(value(idn::VelocityLimit, "Bipolar velocity limit value", fixed(2, T::Unsigned, false, 4),
+                      "rpm", static_cast<std::uint64_t>(6000 * kVelocityUnitsPerRpm), 0, 0x7FFFFFFF));
     v.push_back(text(idn::DiagnosticMessage, "Diagnostic message", "ready"));
     v.push_back(procedure(idn::ResetClass1Diagnostic, "Reset class 1 diagnostic"));
     v.push_back(procedure(idn::Cp3TransitionCheck, "CP3 transition check"));
@@ -145,6 +155,9 @@ std::vector<IdnEntry> drive_idns() {
     c.attribute.type = SoeDataType::Hex;
     c.max_list_bytes = 1024;
     v.push_back(std::move(c));
+    // P-0-0101: how long a procedure command is "in progress" before it is executed, in µs (0: at once).
+    v.push_back(value(idn::CommandDuration, "Procedure command execution time", fixed(2, T::Unsigned), "us",
+                      kDefaultCommandDurationUs, 0, kMaxCommandDurationUs));
     // S-0-0017 lists them all.
     std::vector<std::uint16_t> all;
     for (const auto& e : v)

@@ -11,6 +11,7 @@
 
 #include "common/bytes.hpp"
 #include "device/simple_devices.hpp"
+#include "device/soe_drive.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "network/build.hpp"
@@ -419,6 +420,23 @@ devices:
     EXPECT_EQ(sl[1].sii.mailbox_protocols, 0x0010);
     EXPECT_EQ(sl[1].out_bytes, 6u);  // control word + S-0-0047
     EXPECT_EQ(sl[1].in_bytes, 6u);   // status word + S-0-0051
+    for (int i = 0; i < 10; ++i)
+        ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
+}
+
+// device: soe-drive-2, the two-axis SoE drive: the master sums drives 0 and 1 (drives 2-7 answer 0x800A), the
+// SyncManagers hold both blocks, OP with both.
+TEST(Network, TheTwoAxisSoeDrive) {
+    Served s("devices:\n  - name: ax2\n    device: soe-drive-2\n");
+    EXPECT_EQ(
+        parse_network("devices:\n  - name: ax2\n    device: soe-drive-2\n", "n.yaml").devices.at(0).source,
+        Source::SoeDrive2);
+    std::string why;
+    ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
+    const auto& sl = s.master.slaves();
+    EXPECT_EQ(sl[0].sii.identity.product_code, device::kSoeDrive2Product);
+    EXPECT_EQ(sl[0].out_bytes, 12u);  // (control word + S-0-0047) x 2
+    EXPECT_EQ(sl[0].in_bytes, 12u);   // (status word + S-0-0051) x 2
     for (int i = 0; i < 10; ++i)
         ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
 }

@@ -2,21 +2,18 @@
 // protocol/soe.hpp (round trips, bytes written by hand from the header layout), the SoE server's cases
 // (read and write of elements, segmented transfers both ways, notifications) with every SoE error code and
 // mailbox error it answers, and the SoE drive behind the project's master: the AT/MDT mapping through
-// S-0-0015/0016/0024 as SOEM's ecx_readIDNmap reads it, the process data, the procedure commands.
+// S-0-0015/0016/0024 as SOEM's ecx_readIDNmap reads it, the process data, the procedure commands. The
+// drive's motion, its two axes and the commands' timing: test_soe_drive.cpp.
 #include <gtest/gtest.h>
 
 #include <map>
 
-#include "device/soe_drive.hpp"
 #include "esc/sii_image.hpp"
-#include "master/soe_client.hpp"
-#include "protocol/soe.hpp"
-#include "soe/soe_drive.hpp"
-#include "soe/soe_server.hpp"
-#include "test_support.hpp"
+#include "soe_bench.hpp"
 
 using namespace vecat;
 using namespace vecat::test;
+using namespace vecat::test::soe_bench;
 using protocol::AlState;
 using protocol::Idn;
 using protocol::MailboxType;
@@ -25,112 +22,6 @@ using protocol::SoeMessage;
 using protocol::SoeOpCode;
 namespace el = protocol::soe_element;
 namespace idn = soe::idn;
-
-namespace {
-
-// ---- The server alone: a reply sink of a 128-byte mailbox that keeps every message committed.
-struct Sink final : esc::MailboxReplySink {
-    std::array<std::uint8_t, 128 - protocol::kMailboxHeaderSize> buf{};
-    std::vector<std::pair<MailboxType, std::vector<std::uint8_t>>> sent;
-    std::size_t unread = 0;  // pending(): what the master has not read yet
-    Bytes reply_buffer() override { return Bytes(buf.data(), buf.size()); }
-    void commit(MailboxType t, std::size_t n) override {
-        sent.emplace_back(t, std::vector<std::uint8_t>(buf.begin(), buf.begin() + static_cast<long>(n)));
-    }
-    bool can_commit() const override { return true; }
-    std::size_t pending() const override { return unread; }
-    SoeMessage last() const {
-        EXPECT_FALSE(sent.empty());
-        EXPECT_EQ(sent.back().first, MailboxType::SoE);
-        return *protocol::parse_soe(sent.back().second);
-    }
-};
-
-std::vector<std::uint8_t> request(SoeOpCode op, std::uint8_t drive, std::uint8_t elements,
-                                  std::uint16_t idn_field, ConstBytes data = {}, bool incomplete = false) {
-    SoeMessage m;
-    m.op = op;
-    m.drive = drive;
-    m.elements = elements;
-    m.idn_or_fragments = idn_field;
-    m.incomplete = incomplete;
-    m.data = data;
-    std::vector<std::uint8_t> b(protocol::kSoeHeaderSize + data.size());
-    b.resize(protocol::write_soe(b, m));
-    return b;
-}
-
-std::vector<std::uint8_t> u16(std::uint16_t v) {
-    return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8)};
-}
-std::vector<std::uint8_t> u32(std::uint32_t v) {
-    return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8),
-            static_cast<std::uint8_t>(v >> 16), static_cast<std::uint8_t>(v >> 24)};
-}
-// A list value: current length, maximum length, the bytes.
-std::vector<std::uint8_t> list(const std::vector<std::uint8_t>& bytes, std::uint16_t max = 0) {
-    std::vector<std::uint8_t> v = u16(static_cast<std::uint16_t>(bytes.size()));
-    const auto m = u16(max);
-    v.insert(v.end(), m.begin(), m.end());
-    v.insert(v.end(), bytes.begin(), bytes.end());
-    return v;
-}
-std::vector<std::uint8_t> idns(std::initializer_list<Idn> l) {
-    std::vector<std::uint8_t> v;
-    for (Idn i : l) {
-        v.push_back(static_cast<std::uint8_t>(i.raw));
-        v.push_back(static_cast<std::uint8_t>(i.raw >> 8));
-    }
-    return list(v);
-}
-
-// The SoE drive alone, in a phase, with its server.
-struct DriveBench {
-    explicit DriveBench(AlState phase = AlState::PreOp) : drive(device::soe_drive()), server(drive) {
-        drive.on_state_change(AlState::Init, phase);
-    }
-    SoeMessage read(std::uint8_t elements, Idn i, std::uint8_t drive_no = 0) {
-        server.handle({}, request(SoeOpCode::ReadRequest, drive_no, elements, i.raw), sink);
-        return sink.last();
-    }
-    SoeMessage write(std::uint8_t elements, Idn i, ConstBytes data, std::uint8_t drive_no = 0) {
-        server.handle({}, request(SoeOpCode::WriteRequest, drive_no, elements, i.raw, data), sink);
-        return sink.last();
-    }
-    std::optional<std::uint16_t> write_error(Idn i, const std::vector<std::uint8_t>& data,
-                                             std::uint8_t elements = el::Value) {
-        const auto m = write(elements, i, data);
-        EXPECT_EQ(m.op, SoeOpCode::WriteResponse);
-        return m.error_code();
-    }
-    std::optional<std::uint16_t> read_error(Idn i, std::uint8_t elements) {
-        const auto m = read(elements, i);
-        EXPECT_EQ(m.op, SoeOpCode::ReadResponse);
-        return m.error_code();
-    }
-    soe::SoeDrive drive;
-    soe::SoeServer server;
-    Sink sink;
-};
-
-constexpr std::uint16_t code(SoeError e) {
-    return static_cast<std::uint16_t>(e);
-}
-
-// ---- The drive behind the project's master, over an in-process link.
-struct MasterBench {
-    MasterBench() : b(1, {}, device::soe_drive(), &soe::make_soe_segment) {}
-    std::uint16_t station() { return b.master.slaves()[0].station; }
-    soe::SoeDrive& drive() { return dynamic_cast<soe::SoeDrive&>(b.slave().app()); }
-    void startup(AlState s) {
-        std::string why;
-        ASSERT_TRUE(b.master.startup(s, &why)) << why;
-    }
-    master::SoeClient client() { return master::SoeClient(b.master, station()); }
-    Bench b;
-};
-
-}  // namespace
 
 // ---- Wire layout
 
@@ -504,6 +395,10 @@ TEST(SoeErrors, ListsOfAStandardTelegram0x700C) {
 TEST(SoeErrors, CommandAlreadyActive0x7010AndNotInterruptible0x7011) {
     DriveBench d;
     ASSERT_EQ(d.write_error(idn::ResetClass1Diagnostic, u16(soe::command_input::SetAndEnable)), std::nullopt);
+    // In progress (P-0-0101, 2 ms by default): started again, 0x7010.
+    EXPECT_EQ(d.write_error(idn::ResetClass1Diagnostic, u16(soe::command_input::SetAndEnable)),
+              code(SoeError::CommandActive));
+    d.drive.tick(1'000'000'000);  // the drive's first time: past the command's end, it is executed
     EXPECT_EQ(d.write_error(idn::ResetClass1Diagnostic, u16(soe::command_input::SetAndEnable)),
               code(SoeError::CommandActive));
     EXPECT_EQ(d.write_error(idn::ResetClass1Diagnostic, u16(soe::command_input::SetNotEnabled)),
@@ -539,7 +434,14 @@ TEST(SoeErrors, TruncatedPayloadAndServicesOfTheSlaveGetMailboxErrors) {
 
 TEST(SoeCommands, ExecutionIsNotifiedWithItsDataState) {
     DriveBench d;
+    d.drive.tick(1'000'000'000);
     ASSERT_EQ(d.write_error(idn::ResetClass1Diagnostic, u16(soe::command_input::SetAndEnable)), std::nullopt);
+    // In progress first (set, enabled, not yet executed): no notification, no command change yet.
+    EXPECT_EQ(ld_le16(d.read(el::DataState, idn::ResetClass1Diagnostic).data.data()),
+              soe::command_state::InProgress);
+    EXPECT_FALSE(d.server.has_output());
+    EXPECT_EQ(d.drive.status_word() & soe::status::CommandChange, 0);
+    d.drive.tick(1'000'000'000 + soe::kDefaultCommandDurationUs * 1000ull);
     EXPECT_TRUE(d.server.has_output());
     d.server.poll(d.sink);
     const auto n = d.sink.last();
@@ -561,6 +463,11 @@ TEST(SoeCommands, Cp3CheckFailsWhenTheSyncManagersDoNotFitTheTelegrams) {
     m.startup(AlState::PreOp);  // SM2/SM3 are still off in PREOP: the check fails
     auto c = m.client();
     ASSERT_TRUE(c.write(0, el::Value, idn::Cp3TransitionCheck, u16(3)).ok());
+    // A master polling the data state sees it in progress until the command's time has passed.
+    const auto r = c.read(0, el::DataState, idn::Cp3TransitionCheck);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(ld_le16(r.data.data()), soe::command_state::InProgress);
+    m.b.advance(soe::kDefaultCommandDurationUs * 1000ull);
     const auto n = c.notification(std::chrono::milliseconds(200));
     ASSERT_TRUE(n);
     EXPECT_EQ(n->idn, idn::Cp3TransitionCheck);
@@ -576,43 +483,6 @@ TEST(SoeDriveDevice, SiiDeclaresSoeAndOneChannel) {
     EXPECT_EQ(sii.mailbox_protocols, 0x0010);
     EXPECT_EQ(sii.identity.vendor_id, 0x00000A3Cu);
     EXPECT_EQ(sii.identity.product_code, device::kSoeDriveProduct);
-}
-
-TEST(SoeDriveDevice, MasterMapsTheTelegramAndRunsTheFollower) {
-    MasterBench m;
-    m.startup(AlState::Op);
-    const auto& s = m.b.master.slaves()[0];
-    EXPECT_EQ(s.out_bytes, 6u);  // control word + S-0-0047
-    EXPECT_EQ(s.in_bytes, 6u);   // status word + S-0-0051
-    const auto wkc = m.b.master.expected_wkc();
-    auto out = m.b.master.outputs(0);
-    st_le16(out.data(), soe::control::DriveOn | soe::control::DriveEnable | soe::control::Run);
-    st_le32(out.data() + 2, 1234);
-    for (int i = 0; i < 3; ++i)
-        ASSERT_EQ(m.b.master.exchange_process_data(), wkc);
-    const auto in = m.b.master.inputs(0);
-    EXPECT_EQ(ld_le16(in.data()) >> soe::status::ReadyShift, soe::status::InOperation);
-    EXPECT_EQ(ld_le32(in.data() + 2), 1234u);
-    // A jump beyond the monitoring window: shut down, class 1 diagnostic, until S-0-0099 resets it.
-    st_le32(out.data() + 2, 1234 + 200000);
-    ASSERT_EQ(m.b.master.exchange_process_data(), wkc);
-    ASSERT_EQ(m.b.master.exchange_process_data(), wkc);
-    EXPECT_EQ(ld_le16(m.b.master.inputs(0).data()) & soe::status::Class1Error, soe::status::Class1Error);
-    EXPECT_EQ(ld_le32(m.b.master.inputs(0).data() + 2), 1234u);
-    auto c = m.client();
-    const auto diag = c.read(0, el::Value, idn::Class1Diagnostic);
-    ASSERT_TRUE(diag.ok());
-    EXPECT_EQ(ld_le16(diag.data.data()), soe::c1d::ExcessiveDeviation);
-    // The master brings the command back to the feedback first: the reset takes effect with the MDT the
-    // drive has (as a real drive, whose last MDT would shut it down again).
-    st_le32(out.data() + 2, 1234);
-    ASSERT_EQ(m.b.master.exchange_process_data(), wkc);
-    EXPECT_EQ(ld_le16(m.b.master.inputs(0).data()) >> soe::status::ReadyShift, soe::status::NotReady);
-    ASSERT_TRUE(c.write(0, el::Value, idn::ResetClass1Diagnostic, u16(3)).ok());
-    for (int i = 0; i < 3; ++i)
-        ASSERT_EQ(m.b.master.exchange_process_data(), wkc);
-    EXPECT_EQ(ld_le16(m.b.master.inputs(0).data()) >> soe::status::ReadyShift, soe::status::InOperation);
-    EXPECT_EQ(m.drive().class1_diagnostic(), 0);
 }
 
 TEST(SoeDriveDevice, ApplicationTelegramChangesTheProcessDataLengths) {
