@@ -577,10 +577,11 @@ int main(int argc, char** argv) {
             ->check(CLI::Range(1, 99));
         c->add_flag("--mlock", ro.rt.lock_memory, "Lock all memory (mlockall): no page faults while serving");
         c->add_option("--tick-us", ro.tick_us,
-                      "The slaves' local cycle: a slave whose firmware last ran this long ago or longer "
-                      "catches up before a frame reaches it; also the shortest time between firmware runs "
-                      "without frames (between frames the firmware runs for its deadlines and so that the "
-                      "work a frame finds waiting stays small)")
+                      "The slaves' local cycle: a slave without a cycle of its own (a drive has its servo "
+                      "period) whose firmware last ran this long ago or longer catches up before a frame "
+                      "reads it; also the shortest time between firmware runs without frames (between "
+                      "frames the firmware runs for its deadlines and so that the work a frame finds waiting "
+                      "stays small)")
             ->check(CLI::Range(10, 100000));
         c->add_flag("--rx-ring", ro.rx_ring,
                     "Receive through a PACKET_MMAP ring shared with the kernel instead of one recvmsg() per "
