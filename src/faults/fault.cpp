@@ -44,8 +44,9 @@ constexpr std::array kKinds{
         "starts in INIT, station address cleared"},
     FaultKindInfo{
         "set_input", K::External, "slave, channel, value",
-        "an input of a built-in input terminal (network file) reads value until the fault ends (needs "
-        "the I/O terminals' handler: vecat run --network)"},
+        "an input of a built-in input terminal, or a touch probe input (channel 0/1) of a vecat drive, of a "
+        "network file reads value until the fault ends (needs the I/O terminals' handler: vecat run "
+        "--network)"},
     FaultKindInfo{"twinsync_cable_break", K::External, "slave",
                   "TWINsync: the drive-to-drive cable is cut (needs the TWINsync port's handler)"},
     FaultKindInfo{"twinsync_crc_errors", K::External, "slave",

@@ -102,22 +102,24 @@ OutputTerminal::~OutputTerminal() {
 std::pair<std::size_t, unsigned> InputForcing::target(const faults::FaultSpec& f) const {
     if (f.slave >= seg_.size())
         throw std::invalid_argument("set_input: slave " + std::to_string(f.slave) + " is not on the line");
-    auto* t = dynamic_cast<InputTerminal*>(&seg_.slave(f.slave).app());
+    const auto* t = dynamic_cast<const ForceableInputs*>(&seg_.slave(f.slave).app());
     if (!t)
-        throw std::invalid_argument("set_input: slave " + std::to_string(f.slave) + " is no input terminal");
+        throw std::invalid_argument(
+            "set_input: slave " + std::to_string(f.slave) +
+            " has no inputs to force (an input terminal, or a drive's touch probe inputs)");
     const auto ch = f.params.find("channel");
     if (ch == f.params.end()) throw std::invalid_argument("set_input: give channel=N");
     unsigned c = 0;
     try {
         std::size_t used = 0;
         const unsigned long v = std::stoul(ch->second, &used, 0);
-        if (used != ch->second.size() || v >= t->channels()) throw std::out_of_range(ch->second);
+        if (used != ch->second.size() || v >= t->input_channels()) throw std::out_of_range(ch->second);
         c = static_cast<unsigned>(v);
     } catch (const std::exception&) {
-        throw std::invalid_argument("set_input: channel " + ch->second + ": the terminal has channels 0-" +
-                                    std::to_string(t->channels() - 1));
+        throw std::invalid_argument("set_input: channel " + ch->second + ": the device has channels 0-" +
+                                    std::to_string(t->input_channels() - 1));
     }
-    return {t->slot(), c};
+    return {t->input_slot(), c};
 }
 
 void InputForcing::start(const faults::FaultSpec& f, std::uint64_t) {

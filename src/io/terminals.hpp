@@ -74,13 +74,24 @@ struct InputSource {
     std::size_t wire_slot = IoBus::kNone;  // a wire: this output slot and channel (signal.channel)
 };
 
-class InputTerminal final : public esc::ProcessImageApplication {
+// An application whose inputs the fault set_input can force: an input terminal, and a vecat drive in a
+// network file (its touch probe inputs 1 and 2, network/build.cpp).
+class ForceableInputs {
+  public:
+    virtual ~ForceableInputs() = default;
+    virtual std::size_t input_slot() const = 0;  // its input slot on the IoBus
+    virtual unsigned input_channels() const = 0;
+};
+
+class InputTerminal final : public esc::ProcessImageApplication, public ForceableInputs {
   public:
     InputTerminal(unsigned output_bytes, unsigned input_bytes, ChannelKind kind,
                   std::vector<InputSource> sources, std::shared_ptr<IoBus> bus, std::size_t slot);
     void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) override;
     std::size_t slot() const { return slot_; }
     unsigned channels() const { return static_cast<unsigned>(sources_.size()); }
+    std::size_t input_slot() const override { return slot_; }
+    unsigned input_channels() const override { return channels(); }
     ChannelKind kind() const { return kind_; }
 
   private:
@@ -107,7 +118,7 @@ class OutputTerminal final : public esc::ProcessImageApplication {
 };
 
 // The fault set_input slave=N channel=C value=V: the input reads V until the fault ends. Registered with the
-// injector where a network has input terminals (vecat run).
+// injector for a network file (vecat run); the slave is an input terminal or a vecat drive (ForceableInputs).
 class InputForcing final : public faults::FaultHandler {
   public:
     InputForcing(esc::Segment& seg, std::shared_ptr<IoBus> bus) : seg_(seg), bus_(std::move(bus)) {}

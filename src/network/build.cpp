@@ -301,14 +301,20 @@ std::uint8_t ports_of(const esc::EscConfig& cfg) noexcept {
     return ports;
 }
 
-// A vecat drive with wires (network files, inputs: on a drive, or a wire from its digital outputs): its touch
-// probe inputs follow their sources each servo period, and its digital outputs 0x60FE show on the bus.
-class WiredDrive final : public cia402::Drive {
+// A vecat drive of a network file: its touch probe inputs follow their sources (inputs: on a drive) each
+// servo period and can be forced (fault set_input, ForceableInputs), and its digital outputs 0x60FE show on
+// the bus when a wire takes one.
+class WiredDrive final : public cia402::Drive, public io::ForceableInputs {
   public:
     WiredDrive(const device::DeviceDescription& d,
                std::shared_ptr<const std::vector<device::ObjectDescription>> objects,
-               std::vector<io::InputSource> probes, std::shared_ptr<io::IoBus> bus, std::size_t output_slot)
-        : Drive(d, std::move(objects)), probes_(std::move(probes)), bus_(std::move(bus)), slot_(output_slot) {
+               std::vector<io::InputSource> probes, std::shared_ptr<io::IoBus> bus, std::size_t input_slot,
+               std::size_t output_slot)
+        : Drive(d, std::move(objects)),
+          probes_(std::move(probes)),
+          bus_(std::move(bus)),
+          input_slot_(input_slot),
+          slot_(output_slot) {
         if (slot_ != io::IoBus::kNone) {
             publish_digital_outputs();
             bus_->publish(slot_, &digital_output_image());
@@ -319,15 +325,20 @@ class WiredDrive final : public cia402::Drive {
     }
     WiredDrive(const WiredDrive&) = delete;
     WiredDrive& operator=(const WiredDrive&) = delete;
+    std::size_t input_slot() const override { return input_slot_; }
+    unsigned input_channels() const override { return kDriveProbeInputs; }
 
   protected:
+    // A forced input reads its value; the others their sources (none: 0). The drive ORs them with 0x2100:6.
     std::optional<std::uint8_t> wired_probe_inputs(std::uint64_t sim_ns) override {
-        if (probes_.empty()) return std::nullopt;
         std::uint8_t bits = 0;
-        for (unsigned c = 0; c < probes_.size(); ++c) {
-            const io::InputSource& s = probes_[c];
-            const double v = s.wire_slot != io::IoBus::kNone ? bus_->output(s.wire_slot, s.signal.channel)
-                                                             : io::value_at(s.signal, sim_ns);
+        for (unsigned c = 0; c < kDriveProbeInputs; ++c) {
+            double v = 0;
+            if (!bus_->forced(input_slot_, c, v) && !probes_.empty()) {
+                const io::InputSource& s = probes_[c];
+                v = s.wire_slot != io::IoBus::kNone ? bus_->output(s.wire_slot, s.signal.channel)
+                                                    : io::value_at(s.signal, sim_ns);
+            }
             if (v > 0.5) bits = static_cast<std::uint8_t>(bits | (1u << c));
         }
         return bits;
@@ -336,7 +347,8 @@ class WiredDrive final : public cia402::Drive {
   private:
     std::vector<io::InputSource> probes_;  // touch probe inputs 1 and 2 (empty: not wired)
     std::shared_ptr<io::IoBus> bus_;
-    std::size_t slot_;  // the output slot of its digital outputs (kNone: no wire takes them)
+    std::size_t input_slot_;  // its touch probe inputs on the bus (forced values)
+    std::size_t slot_;        // the output slot of its digital outputs (kNone: no wire takes them)
 };
 
 // The built-in I/O terminals get their behaviour (src/io): output terminals show their outputs on the bus,
@@ -344,7 +356,7 @@ class WiredDrive final : public cia402::Drive {
 void attach_io(const DeviceEntry& e, Made& m, BuiltNetwork& b) {
     if (e.source == Source::Drive) {
         const std::size_t slot = b.io->output_slot(e.name);
-        if (e.inputs.empty() && slot == io::IoBus::kNone) return;
+        const std::size_t input_slot = b.io->add_input(e.name, kDriveProbeInputs);
         std::vector<io::InputSource> probes;
         if (!e.inputs.empty()) probes.resize(kDriveProbeInputs);
         for (const auto& in : e.inputs) {
@@ -352,9 +364,9 @@ void attach_io(const DeviceEntry& e, Made& m, BuiltNetwork& b) {
             if (in.signal.kind == io::SignalKind::Wire)
                 probes[in.channel].wire_slot = b.io->output_slot(in.signal.device);
         }
-        m.factory = [objects = m.model.dictionary, probes, bus = b.io,
+        m.factory = [objects = m.model.dictionary, probes, bus = b.io, input_slot,
                      slot](const device::DeviceDescription& d) -> std::unique_ptr<esc::Application> {
-            return std::make_unique<WiredDrive>(d, objects, probes, bus, slot);
+            return std::make_unique<WiredDrive>(d, objects, probes, bus, input_slot, slot);
         };
         return;
     }

@@ -9,12 +9,15 @@
 #include <fstream>
 #include <memory>
 
+#include "common/bytes.hpp"
 #include "faults/injector.hpp"
 #include "io/signal.hpp"
 #include "io/terminals.hpp"
+#include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "network/build.hpp"
 #include "network/network_file.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "serve/in_process_link.hpp"
 #include "telemetry/plot.hpp"
 #include "telemetry/recording.hpp"
@@ -198,6 +201,41 @@ TEST(IoTerminals, AnInputForcedThroughTheControlSocketUntilTheFaultIsCleared) {
     EXPECT_EQ(l.inj.execute("inject set_input slave=0 channel=0 value=1", l.now).rfind("error", 0), 0u);
     EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=4 value=1", l.now).rfind("error", 0), 0u);
     EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=0", l.now).rfind("error", 0), 0u);
+}
+
+// A vecat drive of a network file has inputs to force too: its touch probe inputs 1 and 2 (0x60FD bits 16
+// and 17), without any inputs: entry in the file.
+TEST(IoTerminals, ADrivesTouchProbeInputForcedThroughTheControlSocket) {
+    network::BuiltNetwork built = network::build_network(
+        network::parse_network("devices:\n  - {name: axis, device: drive}\n", "d.yaml"), "d.yaml");
+    net::InProcessLink link(*built.segment);
+    faults::FaultInjector inj(*built.segment);
+    io::InputForcing forcing(*built.segment, built.io);
+    inj.register_handler(io::InputForcing::kKind, forcing);
+    std::uint64_t now = 1'000'000'000;
+    link.set_time(now);
+    link.set_filter(&inj);
+    master::Master m(link);
+    std::string why;
+    ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+    auto probe_inputs = [&] {
+        for (int i = 0; i < 3; ++i) {
+            now += 1'000'000;
+            link.set_time(now);
+            EXPECT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+        }
+        master::CoeClient c(m, m.slaves()[0].station);
+        const auto r = c.upload(protocol::obj::digital_inputs.index, 0);
+        EXPECT_TRUE(r.ok());
+        return r.ok() && r.data.size() >= 4 ? (ld_le32(r.data.data()) >> 16) & 3u : 99u;
+    };
+    EXPECT_EQ(probe_inputs(), 0u);
+    EXPECT_EQ(inj.execute("inject set_input slave=0 channel=1 value=1 id=p", now).rfind("ok", 0), 0u);
+    EXPECT_EQ(probe_inputs(), 2u);
+    EXPECT_EQ(inj.execute("clear p", now).rfind("ok", 0), 0u);
+    EXPECT_EQ(probe_inputs(), 0u);
+    // The drive has two probe inputs.
+    EXPECT_EQ(inj.execute("inject set_input slave=0 channel=2 value=1", now).rfind("error", 0), 0u);
 }
 
 // The telemetry samples every I/O terminal (IoSample): the output terminals' channels as the master wrote
