@@ -13,14 +13,7 @@
 
 using namespace vecat;
 using namespace vecat::test;
-using namespace vecat::test::soe_bench;
-using protocol::AlState;
-using protocol::Idn;
-using protocol::MailboxType;
-using protocol::SoeError;
-using protocol::SoeMessage;
-using protocol::SoeOpCode;
-namespace el = protocol::soe_element;
+using namespace vecat::test::soe_bench;  // and its names of the protocol (AlState, Idn, SoeError, el...)
 namespace idn = soe::idn;
 
 // ---- Wire layout
