@@ -347,8 +347,6 @@ std::string write_esi(const device::DeviceDescription& d) {
     st_le16(cfg.data() + 2 * protocol::sii::SyncImpulseLen, d.sync_impulse_len);
     st_le16(cfg.data() + 2 * protocol::sii::StationAlias, d.station_alias);
     text(ee, "ConfigData", hex_bytes(cfg));
-    const auto* mo = d.sm_of_type(device::SmType::MailboxOut);
-    const auto* mi = d.sm_of_type(device::SmType::MailboxIn);
     if (const auto boot = d.bootstrap_mailbox()) {
         std::vector<std::uint8_t> bs(8, 0);
         st_le16(bs.data(), boot->out_start);

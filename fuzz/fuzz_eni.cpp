@@ -56,7 +56,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         back = network::parse_network(written.yaml, "back.yaml", "/nonexistent");
     } catch (const network::NetworkFileError& e) {
         std::fprintf(stderr, "%s\n", e.what());
-        VECAT_FUZZ_CHECK(!"the written network file is refused");
+        VECAT_FUZZ_CHECK(false && "the written network file is refused");
     }
     VECAT_FUZZ_CHECK(back.parent == f.parent && back.children == f.children && back.devices.size() == count);
     for (std::size_t i = 0; i < count; ++i)

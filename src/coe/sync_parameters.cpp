@@ -20,7 +20,6 @@ namespace sp = protocol::obj::sync_parameter;
 constexpr std::uint8_t SyncMode = sp::sync_mode;
 constexpr std::uint8_t CycleTime = sp::cycle_time;
 constexpr std::uint8_t ShiftTime = sp::shift_time;
-constexpr std::uint8_t SyncModesSupported = sp::sync_modes_supported;
 constexpr std::uint8_t MinimumCycleTime = sp::minimum_cycle_time;
 constexpr std::uint8_t GetCycleTime = sp::get_cycle_time;
 constexpr std::uint8_t Sync0CycleTime = sp::sync0_cycle_time;

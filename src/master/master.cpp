@@ -661,9 +661,9 @@ bool Master::configure_dc(std::uint64_t master_time_ns) {
         } else {
             const SlaveInfo& up = slaves_[static_cast<std::size_t>(s.parent)];
             const std::int64_t d = up.has_dc ? cable_delay(up, s) : 0;
-            s.dc_delay_ns = (up.has_dc ? up.dc_delay_ns : parent->dc_delay_ns) +
-                            static_cast<std::uint32_t>(d > 0 ? d : 0) +
-                            (up.has_dc ? departure(up, s.parent_port) : 0);
+            s.dc_delay_ns =
+                static_cast<std::uint32_t>((up.has_dc ? up.dc_delay_ns : parent->dc_delay_ns) +
+                                           (d > 0 ? d : 0) + (up.has_dc ? departure(up, s.parent_port) : 0));
             if (!write32(s.station, ra(Reg::DcSystemTimeDelay), s.dc_delay_ns)) return false;
         }
         // Offset: the system time of every slave reads the master's time at the moment the latching frame

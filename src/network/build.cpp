@@ -130,8 +130,8 @@ Made make_device(const DeviceEntry& e, const std::string& file, const std::strin
             sel.revision = e.esi_revision;
             if (e.modules_line) {
                 sel.modules.emplace();
-                for (const auto& m : e.modules)
-                    sel.modules->push_back(m.module);
+                for (const auto& chosen : e.modules)
+                    sel.modules->push_back(chosen.module);
             }
             try {
                 auto r = esi::import_esi_file(e.path, sel);

@@ -110,9 +110,9 @@ std::optional<EsiIndex::Entry> find_esi(EsiIndex& idx, const Eni& eni, const Eni
         if (v == idx.vendor.end()) {
             std::uint32_t vendor = 0;
             try {
-                vendor =
-                    esi::import_esi_file(e.path, {e.device.type, e.device.product_code, e.device.revision})
-                        .desc.identity.vendor_id;
+                vendor = esi::import_esi_file(e.path,
+                                              {e.device.type, e.device.product_code, e.device.revision, {}})
+                             .desc.identity.vendor_id;
             } catch (const std::exception&) {
             }
             v = idx.vendor.emplace(e.path, vendor).first;

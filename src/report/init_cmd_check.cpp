@@ -69,7 +69,8 @@ bool overlaps(std::uint32_t a, std::uint32_t a_end, std::uint32_t b, std::uint32
 
 // A write the check compares: in the register space, not touching AL control or the SII interface.
 bool compared(std::uint16_t ado, std::size_t len) {
-    const std::uint32_t end = std::uint32_t{ado} + len;
+    if (len == 0 || len > kRegisterSpaceEnd) return false;
+    const auto end = static_cast<std::uint32_t>(ado + len);
     const std::uint32_t al = addr(Reg::AlControl);
     const std::uint32_t sii = addr(Reg::SiiConfig);
     return len > 0 && end <= kRegisterSpaceEnd && !overlaps(ado, end, al, al + 2) &&

@@ -419,7 +419,7 @@ std::vector<VendorCase> vendor_cases() {
     return {
         {"esi/elmo-gold.xml", {}, 0x9A, 0x00030924, 0x00000001, 1, 1, {0x1600}, {0x1A00}},
         {"esi/elmo-gold.xml",
-         {std::nullopt, 0x00030924, 0x00010420},
+         {std::nullopt, 0x00030924, 0x00010420, {}},
          0x9A,
          0x00030924,
          0x00010420,

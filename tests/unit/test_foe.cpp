@@ -433,7 +433,7 @@ TEST(FoeErrors, NotFound0x8001) {
 }
 
 TEST(FoeErrors, NoRights0x800AForAWrongPassword) {
-    FoeBench f({.password = 0x1234});
+    FoeBench f({.dir = {}, .password = 0x1234});
     f.startup(AlState::PreOp);
     EXPECT_EQ(f.client().write("a.bin", pattern(10), 0x9999).error, FoeError::NoRights);
     EXPECT_EQ(f.client().read("a.bin", 0).error, FoeError::NoRights);
@@ -442,7 +442,7 @@ TEST(FoeErrors, NoRights0x800AForAWrongPassword) {
 }
 
 TEST(FoeErrors, DiskFull0x8003ForAFileOverTheLimitWithBoundedMemory) {
-    FoeBench f({.max_file_size = 500});
+    FoeBench f({.dir = {}, .max_file_size = 500});
     f.startup(AlState::PreOp);
     EXPECT_TRUE(f.client().write("fits.bin", pattern(500)).ok());
     const auto r = f.client().write("big.bin", pattern(501));

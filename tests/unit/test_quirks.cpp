@@ -113,10 +113,10 @@ TEST(Quirks, ParsedAsWrittenAndRefusedWithTheReason) {
         {"sii_without=strings+", "a category after '+'"},
         {"slow", "unknown quirk \"slow\""},
     };
-    for (const auto& [text, why] : bad) {
+    for (const auto& [option, why] : bad) {
         device::Quirks x;
-        EXPECT_NE(device::parse_quirk(text, x).find(why), std::string::npos)
-            << text << ": " << device::parse_quirk(text, x);
+        EXPECT_NE(device::parse_quirk(option, x).find(why), std::string::npos)
+            << option << ": " << device::parse_quirk(option, x);
     }
 }
 

@@ -203,6 +203,6 @@ TEST_P(FirmwareSchedule, RunningOnlyWhenNeededGivesTheMasterTheSameBytesAsEveryS
 }
 
 INSTANTIATE_TEST_SUITE_P(DcAndFreeRun, FirmwareSchedule, ::testing::Values(true, false),
-                         [](const auto& info) { return info.param ? "DcSync0" : "FreeRun"; });
+                         [](const auto& p) { return p.param ? "DcSync0" : "FreeRun"; });
 
 }  // namespace
