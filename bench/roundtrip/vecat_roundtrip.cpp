@@ -118,7 +118,9 @@ struct Options {
     bool with_reflector = false;  // soak: every cycle also sends the frames to the reflector
     std::int64_t tick_us = net::ServeOptions{}.tick_us;
     std::int64_t catch_up_us = net::ServeOptions{}.catch_up_budget_us;
-    std::string network;  // a network file instead of a line of drives
+    std::string network;   // a network file instead of a line of drives
+    unsigned threads = 1;  // threads that run the slaves' firmware (vecat run --threads)
+    std::uint64_t spin_us = esc::FirmwareThreads::kSpinNs / 1000;
 };
 
 // The drives are enabled (6, 7, 15) in CSP and hold the position they had, so that every cycle runs the
@@ -261,7 +263,15 @@ int run(const Options& o) {
             if (n > 0) refl_sock.send(ConstBytes(buf.data(), static_cast<std::size_t>(n)));
         }
     });
+    // The firmware's workers, made here: not pinned to the server's CPU.
+    std::unique_ptr<esc::FirmwareThreads> firmware;
+    if (o.threads > 1) {
+        firmware = std::make_unique<esc::FirmwareThreads>(o.threads, o.spin_us * 1000);
+        if (o.fifo && !firmware->set_fifo_priority(o.fifo, &why))
+            fmt::print(stderr, "vecat-roundtrip: {}\n", why);
+    }
     net::ServeOptions sopt;
+    sopt.firmware_threads = firmware.get();
     sopt.busy_poll = o.busy;
     sopt.park = &park_vecat;
     sopt.tick_us = o.tick_us;
@@ -458,6 +468,11 @@ int run(const Options& o) {
             100.0 * static_cast<double>(cpu_srv) / static_cast<double>(wall),
             latency ? " (includes the reflector phases, parked)" : "",
             100.0 * tv / (static_cast<double>(wall) / 1e9));
+        if (firmware)
+            fmt::print(
+                "  firmware on {} threads: {} groups of slaves run by the workers (the rest by the serve "
+                "thread); the whole process's figure includes the workers\n",
+                firmware->threads(), firmware->items_on_workers());
         // Busy-polling, a loop pass is a poll, not a wake-up: the figure means something only when blocking.
         if (c_vecat > 0 && !o.busy)
             fmt::print(
@@ -493,6 +508,11 @@ int main(int argc, char** argv) {
     app.add_flag("--busy-poll,!--blocking", o.busy, "Spin on the sockets (default: sleep in poll)");
     app.add_flag("--rx-ring", o.rx_ring,
                  "All four sockets receive through PACKET_MMAP rings (default: one recvmsg per frame)");
+    app.add_option("--threads", o.threads, "Threads that run the slaves' firmware (as vecat run --threads)")
+        ->check(CLI::Range(1, 64));
+    app.add_option("--spin-us", o.spin_us,
+                   "With --threads: how long a firmware worker spins without work before it sleeps")
+        ->capture_default_str();
     app.add_option("--cpu", o.cpu, "Pin the master thread to CPU M and the server threads to S: M,S");
     app.add_option("--fifo", o.fifo, "SCHED_FIFO priority of all threads (1..99)")->check(CLI::Range(0, 99));
     app.add_flag("--mlock", o.mlock, "Lock all memory (mlockall)");

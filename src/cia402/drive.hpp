@@ -7,6 +7,7 @@
 // so it is deterministic for a given cycle time.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -80,6 +81,10 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     void cycle(std::uint64_t now_ns, bool outputs_applied) override;
     void advance_to(std::uint64_t now_ns) override { advance(now_ns); }
     bool coupled() const override { return twin_partner_ != nullptr; }
+    // Drives coupled by TWINsync step each other: both name the pair.
+    void shared_state(std::vector<const void*>& keys) const override {
+        if (twin_partner_) keys.push_back(std::min<const void*>(this, twin_partner_));
+    }
 
   private:
     void advance(std::uint64_t now_ns);

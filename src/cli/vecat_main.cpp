@@ -169,6 +169,7 @@ struct RunOptions {
     std::string redundant_iface;      // --redundant-iface: the master's second port (cable redundancy)
     std::vector<std::string> quirks;  // --quirk: of every device of the line (device/quirks.hpp)
     std::string eoe_tap;              // --eoe-tap: the EoE devices' Ethernet sides as TAP PREFIXn
+    unsigned threads = 1;             // --threads: threads that run the slaves' firmware
 };
 
 // Several observers of the frames (the report's checks), each called in turn.
@@ -190,7 +191,8 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
             std::FILE* log = stdout) {
     const auto& [iface, slaves, pcap_path, pcap_limit_mb, busy, rx_ring, allow_busy_if, drift_ppm, esi_path,
                  sel, param_dir, fault_opts, telemetry, twinsync, rt, tick_us, downstream, network_path,
-                 eni_path, esi_dir, report_path, report_fail, foe_opts, redundant_iface, quirks, eoe_tap] = o;
+                 eni_path, esi_dir, report_path, report_fail, foe_opts, redundant_iface, quirks, eoe_tap,
+                 threads] = o;
     std::string why;
     for (const std::string& i : {iface, downstream, redundant_iface}) {
         if (i.empty() || allow_busy_if || !vecat::net::interface_in_use(i, &why)) continue;
@@ -351,6 +353,18 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
     }
     auto tel = vecat::cli::RunTelemetry::start(*seg, telemetry, opt);
     if (!tel) return 2;
+    // The firmware's workers, made before the serve loop's thread is pinned (they run on any CPU).
+    std::unique_ptr<vecat::esc::FirmwareThreads> firmware;
+    if (threads > 1) {
+        firmware = std::make_unique<vecat::esc::FirmwareThreads>(threads);
+        opt.firmware_threads = firmware.get();
+        if (rt.fifo_priority > 0 && !firmware->set_fifo_priority(rt.fifo_priority, &why)) {
+            fmt::print(stderr, "vecat: {}\n", why);
+            return 1;
+        }
+        fmt::print(log, "vecat: the slaves' firmware runs on {} threads ({} firmware groups)\n", threads,
+                   seg->firmware_groups());
+    }
     // The serve loop runs on this thread: pinning, SCHED_FIFO and locked memory apply to it.
     if (!vecat::net::apply_realtime(rt, &why)) {
         fmt::print(stderr, "vecat: {}\n", why);
@@ -583,6 +597,14 @@ int main(int argc, char** argv) {
                       "frames the firmware runs for its deadlines and so that the work a frame finds waiting "
                       "stays small)")
             ->check(CLI::Range(10, 100000));
+        c->add_option("--threads", ro.threads,
+                      "Threads that run the slaves' firmware: the serve loop's and N-1 workers. The runs "
+                      "that a frame needs (the catch-up of the slaves it reads, the runs after it) are "
+                      "spread over them by groups of slaves that share no state (drives coupled by "
+                      "TWINsync and wired I/O stay together); results are the same as with one thread. "
+                      "For large networks; a worker spins while frames keep coming")
+            ->check(CLI::Range(1, 64))
+            ->capture_default_str();
         c->add_flag("--rx-ring", ro.rx_ring,
                     "Receive through a PACKET_MMAP ring shared with the kernel instead of one recvmsg() per "
                     "frame");

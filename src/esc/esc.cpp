@@ -165,7 +165,9 @@ void Esc::set_port_link(unsigned port, bool up) {
 }
 
 void Esc::update_dl_status() {
-    if (port_changes_) ++*port_changes_;  // links or loop settings may have changed: the way of frames too
+    if (port_changes_)
+        port_changes_->fetch_add(
+            1, std::memory_order_relaxed);  // links or loop settings may have changed: the way of frames too
     const std::uint16_t ctrl = ld_le16(&mem_[addr(Reg::SiiControl)]);
     std::uint16_t v = 0;
     if (!(ctrl & sii_ctrl::NotLoaded)) v |= dl_status::PdiOperational;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <cstring>
 #include <utility>
@@ -94,7 +95,8 @@ class Esc {
     // (ESC datasheet section II, 0x0100 and 0x0110). An unimplemented port is always closed.
     bool port_open(unsigned port) const;
     // Counted up whenever a link or a loop setting may have changed (the segment routes frames anew).
-    void set_port_change_counter(std::uint64_t* counter) { port_changes_ = counter; }
+    // Atomic: slaves' firmware may run on several threads (Segment::set_firmware_threads).
+    void set_port_change_counter(std::atomic<std::uint64_t>* counter) { port_changes_ = counter; }
 
     // ---- PDI side (the slave application)
     std::uint32_t al_events() const { return ld_le32(&mem_[protocol::addr(protocol::Reg::AlEventRequest)]); }
@@ -207,7 +209,7 @@ class Esc {
     Addressing addressing() const;
     // Counted up whenever addressing() may have changed (a write to those registers or to an FMMU, an SII
     // reload that brings a new alias). Only process() and reload_eeprom() change it.
-    void set_address_change_counter(std::uint64_t* counter) { address_changes_ = counter; }
+    void set_address_change_counter(std::atomic<std::uint64_t>* counter) { address_changes_ = counter; }
 
     // The slave's firmware writes its own EEPROM (a firmware update writes the new revision into the SII,
     // words 0x000C/0x000D). A word past the EEPROM's end is not written.
@@ -322,10 +324,10 @@ class Esc {
     std::uint64_t fmmu_log_first_bit_ = ~std::uint64_t{0}, fmmu_log_last_bit_ = 0;
     std::uint64_t fmmu_log_read_first_bit_ = ~std::uint64_t{0}, fmmu_log_read_last_bit_ = 0;
     std::uint32_t repeat_bits_ = 0;
-    std::uint64_t* port_changes_ = nullptr;
-    std::uint64_t* address_changes_ = nullptr;
+    std::atomic<std::uint64_t>* port_changes_ = nullptr;
+    std::atomic<std::uint64_t>* address_changes_ = nullptr;
     void address_changed() {
-        if (address_changes_) ++*address_changes_;
+        if (address_changes_) address_changes_->fetch_add(1, std::memory_order_relaxed);
     }
     std::uint8_t auto_closed_ = 0;  // ports that "auto close" closed at a link loss, until the master reopens
     std::uint8_t link_mask_ = 0x01;

@@ -96,6 +96,7 @@ bool Segment::move_group(std::size_t head, std::size_t parent, unsigned port, st
     permute(last_run_ns_);
     permute(deadline_ns_);
     permute(pulse_ns_);
+    permute(cycle_ns_);
     permute(latched_);
     permute(delay_);
     parent_ = std::move(parents);

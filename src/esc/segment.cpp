@@ -1,5 +1,6 @@
-// About 650 lines: the line's frame path in one place (routing of datagrams to the ESCs they concern, the
-// firmware runs around a frame, port timing); the ring's is in ring.cpp.
+// The line's frame path in one place: routing of datagrams to the ESCs they concern, which slaves' firmware a
+// frame needs, port timing. The firmware runs themselves are in segment_firmware.cpp, the ring's path in
+// ring.cpp, hot connect in hot_connect.cpp.
 #include "esc/segment.hpp"
 
 #include <algorithm>
@@ -36,6 +37,7 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     deadline_ns_.push_back(0);
     pulse_ns_.push_back(0);
     cycle_ns_.push_back(0);
+    picked_.push_back(0);
     latched_.push_back(0);
     // A line: port 0 of the new slave to port 1 of the one before.
     parent_.push_back(static_cast<int>(i) - 1);
@@ -266,47 +268,6 @@ bool Segment::restart_slave(std::size_t i) {
     return true;
 }
 
-void Segment::deliver_coupled_pulses(std::uint64_t now_ns) {
-    if (coupled_epoch_ == slaves_epoch_ && coupled_.empty()) return;
-    if (coupled_epoch_ != slaves_epoch_) {
-        coupled_epoch_ = slaves_epoch_;
-        coupled_.clear();
-        for (std::size_t k = 0; k < slaves_.size(); ++k)
-            if (slaves_[k]->app().coupled()) coupled_.push_back(k);
-    }
-    for (;;) {
-        std::size_t first = slaves_.size();
-        std::uint64_t t = DistributedClock::kNever;
-        for (const std::size_t k : coupled_)
-            if (!halted_[k])
-                if (const std::uint64_t p = slaves_[k]->esc().dc().next_pulse_host_ns(); p < t) {
-                    t = p;
-                    first = k;
-                }
-        if (first == slaves_.size() || t > now_ns) return;
-        slaves_[first]->deliver_sync_pulses(t);
-    }
-}
-
-void Segment::run_due_firmware(std::uint64_t now_ns) {
-    deliver_coupled_pulses(now_ns);
-    for (std::size_t k = 0; k < slaves_.size(); ++k)
-        if (last_run_ns_[k] == 0 || now_ns < last_run_ns_[k]) run(k, now_ns);
-}
-
-void Segment::run_deferred_firmware() {
-    if (!firmware_due_) return;
-    firmware_due_ = false;
-    run_due_firmware(firmware_due_ns_);
-}
-
-void Segment::run_firmware(std::uint64_t now_ns) {
-    run_deferred_firmware();
-    deliver_coupled_pulses(now_ns);
-    for (std::size_t k = 0; k < slaves_.size(); ++k)
-        run(k, now_ns);
-}
-
 bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns) {
     return process_frame(frame, len, now_ns, FrameDamage{});
 }
@@ -477,8 +438,7 @@ void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t 
         any_reads |= r.reads;
     }
     // position: the ESCs the frame has passed so far (each counts up the ADP of auto-increment commands).
-    std::uint16_t position = 0;
-    const auto concerns = [&](const DatagramReach& r, const Esc::Addressing& a) {
+    const auto concerns = [](const DatagramReach& r, const Esc::Addressing& a, std::uint16_t position) {
         switch (r.reach) {
             case Reach::None:
                 return false;
@@ -493,30 +453,38 @@ void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t 
         }
         return false;
     };
-    for (std::size_t k = 0; k < intact; ++k) {
-        if (!reached_[k]) continue;
-        // A slave the frame reads catches up with its own cycle first (see set_local_cycle_ns), or posts
-        // the mailbox message it has for the master (one that arrived between its runs: an EoE frame from
-        // the host, an emergency of an injected fault).
-        if (any_reads) {
+    // A slave the frame reads catches up with its own cycle first (see set_local_cycle_ns), or posts the
+    // mailbox message it has for the master (one that arrived between its runs: an EoE frame from the host,
+    // an emergency of an injected fault). All of them run before the frame reaches the first ESC: a slave's
+    // run depends on its own ESC and on the slaves it shares state with (which run in order, see
+    // set_firmware_threads), not on what the frame does at the ESCs before it, so this is the same as each
+    // running as the frame reaches it, and the runs can go to several threads as one batch.
+    if (any_reads) {
+        std::uint16_t position = 0;
+        for (std::size_t k = 0; k < intact; ++k) {
+            if (!reached_[k]) continue;
             const Esc::Addressing& a = addressing_[k];
             for (std::size_t i = 0; i < pf.count; ++i) {
                 const DatagramReach& r = reach_[i];
-                if (!r.reads || !concerns(r, a)) continue;
+                if (!r.reads || !concerns(r, a, position)) continue;
                 if (r.reach == Reach::Logical && !a.logical_read(r.first_bit, r.last_bit)) continue;
-                if (stale(k, now_ns) || slaves_[k]->mailbox_output_pending()) {
-                    const std::uint64_t epoch = address_epoch_;
-                    run(k, now_ns);
-                    if (address_epoch_ != epoch) addressing_[k] = slaves_[k]->esc().addressing();
-                }
+                if (stale(k, now_ns) || slaves_[k]->mailbox_output_pending()) pick(k);
                 break;
             }
+            ++position;
         }
+        const std::uint64_t epoch = address_epoch_;
+        run_picked(now_ns);
+        if (address_epoch_ != epoch) refresh_addressing();
+    }
+    std::uint16_t position = 0;
+    for (std::size_t k = 0; k < intact; ++k) {
+        if (!reached_[k]) continue;
         Esc* esc = nullptr;
         FrameTiming t{};
         for (std::size_t i = 0; i < pf.count; ++i) {
             const DatagramReach& r = reach_[i];
-            if (!concerns(r, addressing_[k])) continue;
+            if (!concerns(r, addressing_[k], position)) continue;
             if (!esc) {
                 esc = &slaves_[k]->esc();
                 const FrameTiming& rel = timing_[k];
@@ -565,62 +533,6 @@ void Segment::count_corruption(const FrameDamage& d, std::size_t m) {
             slaves_[k]->esc().count_forwarded_error(1);
     }
     // Damage on the returning cable 0 reaches the master's NIC, which drops the frame: no ESC sees it.
-}
-
-void Segment::run(std::size_t k, std::uint64_t now_ns) {
-    if (halted_[k])
-        slaves_[k]->esc().tick(now_ns);  // the silicon's watchdogs keep running
-    else
-        slaves_[k]->run(now_ns);
-    last_run_ns_[k] = now_ns == 0 ? 1 : now_ns;
-    ++counters_.firmware_runs;
-    // A halted firmware has no deadlines but the silicon's watchdog.
-    deadline_ns_[k] = halted_[k] ? slaves_[k]->esc().watchdog_deadline_ns()
-                                 : std::min(slaves_[k]->next_event_ns(now_ns + local_cycle_ns_),
-                                            now_ns + kMaxLagCycles * local_cycle_ns_);
-    pulse_ns_[k] = slaves_[k]->esc().dc().next_pulse_host_ns();
-    const std::uint64_t cycle = halted_[k] ? 0 : slaves_[k]->next_cycle_ns();
-    cycle_ns_[k] = cycle != 0 ? cycle : now_ns + local_cycle_ns_;
-}
-
-void Segment::tick(std::uint64_t now_ns) {
-    run_firmware(now_ns);
-}
-
-bool Segment::deadline_due(std::size_t k, std::uint64_t now_ns) const {
-    const std::uint64_t last = last_run_ns_[k];
-    return last == 0 || now_ns < last || deadline_ns_[k] <= now_ns;
-}
-
-bool Segment::stale(std::size_t k, std::uint64_t now_ns) const {
-    // (The pulse as of the last run, with a microsecond to spare for the drift of the DC unit since.)
-    return cycle_ns_[k] <= now_ns || pulse_ns_[k] <= now_ns + 1'000;
-}
-
-void Segment::catch_up(std::uint64_t now_ns) {
-    deliver_coupled_pulses(now_ns);
-    for (std::size_t k = 0; k < slaves_.size(); ++k)
-        if (deadline_due(k, now_ns) || stale(k, now_ns)) run(k, now_ns);
-}
-
-void Segment::catch_up_deadlines(std::uint64_t now_ns) {
-    deliver_coupled_pulses(now_ns);
-    for (std::size_t k = 0; k < slaves_.size(); ++k)
-        if (deadline_due(k, now_ns)) run(k, now_ns);
-}
-
-std::uint64_t Segment::next_event_ns() const {
-    std::uint64_t t = DistributedClock::kNever;
-    for (const auto& s : slaves_)
-        t = std::min(t, s->esc().dc().next_pulse_host_ns());
-    return t;
-}
-
-std::uint64_t Segment::next_firmware_ns() const {
-    std::uint64_t t = DistributedClock::kNever;
-    for (const std::uint64_t d : deadline_ns_)
-        t = std::min(t, d);
-    return t;
 }
 
 std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::size_t n, const EscConfig& cfg,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -17,6 +18,8 @@
 #include "protocol/frame.hpp"
 
 namespace vecat::esc {
+
+class FirmwareThreads;
 
 struct SegmentCounters {
     std::uint64_t frames = 0;
@@ -100,6 +103,23 @@ class Segment {
     std::uint64_t local_cycle_ns() const { return local_cycle_ns_; }
     // Host time of the earliest deadline of any slave's firmware (DistributedClock::kNever if none).
     std::uint64_t next_firmware_ns() const;
+
+    // ---- Firmware on several threads (vecat run --threads N). The runs of one batch (the catch-up of the
+    // slaves a frame reads, before the frame is processed; the runs after a frame; a tick) go to the
+    // threads by group: slaves whose applications share state (Application::shared_state: drives coupled
+    // by TWINsync, I/O wired to each other) form one group, which runs on one thread in the slaves'
+    // order; groups share nothing, so they run in any order on any thread with the same results. The
+    // serve loop's thread takes part and returns when the batch is done (FirmwareThreads::run): nothing runs
+    // beside the firmware, and the frame's datagrams are processed on the serve loop's thread as before.
+    // Batches of fewer than kMinParallelRuns runs stay on the calling thread. nullptr: one thread.
+    void set_firmware_threads(FirmwareThreads* threads) { threads_ = threads; }
+    static constexpr std::size_t kMinParallelRuns = 4;
+    // The groups the slaves form now (a figure for tests).
+    std::size_t firmware_groups();
+    std::uint32_t firmware_group(std::size_t i) {
+        firmware_groups();
+        return group_of_[i];
+    }
 
     const SegmentCounters& counters() const { return counters_; }
 
@@ -199,7 +219,25 @@ class Segment {
 
   private:
     void run_firmware(std::uint64_t now_ns);
-    void run(std::size_t k, std::uint64_t now_ns);
+    void run(std::size_t k, std::uint64_t now_ns);  // run_slave, counted
+    void run_slave(std::size_t k, std::uint64_t now_ns);
+    // Batches: pick() the slaves, run_picked() runs them (on the firmware threads when there are enough).
+    void pick(std::size_t k);
+    void run_picked(std::uint64_t now_ns);
+    static void run_group(void* self, std::size_t item);
+    void refresh_groups();
+    FirmwareThreads* threads_ = nullptr;
+    std::vector<std::uint8_t> picked_;  // per slave: runs in the batch being made
+    std::size_t picked_count_ = 0;
+    std::uint64_t batch_now_ns_ = 0;
+    std::uint64_t grouped_epoch_ = ~std::uint64_t{0};  // slaves_epoch_ when the groups were made
+    std::vector<std::uint32_t> group_of_;              // per slave
+    // The members of group g, in the slaves' order: members_[group_begin_[g] .. group_begin_[g + 1]).
+    std::vector<std::uint32_t> group_begin_;
+    std::vector<std::uint32_t> members_;
+    std::vector<std::uint64_t> group_batch_;  // per group: the batch it was last put in
+    std::uint64_t batch_serial_ = 0;
+    std::vector<std::uint32_t> batch_groups_;  // the groups of the batch being run
     void count_corruption(const FrameDamage& d, std::size_t reached);
     void update_links(std::size_t i);
     void return_receive_times(const protocol::ParsedFrame& pf, Bytes frame);
@@ -240,10 +278,10 @@ class Segment {
     mutable std::vector<FrameTiming> timing_;
     mutable std::size_t reached_count_ = 0;
     mutable std::size_t passed_ = 0;
-    std::uint64_t port_epoch_ = 1;             // counted up by the ESCs and by cabling changes
-    std::uint64_t slaves_epoch_ = 0;           // see slaves_epoch()
-    mutable std::uint64_t routed_epoch_ = 0;   // ... when the route was worked out
-    mutable std::uint64_t routed_hop_ns_ = 0;  // ... with this hop_delay_ns
+    std::atomic<std::uint64_t> port_epoch_{1};  // counted up by the ESCs and by cabling changes
+    std::uint64_t slaves_epoch_ = 0;            // see slaves_epoch()
+    mutable std::uint64_t routed_epoch_ = 0;    // ... when the route was worked out
+    mutable std::uint64_t routed_hop_ns_ = 0;   // ... with this hop_delay_ns
     struct Visit {
         std::size_t slave;
         unsigned next;    // ports of kPortOrder visited
@@ -312,9 +350,9 @@ class Segment {
     void process_datagrams(Bytes frame, const protocol::ParsedFrame& pf, std::size_t intact,
                            std::size_t latch_pos, std::uint64_t now_ns);
     void refresh_addressing();
-    std::vector<Esc::Addressing> addressing_;  // per slave
-    std::uint64_t address_epoch_ = 1;          // counted up by the ESCs (Esc::set_address_change_counter)
-    std::uint64_t addressed_epoch_ = 0;        // ... when addressing_ was last made whole
+    std::vector<Esc::Addressing> addressing_;      // per slave
+    std::atomic<std::uint64_t> address_epoch_{1};  // counted up by the ESCs (Esc::set_address_change_counter)
+    std::uint64_t addressed_epoch_ = 0;            // ... when addressing_ was last made whole
     std::uint64_t addressed_slaves_epoch_ = ~std::uint64_t{0};
     enum class Reach : std::uint8_t { None, All, Position, Fixed, Logical };
     struct DatagramReach {

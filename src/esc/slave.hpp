@@ -66,6 +66,10 @@ class Application {
     // the segment then hands out the SYNC pulses of such slaves in time order across them, so that neither
     // steps the other past a pulse the other has not taken yet.
     virtual bool coupled() const { return false; }
+    // State this application shares with other slaves' applications, as keys (a TWINsync partner, the
+    // output image a wire reads): slaves that name a common key run on one thread, one after the other in
+    // the slaves' order (Segment::set_firmware_threads). Asked when the slaves change, never cyclically.
+    virtual void shared_state(std::vector<const void*>& /*keys*/) const {}
     // The host time by which the firmware must run even without a frame, for a deadline of the
     // application's own (a timeout, a loss of SYNC events), or DistributedClock::kNever. Its own cycle
     // needs none: it catches up at every run (Segment::set_local_cycle_ns). Asked after each run.

@@ -63,6 +63,11 @@ InputTerminal::InputTerminal(unsigned output_bytes, unsigned input_bytes, Channe
       bus_(std::move(bus)),
       slot_(slot) {}
 
+void InputTerminal::shared_state(std::vector<const void*>& keys) const {
+    for (const InputSource& s : sources_)
+        if (s.wire_slot != IoBus::kNone) keys.push_back(bus_->output_key(s.wire_slot));
+}
+
 void InputTerminal::exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes in) {
     if (!started_) {
         started_ = true;

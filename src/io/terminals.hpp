@@ -43,6 +43,9 @@ class IoBus {
     void withdraw(std::size_t slot, const std::vector<std::uint8_t>* image) {
         if (outputs_.at(slot).image == image) outputs_[slot].image = nullptr;
     }
+    // The state an output slot stands for, as a key of esc::Application::shared_state: its terminal writes
+    // the image that wired inputs read, so they run on one firmware thread.
+    const void* output_key(std::size_t slot) const { return &outputs_.at(slot); }
     // Channel c of the output terminal in slot s: 0 or 1, or the 16-bit value (0 when it is gone).
     double output(std::size_t slot, unsigned channel) const noexcept;
     ChannelKind output_kind(std::size_t slot) const { return outputs_.at(slot).kind; }
@@ -93,6 +96,7 @@ class InputTerminal final : public esc::ProcessImageApplication, public Forceabl
     std::size_t input_slot() const override { return slot_; }
     unsigned input_channels() const override { return channels(); }
     ChannelKind kind() const { return kind_; }
+    void shared_state(std::vector<const void*>& keys) const override;  // the outputs it is wired to
 
   private:
     ChannelKind kind_;
@@ -111,6 +115,9 @@ class OutputTerminal final : public esc::ProcessImageApplication {
     OutputTerminal& operator=(const OutputTerminal&) = delete;
     ChannelKind kind() const { return bus_->output_kind(slot_); }
     unsigned channels() const { return bus_->output_channels(slot_); }
+    void shared_state(std::vector<const void*>& keys) const override {
+        keys.push_back(bus_->output_key(slot_));
+    }
 
   private:
     std::shared_ptr<IoBus> bus_;

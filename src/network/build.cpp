@@ -327,6 +327,13 @@ class WiredDrive final : public cia402::Drive, public io::ForceableInputs {
     WiredDrive& operator=(const WiredDrive&) = delete;
     std::size_t input_slot() const override { return input_slot_; }
     unsigned input_channels() const override { return kDriveProbeInputs; }
+    // Its digital outputs when a wire takes them, and the outputs its touch probe inputs are wired to.
+    void shared_state(std::vector<const void*>& keys) const override {
+        Drive::shared_state(keys);
+        if (slot_ != io::IoBus::kNone) keys.push_back(bus_->output_key(slot_));
+        for (const io::InputSource& s : probes_)
+            if (s.wire_slot != io::IoBus::kNone) keys.push_back(bus_->output_key(s.wire_slot));
+    }
 
   protected:
     // A forced input reads its value; the others their sources (none: 0). The drive ORs them with 0x2100:6.

@@ -139,6 +139,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     // The reply goes out before the firmware of the slaves runs (see Segment::set_deferred_firmware).
     const bool was_deferred = seg.deferred_firmware();
     seg.set_deferred_firmware(true);
+    seg.set_firmware_threads(opt.firmware_threads);
     // Only this thread writes the counters: a relaxed load and store each, no locked instruction.
     const auto bump = [](std::atomic<std::uint64_t>& c) {
         c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
@@ -253,6 +254,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
         if (opt.counters) opt.counters->catch_up_ns.store(catch_up.period_ns(), std::memory_order_relaxed);
     }
     seg.run_deferred_firmware();
+    seg.set_firmware_threads(nullptr);
     seg.set_deferred_firmware(was_deferred);
     seg.set_local_cycle_ns(was_local_cycle);
     if (opt.pcap) opt.pcap->flush();

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 
+#include "esc/firmware_threads.hpp"
 #include "esc/segment.hpp"
 #include "net/clock.hpp"
 #include "net/frame_filter.hpp"
@@ -66,6 +67,10 @@ struct ServeOptions {
     // downstream.
     RawSocket* secondary = nullptr;
     ServeCounters* counters = nullptr;  // live counters, if given
+    // Threads for the slaves' firmware (vecat run --threads N): the loop's thread and the workers run the
+    // firmware batches of the segment (Segment::set_firmware_threads) while the loop runs. nullptr: this
+    // thread alone.
+    esc::FirmwareThreads* firmware_threads = nullptr;
     // Descriptors to wait on beside the socket (the EoE devices' TAP interfaces, src/eoe/eoe_bridge.hpp):
     // the loop wakes up when one is readable and calls its service() between frames. With busy polling,
     // downstream or secondary it is serviced on every pass instead (without waking the loop).

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdlib>
 #include <mutex>
@@ -17,6 +18,7 @@
 #include "allocation_counter.hpp"
 #include "cia402/drive.hpp"
 #include "coe/coe_application.hpp"
+#include "esc/firmware_threads.hpp"
 #include "lock_counter.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
@@ -182,7 +184,10 @@ TEST(NoAllocation, DriveMovingInEveryMode) {
 
 // The serve loop and the master's socket, blocking and busy-polling, with enough drives that the process
 // data needs two frames per cycle.
-void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if, bool ring = false) {
+// threads > 1: the firmware on that many threads (esc::FirmwareThreads), whose worker spins through the test
+// (its sleep, a futex, comes only after a pause in the batches: see firmware_threads.hpp).
+void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if, bool ring = false,
+                                  unsigned threads = 1) {
     std::string why;
     ASSERT_TRUE(net::create_veth_pair(m_if, s_if, &why)) << why;
     auto seg = cia402::make_drive_segment(device::default_drive(), 40);
@@ -197,6 +202,8 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
     opt.busy_poll = busy;
     net::ServeCounters count;
     opt.counters = &count;
+    esc::FirmwareThreads firmware(threads, 600'000'000'000);
+    if (threads > 1) opt.firmware_threads = &firmware;
     std::thread srv([&] { net::serve(*seg, ss, opt, stop); });
     struct Join {
         std::atomic<bool>& stop;
@@ -225,9 +232,17 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
     const auto before = test::allocations();
     const auto locks_before = test::lock_calls();
     const std::uint64_t frames_before = count.frames.load(), wakeups_before = count.wakeups.load();
+    const std::uint64_t on_workers_before = firmware.items_on_workers();
     int ok = 0;
-    for (int i = 0; i < 1000; ++i)
+    int cycles = 0;
+    // 1,000 cycles; with firmware threads, more until the worker took part (on a loaded machine a spinning
+    // worker may get no CPU for a while; the serve loop's thread then runs every group itself).
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (cycles < 1000 || (threads > 1 && firmware.items_on_workers() == on_workers_before &&
+                             std::chrono::steady_clock::now() < until)) {
         ok += m.exchange_process_data().value_or(0) == m.expected_wkc();
+        ++cycles;
+    }
     const auto allocs = test::allocations() - before;
     const auto locks = test::lock_calls() - locks_before;
     // The live counters saw every frame of the cycles (each reply came back, so each was processed before
@@ -236,17 +251,24 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
     // wakeups_before was read. So 2000 frames take at least 1999 counted passes (more with ticks between
     // them; with receive rings and no tick due, exactly 1999 is seen).
     const auto frames = count.frames.load() - frames_before;
-    EXPECT_EQ(frames, 2000u);
+    EXPECT_EQ(frames, 2u * static_cast<unsigned>(cycles));
     EXPECT_GE(count.wakeups.load() - wakeups_before + 1, frames);
-    EXPECT_EQ(ok, 1000);
+    EXPECT_EQ(ok, cycles);
     EXPECT_EQ(allocs, 0u);
-    // Both threads count: the master's and the serve loop's.
+    // Both threads count: the master's and the serve loop's (and the firmware's worker).
     EXPECT_EQ(locks, 0u);
+    // Each frame writes the outputs of 20 drives: a batch of runs after it, for the worker too.
+    if (threads > 1) EXPECT_GT(firmware.items_on_workers(), on_workers_before);
 }
 
 TEST(NoAllocation, RawSocketServeLoop) {
     if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
     serve_loop_allocates_nothing(false, "na-m", "na-s");
+}
+
+TEST(NoAllocation, RawSocketServeLoopWithFirmwareThreads) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    serve_loop_allocates_nothing(false, "na-m4", "na-s4", false, 2);
 }
 
 TEST(NoAllocation, RawSocketServeLoopBusyPoll) {

@@ -1,0 +1,215 @@
+// The slaves' firmware runs around the frames (Segment, "Firmware when it is needed"), and their batches on
+// several threads (Segment::set_firmware_threads).
+#include <algorithm>
+#include <numeric>
+
+#include "esc/firmware_threads.hpp"
+#include "esc/segment.hpp"
+
+namespace vecat::esc {
+
+void Segment::deliver_coupled_pulses(std::uint64_t now_ns) {
+    if (coupled_epoch_ == slaves_epoch_ && coupled_.empty()) return;
+    if (coupled_epoch_ != slaves_epoch_) {
+        coupled_epoch_ = slaves_epoch_;
+        coupled_.clear();
+        for (std::size_t k = 0; k < slaves_.size(); ++k)
+            if (slaves_[k]->app().coupled()) coupled_.push_back(k);
+    }
+    for (;;) {
+        std::size_t first = slaves_.size();
+        std::uint64_t t = DistributedClock::kNever;
+        for (const std::size_t k : coupled_)
+            if (!halted_[k])
+                if (const std::uint64_t p = slaves_[k]->esc().dc().next_pulse_host_ns(); p < t) {
+                    t = p;
+                    first = k;
+                }
+        if (first == slaves_.size() || t > now_ns) return;
+        slaves_[first]->deliver_sync_pulses(t);
+    }
+}
+
+void Segment::run_due_firmware(std::uint64_t now_ns) {
+    deliver_coupled_pulses(now_ns);
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        if (last_run_ns_[k] == 0 || now_ns < last_run_ns_[k]) pick(k);
+    run_picked(now_ns);
+}
+
+void Segment::run_deferred_firmware() {
+    if (!firmware_due_) return;
+    firmware_due_ = false;
+    run_due_firmware(firmware_due_ns_);
+}
+
+void Segment::run_firmware(std::uint64_t now_ns) {
+    run_deferred_firmware();
+    deliver_coupled_pulses(now_ns);
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        pick(k);
+    run_picked(now_ns);
+}
+
+void Segment::run(std::size_t k, std::uint64_t now_ns) {
+    run_slave(k, now_ns);
+    ++counters_.firmware_runs;
+}
+
+void Segment::run_slave(std::size_t k, std::uint64_t now_ns) {
+    if (halted_[k])
+        slaves_[k]->esc().tick(now_ns);  // the silicon's watchdogs keep running
+    else
+        slaves_[k]->run(now_ns);
+    last_run_ns_[k] = now_ns == 0 ? 1 : now_ns;
+    // A halted firmware has no deadlines but the silicon's watchdog.
+    deadline_ns_[k] = halted_[k] ? slaves_[k]->esc().watchdog_deadline_ns()
+                                 : std::min(slaves_[k]->next_event_ns(now_ns + local_cycle_ns_),
+                                            now_ns + kMaxLagCycles * local_cycle_ns_);
+    pulse_ns_[k] = slaves_[k]->esc().dc().next_pulse_host_ns();
+    const std::uint64_t cycle = halted_[k] ? 0 : slaves_[k]->next_cycle_ns();
+    cycle_ns_[k] = cycle != 0 ? cycle : now_ns + local_cycle_ns_;
+}
+
+void Segment::tick(std::uint64_t now_ns) {
+    run_firmware(now_ns);
+}
+
+bool Segment::deadline_due(std::size_t k, std::uint64_t now_ns) const {
+    const std::uint64_t last = last_run_ns_[k];
+    return last == 0 || now_ns < last || deadline_ns_[k] <= now_ns;
+}
+
+bool Segment::stale(std::size_t k, std::uint64_t now_ns) const {
+    // (The pulse as of the last run, with a microsecond to spare for the drift of the DC unit since.)
+    return cycle_ns_[k] <= now_ns || pulse_ns_[k] <= now_ns + 1'000;
+}
+
+void Segment::catch_up(std::uint64_t now_ns) {
+    deliver_coupled_pulses(now_ns);
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        if (deadline_due(k, now_ns) || stale(k, now_ns)) pick(k);
+    run_picked(now_ns);
+}
+
+void Segment::catch_up_deadlines(std::uint64_t now_ns) {
+    deliver_coupled_pulses(now_ns);
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        if (deadline_due(k, now_ns)) pick(k);
+    run_picked(now_ns);
+}
+
+std::uint64_t Segment::next_event_ns() const {
+    std::uint64_t t = DistributedClock::kNever;
+    for (const auto& s : slaves_)
+        t = std::min(t, s->esc().dc().next_pulse_host_ns());
+    return t;
+}
+
+std::uint64_t Segment::next_firmware_ns() const {
+    std::uint64_t t = DistributedClock::kNever;
+    for (const std::uint64_t d : deadline_ns_)
+        t = std::min(t, d);
+    return t;
+}
+
+// ---- Batches on several threads
+
+void Segment::pick(std::size_t k) {
+    if (picked_[k]) return;
+    picked_[k] = 1;
+    ++picked_count_;
+}
+
+void Segment::run_picked(std::uint64_t now_ns) {
+    if (picked_count_ == 0) return;
+    if (!threads_ || threads_->threads() < 2 || picked_count_ < kMinParallelRuns) {
+        for (std::size_t k = 0; k < slaves_.size(); ++k)
+            if (picked_[k]) {
+                picked_[k] = 0;
+                run(k, now_ns);
+            }
+        picked_count_ = 0;
+        return;
+    }
+    if (grouped_epoch_ != slaves_epoch_) refresh_groups();
+    ++batch_serial_;
+    batch_groups_.clear();
+    for (std::size_t k = 0; k < slaves_.size(); ++k)
+        if (picked_[k]) {
+            const std::uint32_t g = group_of_[k];
+            if (group_batch_[g] != batch_serial_) {
+                group_batch_[g] = batch_serial_;
+                batch_groups_.push_back(g);  // capacity: one per group (refresh_groups)
+            }
+        }
+    batch_now_ns_ = now_ns;
+    threads_->run(batch_groups_.size(), &Segment::run_group, this);
+    counters_.firmware_runs += picked_count_;
+    picked_count_ = 0;
+}
+
+void Segment::run_group(void* self, std::size_t item) {
+    Segment& s = *static_cast<Segment*>(self);
+    const std::uint32_t g = s.batch_groups_[item];
+    for (std::uint32_t m = s.group_begin_[g]; m < s.group_begin_[g + 1]; ++m) {
+        const std::uint32_t k = s.members_[m];
+        if (!s.picked_[k]) continue;
+        s.picked_[k] = 0;
+        s.run_slave(k, s.batch_now_ns_);
+    }
+}
+
+void Segment::refresh_groups() {
+    grouped_epoch_ = slaves_epoch_;
+    const std::size_t n = slaves_.size();
+    // Union-find over the slaves: two slaves that name a common key share state.
+    std::vector<std::uint32_t> root(n);
+    std::iota(root.begin(), root.end(), 0u);
+    const auto find = [&](std::uint32_t x) {
+        while (root[x] != x)
+            x = root[x] = root[root[x]];
+        return x;
+    };
+    std::vector<std::pair<const void*, std::uint32_t>> keys;
+    std::vector<const void*> mine;
+    for (std::size_t k = 0; k < n; ++k) {
+        mine.clear();
+        slaves_[k]->app().shared_state(mine);
+        for (const void* key : mine)
+            keys.emplace_back(key, static_cast<std::uint32_t>(k));
+    }
+    std::sort(keys.begin(), keys.end());
+    for (std::size_t i = 1; i < keys.size(); ++i)
+        if (keys[i].first == keys[i - 1].first) {
+            const std::uint32_t a = find(keys[i].second), b = find(keys[i - 1].second);
+            root[std::max(a, b)] = std::min(a, b);
+        }
+    // Groups numbered by their first slave; members in the slaves' order.
+    group_of_.assign(n, 0);
+    std::vector<std::uint32_t> number(n, ~std::uint32_t{0});
+    std::uint32_t groups = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t r = find(static_cast<std::uint32_t>(k));
+        if (number[r] == ~std::uint32_t{0}) number[r] = groups++;
+        group_of_[k] = number[r];
+    }
+    group_begin_.assign(groups + 1, 0);
+    for (std::size_t k = 0; k < n; ++k)
+        ++group_begin_[group_of_[k] + 1];
+    for (std::uint32_t g = 0; g < groups; ++g)
+        group_begin_[g + 1] += group_begin_[g];
+    members_.assign(n, 0);
+    std::vector<std::uint32_t> at(group_begin_.begin(), group_begin_.end() - 1);
+    for (std::size_t k = 0; k < n; ++k)
+        members_[at[group_of_[k]]++] = static_cast<std::uint32_t>(k);
+    group_batch_.assign(groups, 0);
+    batch_groups_.reserve(groups);
+}
+
+std::size_t Segment::firmware_groups() {
+    if (grouped_epoch_ != slaves_epoch_) refresh_groups();
+    return group_begin_.empty() ? 0 : group_begin_.size() - 1;
+}
+
+}  // namespace vecat::esc

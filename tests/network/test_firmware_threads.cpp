@@ -1,0 +1,200 @@
+// The slaves' firmware on several threads (esc::FirmwareThreads, Segment::set_firmware_threads, vecat run
+// --threads): every item of every batch runs once; slaves that share state form one group; and a network
+// served with three threads answers the master byte for byte as with one.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <thread>
+#include <vector>
+
+#include "cia402/drive.hpp"
+#include "common/bytes.hpp"
+#include "device/device_description.hpp"
+#include "esc/firmware_threads.hpp"
+#include "esc/segment.hpp"
+#include "network_support.hpp"
+#include "protocol/cia402_objects.hpp"
+
+namespace vecat::network {
+namespace {
+
+using protocol::AlState;
+
+constexpr std::uint64_t kMs = 1'000'000;
+
+struct Batch {
+    std::vector<int> runs;
+    std::atomic<std::uint64_t> spin_sink{0};
+};
+
+void count_item(void* context, std::size_t item) {
+    auto& b = *static_cast<Batch*>(context);
+    ++b.runs[item];  // items are distinct: no two threads touch one counter
+    // A little work, so that the workers get items while the caller works too.
+    std::uint64_t x = item;
+    for (int i = 0; i < 200; ++i)
+        x = x * 6364136223846793005ull + 1442695040888963407ull;
+    b.spin_sink.fetch_add(x & 1, std::memory_order_relaxed);
+}
+
+TEST(FirmwareThreads, EveryItemOfEveryBatchRunsOnceAndTheWorkersTakePart) {
+    esc::FirmwareThreads threads(3);
+    ASSERT_EQ(threads.threads(), 3u);
+    Batch b;
+    std::size_t batches = 0;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    // Batches of every size, back to back, so that a worker late for one batch meets the next (it must not
+    // run an item of the next batch as one of the last). At least 20,000, and until the workers ran some.
+    while (batches < 20'000 ||
+           (threads.items_on_workers() == 0 && std::chrono::steady_clock::now() < until)) {
+        const std::size_t count = batches % 41;
+        b.runs.assign(count, 0);
+        threads.run(count, &count_item, &b);
+        for (std::size_t i = 0; i < count; ++i)
+            ASSERT_EQ(b.runs[i], 1) << "item " << i << " of batch " << batches << " (" << count << " items)";
+        ++batches;
+    }
+    EXPECT_GT(threads.items_on_workers(), 0u);
+}
+
+TEST(FirmwareThreads, ASleepingWorkerWakesUpForTheNextBatch) {
+    esc::FirmwareThreads threads(2, 1'000'000);  // sleeps after 1 ms without a batch
+    Batch b;
+    b.runs.assign(40, 0);
+    threads.run(40, &count_item, &b);
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));  // the worker is asleep by now
+    const std::uint64_t before = threads.items_on_workers();
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (threads.items_on_workers() == before && std::chrono::steady_clock::now() < until) {
+        b.runs.assign(40, 0);
+        threads.run(40, &count_item, &b);
+        ASSERT_EQ(std::count(b.runs.begin(), b.runs.end(), 1), 40);
+    }
+    EXPECT_GT(threads.items_on_workers(), before);
+}
+
+TEST(FirmwareThreads, OneThreadRunsEverythingOnTheCaller) {
+    esc::FirmwareThreads threads(1);
+    Batch b;
+    b.runs.assign(10, 0);
+    threads.run(10, &count_item, &b);
+    EXPECT_EQ(std::count(b.runs.begin(), b.runs.end(), 1), 10);
+    EXPECT_EQ(threads.items_on_workers(), 0u);
+}
+
+// Six drives (the first two coupled by TWINsync), two output terminals, three input terminals (two wired to
+// the first output terminal, one to a signal), a drive whose touch probe input is wired to the second
+// output terminal.
+constexpr const char* kNetwork = R"(
+devices:
+  - {name: valves, device: digital-out, channels: 8}
+  - {name: lamps, device: digital-out, channels: 8}
+  - name: sensors
+    device: digital-in
+    channels: 8
+    inputs:
+      0: {wire: valves:0}
+  - name: more
+    device: digital-in
+    channels: 8
+    inputs:
+      1: {wire: valves:1}
+  - name: clock
+    device: digital-in
+    channels: 8
+    inputs:
+      0: {signal: square, period_ms: 3}
+  - {name: a1, device: drive}
+  - {name: a2, device: drive}
+  - {name: a3, device: drive}
+  - name: a4
+    device: drive
+    inputs:
+      0: {wire: lamps:2}
+  - {name: a5, device: drive}
+  - {name: a6, device: drive}
+)";
+
+TEST(FirmwareGroups, SlavesThatShareStateRunInOneGroup) {
+    test::ServedNetwork s{kNetwork};
+    esc::Segment& seg = *s.built.segment;
+    // valves + sensors + more; lamps + a4; the others alone.
+    EXPECT_EQ(seg.firmware_group(0), seg.firmware_group(2));
+    EXPECT_EQ(seg.firmware_group(0), seg.firmware_group(3));
+    EXPECT_EQ(seg.firmware_group(1), seg.firmware_group(8));
+    EXPECT_NE(seg.firmware_group(0), seg.firmware_group(1));
+    EXPECT_NE(seg.firmware_group(4), seg.firmware_group(0));
+    EXPECT_NE(seg.firmware_group(5), seg.firmware_group(6));
+    EXPECT_EQ(seg.firmware_groups(), 8u);
+    // Drives coupled by TWINsync step each other: one group.
+    auto line = cia402::make_drive_segment(device::default_drive(), 4);
+    EXPECT_EQ(line->firmware_group(0), line->firmware_group(1));
+    EXPECT_NE(line->firmware_group(1), line->firmware_group(2));
+    EXPECT_EQ(line->firmware_groups(), 3u);
+}
+
+// The same network twice, one copy with three firmware threads: the master reads the same bytes from both
+// in every cycle, with every drive moving in cyclic synchronous position mode and the wired outputs
+// toggling; and the workers did take part.
+TEST(FirmwareThreads, ANetworkAnswersAsWithOneThread) {
+    constexpr std::uint64_t kStart = 1'000'000'000;
+    test::ServedNetwork plain{kNetwork, test::ServedNetwork::From::Text, kStart};
+    test::ServedNetwork threaded{kNetwork, test::ServedNetwork::From::Text, kStart};
+    esc::FirmwareThreads threads(3);
+    threaded.built.segment->set_firmware_threads(&threads);
+    for (test::ServedNetwork* n : {&plain, &threaded})
+        ASSERT_TRUE(n->master.startup(AlState::Op));
+    ASSERT_EQ(plain.link.now_ns(), threaded.link.now_ns()) << "both start-ups took the same time";
+    const std::size_t n_slaves = plain.master.slaves().size();
+    const auto& rx = plain.master.slaves()[5].out_entries;
+    const auto* cw = master::find_entry(rx, protocol::obj::controlword.index);
+    const auto* mode = master::find_entry(rx, protocol::obj::modes_of_operation.index);
+    const auto* target = master::find_entry(rx, protocol::obj::target_position.index);
+    ASSERT_NE(cw, nullptr);
+    ASSERT_NE(mode, nullptr);
+    ASSERT_NE(target, nullptr);
+    std::size_t differences = 0;
+    const std::uint64_t on_workers_before = threads.items_on_workers();
+    // 600 cycles; more until the worker took part (on a loaded machine a spinning worker may get no CPU for
+    // a while, and the caller then runs every group itself).
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    for (int i = 0; i < 600 || (threads.items_on_workers() == on_workers_before &&
+                                std::chrono::steady_clock::now() < until);
+         ++i) {
+        const std::uint16_t control = i < 5 ? 0x06 : i < 10 ? 0x07 : 0x0F;
+        const std::uint64_t t = plain.link.now_ns() + kMs;
+        for (test::ServedNetwork* n : {&plain, &threaded}) {
+            n->master.outputs(0)[0] = static_cast<std::uint8_t>(i);      // valves
+            n->master.outputs(1)[0] = static_cast<std::uint8_t>(i / 3);  // lamps
+            for (std::size_t d = 5; d < n_slaves; ++d) {
+                const std::int32_t position = i < 20 ? 0 : (i - 20) * 1'000 * static_cast<std::int32_t>(d);
+                st_le16(n->master.outputs(d).data() + cw->bit_offset / 8, control);
+                n->master.outputs(d)[mode->bit_offset / 8] = 8;  // cyclic synchronous position
+                st_le32(n->master.outputs(d).data() + target->bit_offset / 8,
+                        static_cast<std::uint32_t>(position));
+            }
+            // Now and then a tick between frames (a serve loop's), at the same time in both.
+            if (i % 7 == 3) n->built.segment->tick(t - 400'000);
+            n->link.set_time(t);
+            ASSERT_EQ(n->master.exchange_process_data().value_or(0), n->master.expected_wkc());
+        }
+        for (std::size_t k = 0; k < n_slaves; ++k) {
+            const ConstBytes a = plain.master.inputs(k), b = threaded.master.inputs(k);
+            if (!std::equal(a.begin(), a.end(), b.begin(), b.end())) ++differences;
+        }
+    }
+    EXPECT_EQ(differences, 0u);
+    // The drives did move, the wires did carry, and the workers ran some of the groups.
+    auto* drive = dynamic_cast<cia402::Drive*>(&threaded.built.segment->slave(10).app());
+    ASSERT_NE(drive, nullptr);
+    EXPECT_GT(drive->position_actual(), 1'000'000);
+    EXPECT_GT(threads.items_on_workers(), on_workers_before);
+    EXPECT_EQ(plain.built.segment->counters().firmware_runs,
+              threaded.built.segment->counters().firmware_runs);
+}
+
+}  // namespace
+}  // namespace vecat::network
