@@ -484,6 +484,7 @@ struct SlotPosition {
     pugi::xml_node slot;    // its Slot element
     pugi::xml_node module;  // none: empty
     bool chosen = false;    // from DeviceSelector::modules, not the Slot's default
+    std::string why_empty;  // a Slot without its default module: what it lacks
 };
 
 // A Slot's own increment, else the one of Slots (ETG.2000: the Slot's attribute overrides Slots').
@@ -509,7 +510,7 @@ void take_entries(pugi::xml_node slot, pugi::xml_node modules,
             if (min != 0)
                 throw ModuleError(entry, fmt::format("{} cannot stay empty (MinInstances {})", label(no),
                                                      trim(slot.attribute("MinInstances").as_string("1"))));
-            out.push_back({slot, {}, true});
+            out.push_back({slot, {}, true, {}});
             ++entry;
             full_note.clear();
             return;
@@ -525,7 +526,7 @@ void take_entries(pugi::xml_node slot, pugi::xml_node modules,
                                                       module_label(module), slot_offer(slot));
             throw ModuleError(entry, why + full_note);
         }
-        out.push_back({slot, module, true});
+        out.push_back({slot, module, true, {}});
         ++entry;
         ++taken;
         full_note.clear();
@@ -583,14 +584,15 @@ std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node mod
         for (std::int64_t k = 0; k < n; ++k) {
             const int no = static_cast<int>(positions.size());
             if (!module) {
-                notes.push_back(ident.empty() ? fmt::format("{}: no default module (it takes {}), empty",
-                                                            slot_label(slot, no), slot_offer(slot))
-                                              : fmt::format("{}: default module {} not found, empty",
-                                                            slot_label(slot, no), ident));
-                positions.push_back({slot, {}, false});
+                positions.push_back({slot,
+                                     {},
+                                     false,
+                                     ident.empty()
+                                         ? fmt::format("no default module (it takes {})", slot_offer(slot))
+                                         : fmt::format("default module {} not found", ident)});
                 break;  // one empty slot stands for the Slot
             }
-            positions.push_back({slot, module, false});
+            positions.push_back({slot, module, false, {}});
             if (positions.size() > protocol::obj::modular_device::max_slots) break;
         }
     }
@@ -616,7 +618,9 @@ std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node mod
         const auto& pos = positions[i];
         const int no = static_cast<int>(i);
         if (!pos.module) {
-            if (pos.chosen) notes.push_back(fmt::format("{}: empty", slot_label(pos.slot, no)));
+            notes.push_back(pos.chosen
+                                ? fmt::format("{}: empty", slot_label(pos.slot, no))
+                                : fmt::format("{}: {}, empty", slot_label(pos.slot, no), pos.why_empty));
             d.module_idents.push_back(0);
             continue;
         }
