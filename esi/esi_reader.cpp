@@ -582,7 +582,6 @@ std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node mod
         const auto module = default_module(slot, modules, ident);
         const auto n = std::max<std::int64_t>(1, attr_or(slot, "MinInstances", 1));
         for (std::int64_t k = 0; k < n; ++k) {
-            const int no = static_cast<int>(positions.size());
             if (!module) {
                 positions.push_back({slot,
                                      {},
