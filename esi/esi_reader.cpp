@@ -1,4 +1,4 @@
-// The ESI reader (about 900 lines): one vendor file to one DeviceDescription, element by element of the
+// The ESI reader (about 1,000 lines): one vendor file to one DeviceDescription, element by element of the
 // ETG.2000 schema (identity, SyncManagers, PDOs, Dictionary, Modules/Slots and the modules chosen for them,
 // DC), each with its bad-input messages; the elements share the reading helpers of this file.
 #include "esi/esi_reader.hpp"
@@ -261,12 +261,28 @@ device::SmType sm_type(const std::string& t, std::uint8_t control) {
     return write ? device::SmType::Outputs : device::SmType::Inputs;
 }
 
-device::Pdo read_pdo(pugi::xml_node x, const device::DeviceDescription& d, bool rx, std::uint16_t pdo_inc,
-                     std::uint16_t index_inc) {
+// How far the indexes of a module in one slot move (ETG.2000 Slots): an Index marked DependOnSlot by the
+// slot's increment times its slot number, one marked DependOnSlotGroup by the group increment times its
+// slot group number; PDO indexes and excludes by the PDO increments, entries and objects by the index ones.
+struct SlotShift {
+    std::int64_t pdo = 0;
+    std::int64_t index = 0;
+    std::int64_t group_pdo = 0;
+    std::int64_t group_index = 0;
+    std::uint16_t pdo_index(pugi::xml_node idx) const {
+        return static_cast<std::uint16_t>(parse_hexdec(txt(idx)).value_or(0) +
+                                          (bool_attr(idx, "DependOnSlot") ? pdo : 0) +
+                                          (bool_attr(idx, "DependOnSlotGroup") ? group_pdo : 0));
+    }
+    std::uint16_t object_index(pugi::xml_node idx, std::int64_t base) const {
+        return static_cast<std::uint16_t>(base + (bool_attr(idx, "DependOnSlot") ? index : 0) +
+                                          (bool_attr(idx, "DependOnSlotGroup") ? group_index : 0));
+    }
+};
+
+device::Pdo read_pdo(pugi::xml_node x, const device::DeviceDescription& d, bool rx, const SlotShift& shift) {
     device::Pdo p;
-    auto idx = x.child("Index");
-    p.index = static_cast<std::uint16_t>(parse_hexdec(txt(idx)).value_or(0) +
-                                         (bool_attr(idx, "DependOnSlot") ? pdo_inc : 0));
+    p.index = shift.pdo_index(x.child("Index"));
     p.name = name_of(x);
     p.fixed = bool_attr(x, "Fixed");
     p.mandatory = bool_attr(x, "Mandatory");
@@ -274,14 +290,12 @@ device::Pdo read_pdo(pugi::xml_node x, const device::DeviceDescription& d, bool 
     const auto own_sm = d.sm_index_of_type(rx ? device::SmType::Outputs : device::SmType::Inputs);
     p.sm = static_cast<std::uint8_t>(attr_or(x, "Sm", own_sm.value_or(rx ? 2 : 3)));
     for (auto ex : x.children("Exclude"))
-        p.excludes.push_back(static_cast<std::uint16_t>(parse_hexdec(txt(ex)).value_or(0) +
-                                                        (bool_attr(ex, "DependOnSlot") ? pdo_inc : 0)));
+        p.excludes.push_back(shift.pdo_index(ex));
     for (auto en : x.children("Entry")) {
         device::PdoEntry e;
         auto ei = en.child("Index");
         e.index = static_cast<std::uint16_t>(parse_hexdec(txt(ei)).value_or(0));
-        if (e.index != 0 && bool_attr(ei, "DependOnSlot"))
-            e.index = static_cast<std::uint16_t>(e.index + index_inc);
+        if (e.index != 0) e.index = shift.object_index(ei, e.index);  // index 0: a gap, never moved
         e.subindex = static_cast<std::uint8_t>(hexdec_or(en, "SubIndex", 0));
         e.bit_length = static_cast<std::uint8_t>(en.child("BitLen").text().as_uint());
         e.name = e.index ? name_of(en) : "";
@@ -443,9 +457,10 @@ pugi::xml_node default_module(pugi::xml_node slot, pugi::xml_node modules, std::
     return {};
 }
 
-// The objects of a module's own dictionary (Module/Profile/Dictionary), their DependOnSlot indexes moved by
-// the slot's index increment. Data types come from the module's dictionary, then the device's.
-void read_module_objects(pugi::xml_node module, pugi::xml_node device_dict, std::uint16_t index_inc,
+// The objects of a module's own dictionary (Module/Profile/Dictionary), their DependOnSlot and
+// DependOnSlotGroup indexes moved by the slot's shift. Data types come from the module's dictionary, then the
+// device's.
+void read_module_objects(pugi::xml_node module, pugi::xml_node device_dict, const SlotShift& shift,
                          std::vector<ObjectDescription>& out, std::vector<std::string>& notes) {
     pugi::xml_node md;
     for (auto p : module.children("Profile"))
@@ -458,14 +473,77 @@ void read_module_objects(pugi::xml_node module, pugi::xml_node device_dict, std:
     for (auto x : md.child("Objects").children("Object")) {
         auto o = read_object(dict, x, notes);
         if (!o) continue;
-        if (bool_attr(x.child("Index"), "DependOnSlot"))
-            o->index = static_cast<std::uint16_t>(o->index + index_inc);
+        o->index = shift.object_index(x.child("Index"), o->index);
         out.push_back(std::move(*o));
     }
 }
 
-// The slots of a modular device: each its chosen (or default) module's PDOs and objects, the increments of
-// Slots applied to DependOnSlot indexes (slot n, from 0: n * SlotPdoIncrement, n * SlotIndexIncrement), and
+// One slot of the device: a Slot element repeats from MinInstances to MaxInstances times (ETG.2000 SlotType),
+// each instance one slot with its number (from 0, in the order of the Slot elements and their instances).
+struct SlotPosition {
+    pugi::xml_node slot;    // its Slot element
+    pugi::xml_node module;  // none: empty
+    bool chosen = false;    // from DeviceSelector::modules, not the Slot's default
+    std::string why_empty;  // a Slot without its default module: what it lacks
+};
+
+// A Slot's own increment, else the one of Slots (ETG.2000: the Slot's attribute overrides Slots').
+std::int64_t increment(pugi::xml_node slot, pugi::xml_node slots, const char* name) {
+    return attr_or(slot, name, attr_or(slots, name, 0));
+}
+
+// The entries of DeviceSelector::modules a Slot element takes, from `entry` on: the modules it takes while it
+// has fewer than MaxInstances; `empty` as its first entry leaves it empty (one empty slot, MinInstances 0).
+// Appends its slots to `out` and moves `entry` past the entries taken. full_note: why the previous Slot took
+// no more (it is full), for the message of a refused entry.
+void take_entries(pugi::xml_node slot, pugi::xml_node modules,
+                  const std::vector<std::optional<std::string>>& list, std::size_t& entry,
+                  std::vector<SlotPosition>& out, std::string& full_note) {
+    const auto min = attr_or(slot, "MinInstances", 1);
+    const auto max = attr_or(slot, "MaxInstances", 1);
+    const auto label = [&](std::size_t n) { return slot_label(slot, static_cast<int>(n)); };
+    std::int64_t taken = 0;
+    while (entry < list.size() && taken < max) {
+        const std::size_t no = out.size();
+        if (!list[entry]) {
+            if (taken > 0) break;  // the next Slot's entry
+            if (min != 0)
+                throw ModuleError(entry, fmt::format("{} cannot stay empty (MinInstances {})", label(no),
+                                                     trim(slot.attribute("MinInstances").as_string("1"))));
+            out.push_back({slot, {}, true, {}});
+            ++entry;
+            full_note.clear();
+            return;
+        }
+        const auto module = find_module(modules, *list[entry], entry);
+        if (!slot_accepts(slot, module)) {
+            if (taken > 0 && taken >= min) break;  // the next Slot's entry
+            std::string why = taken > 0 ? fmt::format(
+                                              "{} does not take module {} and the Slot has {} of at "
+                                              "least {} instances (MinInstances); it takes {}",
+                                              label(no), module_label(module), taken, min, slot_offer(slot))
+                                        : fmt::format("{} does not take module {}; it takes {}", label(no),
+                                                      module_label(module), slot_offer(slot));
+            throw ModuleError(entry, why + full_note);
+        }
+        out.push_back({slot, module, true, {}});
+        ++entry;
+        ++taken;
+        full_note.clear();
+    }
+    if (taken < min)
+        throw ModuleError(entry - 1, fmt::format("{} module{} for the Slot \"{}\", which takes at least {} "
+                                                 "(MinInstances)",
+                                                 taken, taken == 1 ? "" : "s", name_of(slot), min));
+    full_note = taken == max && max > 1
+                    ? fmt::format("; the Slot \"{}\" takes at most {} (MaxInstances)", name_of(slot), max)
+                    : std::string();
+}
+
+// The slots of a modular device: each its chosen (or default) module's PDOs and objects, their DependOnSlot
+// indexes moved by slot number n (from 0) times the increments (the Slot's SlotPdoIncrement and
+// SlotIndexIncrement, else those of Slots), their DependOnSlotGroup indexes by the Slot's SlotGroup number
+// times the group increments (SlotGroupPdoIncrement, SlotGroupIndexIncrement, the Slot's else Slots'), and
 // its ModuleIdent in d.module_idents. Returns the modules' objects. A refused choice throws ModuleError.
 std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node modules,
                                           pugi::xml_node device_dict, const DeviceSelector& sel,
@@ -478,57 +556,87 @@ std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node mod
     if (sel.modules && slot_nodes.empty())
         throw ModuleError(std::nullopt,
                           "the device has no slots (no Slots element): modules: is for modular devices");
-    if (sel.modules && sel.modules->size() > slot_nodes.size())
-        throw ModuleError(slot_nodes.size(),
-                          fmt::format("{} modules for {} slot{}", sel.modules->size(), slot_nodes.size(),
-                                      slot_nodes.size() == 1 ? "" : "s"));
-    if (slot_nodes.size() > protocol::obj::modular_device::max_slots)
-        throw EsiError(fmt::format("{} slots: the module ident lists have room for {}", slot_nodes.size(),
-                                   protocol::obj::modular_device::max_slots));
-    const auto pdo_inc = attr_or(slots, "SlotPdoIncrement", 0);
-    const auto idx_inc = attr_or(slots, "SlotIndexIncrement", 0);
-    for (std::size_t i = 0; i < slot_nodes.size(); ++i) {
-        const auto slot = slot_nodes[i];
-        const int no = static_cast<int>(i);
-        const bool chosen = sel.modules && i < sel.modules->size();
-        pugi::xml_node module;
-        if (chosen && !(*sel.modules)[i]) {
-            if (attr_or(slot, "MinInstances", 1) != 0)
-                throw ModuleError(i,
-                                  fmt::format("{} cannot stay empty (MinInstances {})", slot_label(slot, no),
-                                              trim(slot.attribute("MinInstances").as_string("1"))));
-            d.module_idents.push_back(0);
-            notes.push_back(fmt::format("{}: empty", slot_label(slot, no)));
+    std::int64_t most = 0;  // the slots the Slot elements can make
+    for (auto slot : slot_nodes) {
+        const auto min = attr_or(slot, "MinInstances", 1);
+        const auto max = attr_or(slot, "MaxInstances", 1);
+        if (min < 0 || max < 1 || max < min)
+            throw EsiError(
+                fmt::format("Slot \"{}\": MinInstances {} and MaxInstances {} (ETG.2000: 0 <= "
+                            "MinInstances <= MaxInstances, MaxInstances >= 1)",
+                            name_of(slot), min, max));
+        most += max;
+    }
+    // The slots: the Slot elements in order, each taking entries of the list; after the list (or without
+    // one) each Slot its default module MinInstances times (at least once; the first ModuleIdent or the
+    // Default one; none: one empty slot).
+    std::vector<SlotPosition> positions;
+    std::size_t entry = 0;
+    std::string full_note;
+    for (auto slot : slot_nodes) {
+        if (sel.modules && entry < sel.modules->size()) {
+            take_entries(slot, modules, *sel.modules, entry, positions, full_note);
             continue;
         }
-        if (chosen) {
-            module = find_module(modules, *(*sel.modules)[i], i);
-            if (!slot_accepts(slot, module))
-                throw ModuleError(i,
-                                  fmt::format("{} does not take module {}; it takes {}", slot_label(slot, no),
-                                              module_label(module), slot_offer(slot)));
-        } else {
-            std::string ident;
-            module = default_module(slot, modules, ident);
+        std::string ident;
+        const auto module = default_module(slot, modules, ident);
+        const auto n = std::max<std::int64_t>(1, attr_or(slot, "MinInstances", 1));
+        for (std::int64_t k = 0; k < n; ++k) {
             if (!module) {
-                notes.push_back(ident.empty() ? fmt::format("{}: no default module (it takes {}), empty",
-                                                            slot_label(slot, no), slot_offer(slot))
-                                              : fmt::format("{}: default module {} not found, empty",
-                                                            slot_label(slot, no), ident));
-                d.module_idents.push_back(0);
-                continue;
+                positions.push_back({slot,
+                                     {},
+                                     false,
+                                     ident.empty()
+                                         ? fmt::format("no default module (it takes {})", slot_offer(slot))
+                                         : fmt::format("default module {} not found", ident)});
+                break;  // one empty slot stands for the Slot
             }
+            positions.push_back({slot, module, false, {}});
+            if (positions.size() > protocol::obj::modular_device::max_slots) break;
         }
-        const auto pi = static_cast<std::uint16_t>(pdo_inc * no);
-        const auto ii = static_cast<std::uint16_t>(idx_inc * no);
-        for (auto p : module.children("RxPdo"))
-            d.rx_pdos.push_back(read_pdo(p, d, true, pi, ii));
-        for (auto p : module.children("TxPdo"))
-            d.tx_pdos.push_back(read_pdo(p, d, false, pi, ii));
-        read_module_objects(module, device_dict, ii, objects, notes);
-        d.module_idents.push_back(module_ident(module));
-        notes.push_back(fmt::format("{}: {} module {}", slot_label(slot, no), chosen ? "chosen" : "default",
-                                    module_label(module)));
+    }
+    if (sel.modules && entry < sel.modules->size())
+        throw ModuleError(entry, fmt::format("{} modules for {} slot{}{}{}", sel.modules->size(),
+                                             slot_nodes.size(), slot_nodes.size() == 1 ? "" : "s",
+                                             most > static_cast<std::int64_t>(slot_nodes.size())
+                                                 ? fmt::format(", which take at most {} (MaxInstances)", most)
+                                                 : std::string(),
+                                             full_note));
+    const auto max_count = attr_or(slots, "MaxSlotCount", 0);
+    if (max_count > 0 && static_cast<std::int64_t>(positions.size()) > max_count) {
+        const auto why = fmt::format("{} slots: the device has at most {} (Slots MaxSlotCount)",
+                                     positions.size(), max_count);
+        if (!sel.modules) throw EsiError(why);  // its default modules alone are too many
+        // The entry of the first slot too many, or the last one when the defaults after the list are.
+        throw ModuleError(std::min(static_cast<std::size_t>(max_count), sel.modules->size() - 1), why);
+    }
+    if (positions.size() > protocol::obj::modular_device::max_slots)
+        throw EsiError(fmt::format("{} slots: the module ident lists have room for {}", positions.size(),
+                                   protocol::obj::modular_device::max_slots));
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        const auto& pos = positions[i];
+        const int no = static_cast<int>(i);
+        if (!pos.module) {
+            notes.push_back(pos.chosen
+                                ? fmt::format("{}: empty", slot_label(pos.slot, no))
+                                : fmt::format("{}: {}, empty", slot_label(pos.slot, no), pos.why_empty));
+            d.module_idents.push_back(0);
+            continue;
+        }
+        const auto group = attr_or(pos.slot, "SlotGroup", 0);
+        SlotShift shift;
+        shift.pdo = increment(pos.slot, slots, "SlotPdoIncrement") * no;
+        shift.index = increment(pos.slot, slots, "SlotIndexIncrement") * no;
+        shift.group_pdo = increment(pos.slot, slots, "SlotGroupPdoIncrement") * group;
+        shift.group_index = increment(pos.slot, slots, "SlotGroupIndexIncrement") * group;
+        for (auto p : pos.module.children("RxPdo"))
+            d.rx_pdos.push_back(read_pdo(p, d, true, shift));
+        for (auto p : pos.module.children("TxPdo"))
+            d.tx_pdos.push_back(read_pdo(p, d, false, shift));
+        read_module_objects(pos.module, device_dict, shift, objects, notes);
+        d.module_idents.push_back(module_ident(pos.module));
+        notes.push_back(fmt::format("{}: {} module {}", slot_label(pos.slot, no),
+                                    pos.chosen ? "chosen" : "default", module_label(pos.module)));
     }
     return objects;
 }
@@ -675,9 +783,9 @@ ImportResult import_esi_text(const std::string& xml, const DeviceSelector& sel) 
     }
 
     for (auto p : dev.children("RxPdo"))
-        d.rx_pdos.push_back(read_pdo(p, d, true, 0, 0));
+        d.rx_pdos.push_back(read_pdo(p, d, true, {}));
     for (auto p : dev.children("TxPdo"))
-        d.tx_pdos.push_back(read_pdo(p, d, false, 0, 0));
+        d.tx_pdos.push_back(read_pdo(p, d, false, {}));
     // Modular devices: the module in each slot brings its PDOs and objects.
     auto module_objects = read_slots(dev, descs.child("Modules"), dict_node, sel, d, notes);
 

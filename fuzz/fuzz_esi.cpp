@@ -3,7 +3,8 @@
 // Invariants: a file is either refused with an exception (what vecat reports and stops on) or gives a
 // description whose SII image parses back with the same identity, and whose slave can be built. A modular
 // device imported again with chosen modules (network file modules:; each slot another slot's module, or
-// empty) gives one ModuleIdent per slot or is refused with a ModuleError naming an entry of the list.
+// empty) gives one ModuleIdent per slot (at least one per entry: Slot elements repeat) or is refused with a
+// ModuleError naming an entry of the list.
 #include <cstdint>
 #include <exception>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "esc/sii_image.hpp"
 #include "esi/esi_reader.hpp"
 #include "fuzz_support.hpp"
+#include "protocol/objects.hpp"
 
 using namespace vecat;
 
@@ -38,8 +40,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             else
                 sel.modules->push_back(std::nullopt);
         try {
+            // Every entry one slot; Slot elements the list does not reach add their default ones.
             const auto chosen = esi::import_esi_text(xml, sel);
-            VECAT_FUZZ_CHECK(chosen.desc.module_idents.size() == n);
+            VECAT_FUZZ_CHECK(chosen.desc.module_idents.size() >= n);
+            VECAT_FUZZ_CHECK(chosen.desc.module_idents.size() <= protocol::obj::modular_device::max_slots);
         } catch (const esi::ModuleError& e) {
             VECAT_FUZZ_CHECK(e.entry && *e.entry < n);
         } catch (const std::exception&) {

@@ -4,7 +4,8 @@
 // or the file; nothing else is thrown. An accepted file is a tree: one device on the master, every other one
 // with a parent before it in the order, its port cabled to it and to nothing else. A redundancy port is a
 // free port of a device; hot connect group names are unique. The inputs of I/O terminals name channels the
-// terminal has, and wires name output terminals of the file. Quirks hold values within their ranges. modules:
+// terminal has, and wires name output terminals or drives of the file (a channel), or devices of ESI files or
+// SII dumps (a channel or an output PDO entry). Quirks hold values within their ranges. modules:
 // is on esi: devices only, each entry with its line. The same
 // text read as a signal's CSV table (io::parse_table) is refused with std::invalid_argument naming a line, or
 // gives rows at rising times with finite values.
@@ -73,13 +74,20 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     for (const auto& d : f.devices)
         for (const auto& in : d.inputs) {
-            VECAT_FUZZ_CHECK(d.source == network::Source::DigitalIn || d.source == network::Source::AnalogIn);
+            VECAT_FUZZ_CHECK(d.source == network::Source::DigitalIn ||
+                             d.source == network::Source::AnalogIn || d.source == network::Source::Drive);
             VECAT_FUZZ_CHECK(in.channel < network::kMaxChannels);
             if (in.signal.kind != io::SignalKind::Wire) continue;
+            // A wire names an output terminal or a vecat drive (a channel), or a device of an ESI file or SII
+            // dump (a channel or an output PDO entry 0xINDEX:SUB, checked when the device is made).
             bool output = false;
-            for (const auto& o : f.devices)
-                output |= o.name == in.signal.device &&
-                          (o.source == network::Source::DigitalOut || o.source == network::Source::AnalogOut);
+            for (const auto& o : f.devices) {
+                if (o.name != in.signal.device) continue;
+                const bool from_file = o.source == network::Source::Esi || o.source == network::Source::Sii;
+                output = from_file || (!in.signal.wire_entry && (o.source == network::Source::DigitalOut ||
+                                                                 o.source == network::Source::AnalogOut ||
+                                                                 o.source == network::Source::Drive));
+            }
             VECAT_FUZZ_CHECK(output);
         }
     return 0;

@@ -17,7 +17,7 @@ enum class SignalKind : std::uint8_t {
     Ramp,      // from -> to over each period, then again
     Table,     // (time, value) rows: each value holds from its time to the next row's; the last holds on,
                // or, with a period, the table starts again after it
-    Wire,      // the output channel `channel` of the output terminal `device`
+    Wire,      // the output channel `channel` of the output terminal `device`, or an output PDO entry of it
 };
 
 struct Signal {
@@ -31,6 +31,11 @@ struct Signal {
     std::vector<std::pair<std::uint64_t, double>> table;  // rising times
     std::string device;    // wire: the output terminal (its name in the network file)
     unsigned channel = 0;  // ... and its channel
+    // A wire that names an output PDO entry of a device of an ESI file or SII dump (DEVICE:0xINDEX:SUB)
+    // instead of a channel.
+    bool wire_entry = false;
+    std::uint16_t wire_index = 0;
+    std::uint8_t wire_subindex = 0;
 };
 
 // The signal's value t_ns after its start (not for Wire: the terminal reads the wire).

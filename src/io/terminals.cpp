@@ -10,7 +10,7 @@
 namespace vecat::io {
 
 std::size_t IoBus::add_output(std::string name, ChannelKind kind, unsigned channels) {
-    outputs_.push_back(Output{std::move(name), kind, channels, nullptr});
+    outputs_.push_back(Output{std::move(name), kind, channels, nullptr, {}});
     return outputs_.size() - 1;
 }
 
@@ -26,11 +26,39 @@ std::size_t IoBus::output_slot(std::string_view name) const {
     return kNone;
 }
 
+unsigned IoBus::add_point(std::size_t slot, ImagePoint p) {
+    Output& o = outputs_.at(slot);
+    for (std::size_t i = 0; i < o.points.size(); ++i)
+        if (o.points[i].bit_offset == p.bit_offset && o.points[i].bit_length == p.bit_length)
+            return static_cast<unsigned>(i);
+    o.points.push_back(p);
+    o.channels = static_cast<unsigned>(o.points.size());
+    return o.channels - 1;
+}
+
+namespace {
+
+// The value of an entry in an image; 0 where the image is shorter.
+double point_value(const std::vector<std::uint8_t>& img, const ImagePoint& p) noexcept {
+    std::uint64_t raw = 0;
+    for (unsigned b = 0; b < p.bit_length; ++b) {
+        const std::uint32_t at = p.bit_offset + b;
+        if (at / 8 >= img.size()) return 0;
+        raw |= static_cast<std::uint64_t>((img[at / 8] >> (at % 8)) & 1u) << b;
+    }
+    if (p.is_signed && p.bit_length > 0 && ((raw >> (p.bit_length - 1)) & 1u))
+        return static_cast<double>(static_cast<std::int64_t>(raw) - (std::int64_t{1} << p.bit_length));
+    return static_cast<double>(raw);
+}
+
+}  // namespace
+
 double IoBus::output(std::size_t slot, unsigned channel) const noexcept {
     if (slot >= outputs_.size()) return 0;
     const Output& o = outputs_[slot];
     if (!o.image || channel >= o.channels) return 0;
     const std::vector<std::uint8_t>& img = *o.image;
+    if (o.kind == ChannelKind::Entries) return point_value(img, o.points[channel]);
     if (o.kind == ChannelKind::Digital)
         return channel / 8 < img.size() ? static_cast<double>((img[channel / 8] >> (channel % 8)) & 1u) : 0.0;
     return 2 * channel + 1 < img.size()

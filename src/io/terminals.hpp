@@ -1,16 +1,19 @@
 // The built-in I/O terminals with behaviour (network files, docs/network-file.md): an input terminal's
 // channels follow their signal sources (signal.hpp) or are wired to a channel of an output terminal, and any
 // input can be forced at run time through the control socket (fault set_input, src/faults) until the fault
-// is cleared. The terminals of one network share an IoBus: the output images for the wires, resolved to
+// is cleared; a wire may also take an output PDO entry of a device of an ESI file or SII dump (OutputsOnBus).
+// The terminals of one network share an IoBus: the output images for the wires, resolved to
 // slots once when the network is built, and the forced inputs, which outlive a restart of their terminal.
 // Nothing on the cyclic path allocates or looks anything up by name.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "esc/slave.hpp"
@@ -24,8 +27,18 @@ class Segment;
 namespace vecat::io {
 
 // A digital channel is one bit (an input reads 1 when its signal is above 0.5), an analog one a 16-bit
-// signed integer (the signal rounded and limited to -32768..32767).
-enum class ChannelKind : std::uint8_t { Digital, Analog };
+// signed integer (the signal rounded and limited to -32768..32767). Entries: the outputs of a device of an
+// ESI file or SII dump, each channel one output PDO entry of its image (IoBus::add_point).
+enum class ChannelKind : std::uint8_t { Digital, Analog, Entries };
+
+// Where an output PDO entry is in a device's output image: bits [bit_offset, bit_offset + bit_length),
+// little-endian (ETG.1000.6 5.6.7.4.7: entries packed in mapping order), 1 to 32 bits; signed: an INTEGER
+// type, its value sign-extended.
+struct ImagePoint {
+    std::uint32_t bit_offset = 0;
+    std::uint8_t bit_length = 1;
+    bool is_signed = false;
+};
 
 class IoBus {
   public:
@@ -34,6 +47,8 @@ class IoBus {
     std::size_t add_output(std::string name, ChannelKind kind, unsigned channels);
     std::size_t add_input(std::string name, unsigned channels);
     std::size_t output_slot(std::string_view name) const;  // kNone when there is none
+    // A point of the image of an Entries output slot: its channel (the same point given again: its channel).
+    unsigned add_point(std::size_t slot, ImagePoint p);
     // The output terminal of a slot shows its image there while it exists. A restarted terminal's new
     // application publishes before the old one goes: withdrawing takes the image away only if it is still
     // the one shown.
@@ -43,10 +58,11 @@ class IoBus {
     void withdraw(std::size_t slot, const std::vector<std::uint8_t>* image) {
         if (outputs_.at(slot).image == image) outputs_[slot].image = nullptr;
     }
-    // The state an output slot stands for, as a key of esc::Application::shared_state: its terminal writes
+    // The state an output slot stands for, as a key of esc::Application::shared_state: its device writes
     // the image that wired inputs read, so they run on one firmware thread.
     const void* output_key(std::size_t slot) const { return &outputs_.at(slot); }
-    // Channel c of the output terminal in slot s: 0 or 1, or the 16-bit value (0 when it is gone).
+    // Channel c of the output terminal in slot s: 0 or 1, or the 16-bit value, or the value of the entry
+    // (0 when it is gone).
     double output(std::size_t slot, unsigned channel) const noexcept;
     ChannelKind output_kind(std::size_t slot) const { return outputs_.at(slot).kind; }
     unsigned output_channels(std::size_t slot) const { return outputs_.at(slot).channels; }
@@ -61,6 +77,7 @@ class IoBus {
         ChannelKind kind = ChannelKind::Digital;
         unsigned channels = 0;
         const std::vector<std::uint8_t>* image = nullptr;
+        std::vector<ImagePoint> points;  // Entries: channel c is points[c]
     };
     struct Input {
         std::string name;
@@ -122,6 +139,42 @@ class OutputTerminal final : public esc::ProcessImageApplication {
   private:
     std::shared_ptr<IoBus> bus_;
     std::size_t slot_;
+};
+
+// The outputs of a device of an ESI file or SII dump on the bus, for wires (App: its application, a
+// coe::CoeApplication, a drive, a bare process image): after each exchange that applies outputs, the image
+// the master wrote (as long as the default mapping's image; a longer one is cut) is copied into a buffer made
+// once, which the bus shows; the safe state clears it. A subclass, so that whoever looks for the
+// application's own type (CoE faults, telemetry) still finds it.
+template <class App>
+class OutputsOnBus final : public App {
+  public:
+    template <class... Args>
+    OutputsOnBus(std::shared_ptr<IoBus> bus, std::size_t slot, unsigned image_bytes, Args&&... args)
+        : App(std::forward<Args>(args)...), bus_(std::move(bus)), slot_(slot), image_(image_bytes, 0) {
+        bus_->publish(slot_, &image_);
+    }
+    ~OutputsOnBus() override { bus_->withdraw(slot_, &image_); }
+    OutputsOnBus(const OutputsOnBus&) = delete;
+    OutputsOnBus& operator=(const OutputsOnBus&) = delete;
+    void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) override {
+        App::exchange(now_ns, outputs, apply, inputs);
+        if (apply) std::copy_n(outputs.begin(), std::min(outputs.size(), image_.size()), image_.begin());
+    }
+    void outputs_safe_state() override {
+        App::outputs_safe_state();
+        std::fill(image_.begin(), image_.end(), 0);
+    }
+    // Wired inputs read its outputs: they run on one firmware thread with it.
+    void shared_state(std::vector<const void*>& keys) const override {
+        App::shared_state(keys);
+        keys.push_back(bus_->output_key(slot_));
+    }
+
+  private:
+    std::shared_ptr<IoBus> bus_;
+    std::size_t slot_;
+    std::vector<std::uint8_t> image_;
 };
 
 // The fault set_input slave=N channel=C value=V: the input reads V until the fault ends. Registered with the

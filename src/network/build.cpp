@@ -1,5 +1,9 @@
 #include "network/build.hpp"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 
@@ -11,6 +15,7 @@
 #include "device/simple_devices.hpp"
 #include "device/soe_drive.hpp"
 #include "esi/esi_reader.hpp"
+#include "protocol/data_type.hpp"
 #include "protocol/sii.hpp"
 #include "soe/soe_drive.hpp"
 
@@ -100,11 +105,19 @@ std::unique_ptr<esc::Application> process_image(const device::DeviceDescription&
     return std::make_unique<esc::ProcessImageApplication>(d.output_bytes(), d.input_bytes());
 }
 
+// An application of type App for a device description, its outputs on the bus when a wire takes them.
+template <class App, class... Args>
+std::unique_ptr<App> make_app(const OutputTap& tap, const device::DeviceDescription& d, Args&&... args) {
+    if (tap.slot == io::IoBus::kNone) return std::make_unique<App>(std::forward<Args>(args)...);
+    return std::make_unique<io::OutputsOnBus<App>>(tap.bus, tap.slot, d.output_bytes(),
+                                                   std::forward<Args>(args)...);
+}
+
 using Made = DeviceParts;
 
 // file: the network file's name, for messages on other lines than the device's (modules:).
 Made make_device(const DeviceEntry& e, const std::string& file, const std::string& at,
-                 const std::string& quirks_at, std::vector<std::string>& notes) {
+                 const std::string& quirks_at, std::vector<std::string>& notes, const OutputTap& tap) {
     Made m;
     device::DeviceDescription d;
     bool drive = false;
@@ -183,7 +196,7 @@ Made make_device(const DeviceEntry& e, const std::string& file, const std::strin
                 coe_details = dd.coe_details;
             };
             try {
-                m = device_from_sii(std::move(img), n, adjust, dict);
+                m = device_from_sii(std::move(img), n, adjust, dict, tap);
             } catch (const NetworkFileError& x) {
                 throw NetworkFileError(at + e.path + ": " + x.what());
             }
@@ -226,8 +239,8 @@ Made make_device(const DeviceEntry& e, const std::string& file, const std::strin
                                                 ? kPortMii
                                                 : kPortEbus);
     if (drive)
-        m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
-            return std::unique_ptr<esc::Application>(std::make_unique<cia402::Drive>(dd, objects));
+        m.factory = [objects = m.model.dictionary, tap](const device::DeviceDescription& dd) {
+            return std::unique_ptr<esc::Application>(make_app<cia402::Drive>(tap, dd, dd, objects));
         };
     else if (e.source == Source::SoeDrive || e.source == Source::SoeDrive2)
         m.factory = soe::make_soe_drive;
@@ -240,7 +253,7 @@ Made make_device(const DeviceEntry& e, const std::string& file, const std::strin
 
 DeviceParts device_from_sii(std::vector<std::uint8_t> img, std::vector<std::string>& notes,
                             const std::function<void(device::DeviceDescription&)>& adjust,
-                            std::shared_ptr<const DeviceDictionary> dictionary) {
+                            std::shared_ptr<const DeviceDictionary> dictionary, OutputTap tap) {
     const protocol::SiiInfo sii = protocol::parse_sii(img);
     if (img.size() < 0x80 || !sii.checksum_ok || sii.identity.vendor_id == 0)
         throw NetworkFileError("not an SII image (" + std::to_string(img.size()) + " bytes, checksum " +
@@ -264,8 +277,8 @@ DeviceParts device_from_sii(std::vector<std::uint8_t> img, std::vector<std::stri
         // so that SDO information still reports the described defaults. The mapping is read again from them.
         m.model.dictionary =
             std::make_shared<const std::vector<device::ObjectDescription>>(dictionary->objects);
-        m.factory = [objects = m.model.dictionary, dictionary](const device::DeviceDescription& dd) {
-            auto app = std::make_unique<coe::CoeApplication>(dd, objects);
+        m.factory = [objects = m.model.dictionary, dictionary, tap](const device::DeviceDescription& dd) {
+            auto app = make_app<coe::CoeApplication>(tap, dd, dd, objects);
             for (const auto& [at, bytes] : dictionary->values)
                 if (coe::Entry* e = app->dictionary().find(at.first, at.second))
                     e->assign(ConstBytes(bytes.data(), bytes.size()));
@@ -274,11 +287,14 @@ DeviceParts device_from_sii(std::vector<std::uint8_t> img, std::vector<std::stri
             return std::unique_ptr<esc::Application>(std::move(app));
         };
     } else if (coe)
-        m.factory = [objects = m.model.dictionary](const device::DeviceDescription& dd) {
-            return std::unique_ptr<esc::Application>(std::make_unique<coe::CoeApplication>(dd, objects));
+        m.factory = [objects = m.model.dictionary, tap](const device::DeviceDescription& dd) {
+            return std::unique_ptr<esc::Application>(make_app<coe::CoeApplication>(tap, dd, dd, objects));
         };
     else
-        m.factory = process_image;
+        m.factory = [tap](const device::DeviceDescription& dd) {
+            return std::unique_ptr<esc::Application>(
+                make_app<esc::ProcessImageApplication>(tap, dd, dd.output_bytes(), dd.input_bytes()));
+        };
     return m;
 }
 
@@ -358,6 +374,46 @@ class WiredDrive final : public cia402::Drive, public io::ForceableInputs {
     std::size_t slot_;        // the output slot of its digital outputs (kNone: no wire takes them)
 };
 
+// The place of a wire's output in the image of a device of an ESI file or SII dump (docs/network-file.md):
+// channel N, its N-th one-bit output PDO entry; 0xINDEX:SUB, that output PDO entry (1 to 32 bits). Both in
+// the default mapping: the assigned RxPDOs in order, their entries packed (gaps count). Throws the line's
+// NetworkFileError (at: "FILE:LINE: NAME: ") when the device has no such output.
+io::ImagePoint wire_point(const device::DeviceDescription& d, const std::string& target, const io::Signal& s,
+                          const std::string& at) {
+    std::uint32_t offset = 0;
+    unsigned bits = 0;  // one-bit entries so far
+    std::vector<std::string> mapped;
+    for (const auto& p : d.rx_pdos) {
+        if (!p.assigned) continue;
+        for (const auto& e : p.entries) {
+            const bool real = e.index != 0;
+            if (real && s.wire_entry && e.index == s.wire_index && e.subindex == s.wire_subindex) {
+                if (e.bit_length < 1 || e.bit_length > 32)
+                    throw NetworkFileError(
+                        fmt::format("{}wire: {}: 0x{:04X}:{} has {} bits; a wire takes 1 to 32", at, target,
+                                    e.index, e.subindex, e.bit_length));
+                return {offset, e.bit_length, protocol::is_signed(e.type)};
+            }
+            if (real && !s.wire_entry && e.bit_length == 1 && bits++ == s.channel) return {offset, 1, false};
+            if (real && mapped.size() < 8) mapped.push_back(fmt::format("0x{:04X}:{}", e.index, e.subindex));
+            offset += e.bit_length;
+        }
+    }
+    if (s.wire_entry)
+        throw NetworkFileError(
+            fmt::format("{}wire: {} maps no output PDO entry 0x{:04X}:{} (its default RxPDOs map {}{})", at,
+                        target, s.wire_index, s.wire_subindex,
+                        mapped.empty() ? std::string("nothing") : fmt::format("{}", fmt::join(mapped, ", ")),
+                        mapped.size() == 8 ? ", ..." : ""));
+    throw NetworkFileError(
+        bits == 0
+            ? fmt::format(
+                  "{}wire: {} has no one-bit outputs in its default RxPDOs; name an entry: {}:0xINDEX:SUB",
+                  at, target, target)
+            : fmt::format("{}wire: {} has one-bit outputs 0-{} (its RxPDO entries of one bit, in order)", at,
+                          target, bits - 1));
+}
+
 // The built-in I/O terminals get their behaviour (src/io): output terminals show their outputs on the bus,
 // input terminals read their signals, wires and forced values. So does a vecat drive that has wires.
 void attach_io(const DeviceEntry& e, Made& m, BuiltNetwork& b) {
@@ -419,11 +475,43 @@ BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
                     if (in.signal.kind == io::SignalKind::Wire && in.signal.device == e.name &&
                         b.io->output_slot(e.name) == io::IoBus::kNone)
                         b.io->add_output(e.name, io::ChannelKind::Digital, kDriveDigitalOutputs);
-    std::vector<std::uint8_t> ports;
+    // A device of an ESI file or SII dump shows its outputs on the bus when a wire takes one of them.
+    const auto from_file = [](const DeviceEntry& e) {
+        return e.source == Source::Esi || e.source == Source::Sii;
+    };
+    for (const DeviceEntry& e : f.devices)
+        if (from_file(e))
+            for (const DeviceEntry& other : f.devices)
+                for (const auto& in : other.inputs)
+                    if (in.signal.kind == io::SignalKind::Wire && in.signal.device == e.name &&
+                        b.io->output_slot(e.name) == io::IoBus::kNone)
+                        b.io->add_output(e.name, io::ChannelKind::Entries, 0);
+    std::vector<Made> made;
     for (const DeviceEntry& e : f.devices) {
         const std::string at = file + ":" + std::to_string(e.line) + ": " + e.name + ": ";
         const std::string quirks_at = file + ":" + std::to_string(e.quirks_line) + ": " + e.name + ": ";
-        Made m = make_device(e, file, at, quirks_at, b.notes);
+        const OutputTap tap{b.io, from_file(e) ? b.io->output_slot(e.name) : io::IoBus::kNone};
+        made.push_back(make_device(e, file, at, quirks_at, b.notes, tap));
+    }
+    // The wires to them: each its point of the device's image, the channel the reading device asks the bus.
+    std::vector<DeviceEntry> wired = f.devices;
+    for (DeviceEntry& e : wired)
+        for (auto& in : e.inputs) {
+            if (in.signal.kind != io::SignalKind::Wire) continue;
+            const auto target = std::find_if(f.devices.begin(), f.devices.end(), [&](const DeviceEntry& o) {
+                return o.name == in.signal.device;
+            });
+            if (target == f.devices.end() || !from_file(*target)) continue;
+            const auto& d = *made[static_cast<std::size_t>(target - f.devices.begin())].model.description;
+            const std::string at = file + ":" + std::to_string(in.line) + ": " + e.name + ": ";
+            in.signal.channel =
+                b.io->add_point(b.io->output_slot(target->name), wire_point(d, target->name, in.signal, at));
+        }
+    std::vector<std::uint8_t> ports;
+    for (std::size_t i = 0; i < wired.size(); ++i) {
+        const DeviceEntry& e = wired[i];
+        const std::string at = file + ":" + std::to_string(e.line) + ": " + e.name + ": ";
+        Made& m = made[i];
         attach_io(e, m, b);
         apply_esc(m.esc, e.esc);
         if (e.esc.ram_kib && *e.esc.ram_kib < 8)

@@ -36,11 +36,17 @@ struct DeviceParts {
     esc::ApplicationFactory factory;
     esc::EscConfig esc;
 };
+// Where a device's outputs go for wires (io::OutputsOnBus): this output slot of the bus; none: nowhere.
+struct OutputTap {
+    std::shared_ptr<io::IoBus> bus;
+    std::size_t slot = io::IoBus::kNone;
+};
 // dictionary: the object dictionary read from the device (a dictionary file) served instead of the
 // generated one: exactly its objects, starting at its values, SDO information refused if it says so.
+// tap: its outputs shown on the bus (a wire takes one).
 DeviceParts device_from_sii(std::vector<std::uint8_t> image, std::vector<std::string>& notes,
                             const std::function<void(device::DeviceDescription&)>& adjust = {},
-                            std::shared_ptr<const DeviceDictionary> dictionary = {});
+                            std::shared_ptr<const DeviceDictionary> dictionary = {}, OutputTap tap = {});
 
 // The ESC registers of a network file's esc: key applied to a configuration.
 void apply_esc(esc::EscConfig& cfg, const EscOverride& o);

@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -54,6 +55,42 @@ std::uint64_t milliseconds(const Reader& r, const YAML::Node& n, const std::stri
     return static_cast<std::uint64_t>(ms * 1e6);
 }
 
+// wire: DEVICE:CHANNEL (a channel number), or DEVICE:0xINDEX:SUB (an output PDO entry of a device of an ESI
+// file or SII dump: index in hexadecimal, subindex decimal or 0x). Device names hold no ':'.
+void parse_wire(const Reader& r, const YAML::Node& v, io::Signal& sig) {
+    const std::string w = r.scalar(v, "wire");
+    const auto colon = w.find(':');
+    if (colon == std::string::npos || colon == 0)
+        r.fail(v, "wire: DEVICE:CHANNEL (an output channel) or DEVICE:0xINDEX:SUB (an output PDO entry)");
+    sig.kind = io::SignalKind::Wire;
+    sig.device = w.substr(0, colon);
+    const std::string rest = w.substr(colon + 1);
+    const auto digits = [](const std::string& t, bool hex) {
+        return !t.empty() && std::all_of(t.begin(), t.end(), [&](char c) {
+            return hex ? std::isxdigit(static_cast<unsigned char>(c)) != 0
+                       : std::isdigit(static_cast<unsigned char>(c)) != 0;
+        });
+    };
+    if (const auto second = rest.find(':'); second != std::string::npos) {
+        const std::string index = rest.substr(0, second);
+        std::string sub = rest.substr(second + 1);
+        const bool hex_index = index.size() > 2 && index[0] == '0' && (index[1] == 'x' || index[1] == 'X');
+        if (!hex_index || index.size() > 6 || !digits(index.substr(2), true))
+            r.fail(v, "wire: DEVICE:0xINDEX:SUB, the entry's index in hexadecimal (0x7000)");
+        const bool hex_sub = sub.size() > 2 && sub[0] == '0' && (sub[1] == 'x' || sub[1] == 'X');
+        if (hex_sub) sub = sub.substr(2);
+        if (!digits(sub, hex_sub) || sub.size() > 3 || std::stoul(sub, nullptr, hex_sub ? 16 : 10) > 255)
+            r.fail(v, "wire: DEVICE:0xINDEX:SUB, the subindex 0-255 after the index");
+        sig.wire_entry = true;
+        sig.wire_index = static_cast<std::uint16_t>(std::stoul(index.substr(2), nullptr, 16));
+        sig.wire_subindex = static_cast<std::uint8_t>(std::stoul(sub, nullptr, hex_sub ? 16 : 10));
+        return;
+    }
+    if (!digits(rest, false) || rest.size() > 3)
+        r.fail(v, "wire: the channel after ':' is a number (or 0xINDEX:SUB, an output PDO entry)");
+    sig.channel = static_cast<unsigned>(std::stoul(rest));
+}
+
 // inputs: of an input terminal: CHANNEL: {signal: KIND, parameters...} or CHANNEL: {wire: DEVICE:CHANNEL}.
 void parse_inputs(const Reader& r, const YAML::Node& n, DeviceEntry& d, const std::string& folder) {
     if (!n.IsMap()) r.fail(n, "inputs: a map of channel: {signal: ...} or channel: {wire: DEVICE:CHANNEL}");
@@ -89,16 +126,7 @@ void parse_inputs(const Reader& r, const YAML::Node& n, DeviceEntry& d, const st
                 sig.kind = it->second;
                 kind_given = true;
             } else if (key == "wire") {
-                const std::string w = r.scalar(v, key);
-                const auto colon = w.rfind(':');
-                if (colon == std::string::npos || colon == 0)
-                    r.fail(v, "wire: DEVICE:CHANNEL, an output terminal and its channel");
-                sig.kind = io::SignalKind::Wire;
-                sig.device = w.substr(0, colon);
-                const std::string c = w.substr(colon + 1);
-                if (c.empty() || c.size() > 2 || !std::all_of(c.begin(), c.end(), ::isdigit))
-                    r.fail(v, "wire: the channel after ':' is a number");
-                sig.channel = static_cast<unsigned>(std::stoul(c));
+                parse_wire(r, v, sig);
                 kind_given = true;
             } else if (key == "value") {
                 sig.value = real(r, v, key);
@@ -451,7 +479,7 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
                                            "); a group is a device and everything downstream of it");
     }
     // Wires: each names an output terminal of the file, or a vecat drive (its digital outputs), and one of
-    // its channels.
+    // its channels; or a device of an ESI file or SII dump (its outputs, checked when it is made).
     for (const DeviceEntry& d : f.devices)
         for (const auto& in : d.inputs) {
             if (in.signal.kind != io::SignalKind::Wire) continue;
@@ -459,6 +487,12 @@ NetworkFile parse_network(const std::string& yaml_text, const std::string& name,
                                          [&](const DeviceEntry& o) { return o.name == in.signal.device; });
             if (it == f.devices.end())
                 r.fail(in.line, d.name + ": wire: no device named " + in.signal.device);
+            // A device of an ESI file or SII dump: its output PDO entries are checked when it is made.
+            if (it->source == Source::Esi || it->source == Source::Sii) continue;
+            if (in.signal.wire_entry)
+                r.fail(in.line, d.name + ": wire: " + it->name +
+                                    " is a built-in device: a wire names its channel (DEVICE:CHANNEL); "
+                                    "DEVICE:0xINDEX:SUB is for devices of ESI files and SII dumps");
             if (output_channels(*it) == 0)
                 r.fail(in.line, d.name + ": wire: " + it->name +
                                     " is no output terminal (digital-out, analog-out) and no vecat drive "

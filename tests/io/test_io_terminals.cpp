@@ -19,6 +19,7 @@
 #include "network/network_file.hpp"
 #include "protocol/cia402_objects.hpp"
 #include "serve/in_process_link.hpp"
+#include "shared_data.hpp"
 #include "telemetry/plot.hpp"
 #include "telemetry/recording.hpp"
 #include "telemetry/sampler.hpp"
@@ -329,6 +330,108 @@ TEST(IoTerminals, TheScopeSamplesTheChannelsOfEachTerminal) {
     for (const auto& sig : telemetry::signal_list())
         listed = listed || sig.name == "io.out15";
     EXPECT_TRUE(listed);
+}
+
+// Wires from the outputs of devices of SII dumps and ESI files (docs/network-file.md, Inputs): a real
+// Beckhoff EL2004 from its SII dump (four one-bit RxPDOs 0x1600-0x1603 mapping 0x7000:1 ... 0x7030:1) drives
+// a digital input terminal by channel and by entry; the modular device of examples/networks drives an analog
+// input terminal with its 8-bit output 0x7000:0.
+std::string el2004_line() {
+    return "devices:\n"
+           "  - name: el2004\n"
+           "    sii: " +
+           test::shared_data("sii/beckhoff-el2004.bin") +
+           "\n"
+           "  - name: ins\n"
+           "    device: digital-in\n"
+           "    channels: 4\n"
+           "    inputs:\n"
+           "      0: {wire: el2004:0}\n"
+           "      1: {wire: el2004:3}\n"
+           "      2: {wire: el2004:0x7010:1}\n"
+           "  - name: mod\n"
+           "    esi: " VECAT_SOURCE_DIR
+           "/examples/networks/modular-io.xml\n"
+           "    type: VECAT-MOD-3\n"
+           "  - name: level\n"
+           "    device: analog-in\n"
+           "    channels: 1\n"
+           "    inputs:\n"
+           "      0: {wire: mod:0x7000:0}\n";
+}
+
+TEST(IoTerminals, AWireTakesAnOutputOfADeviceOfAnSiiDumpOrEsiFile) {
+    VECAT_REQUIRE_SHARED_DATA("sii/beckhoff-el2004.bin");
+    auto built = network::build_network(network::parse_network(el2004_line(), "el.yaml"), "el.yaml");
+    net::InProcessLink link(*built.segment);
+    master::Master m(link);
+    std::uint64_t now = 1'000'000'000;
+    link.set_time(now);
+    std::string why;
+    ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+    ASSERT_EQ(m.outputs(0).size(), 1u) << "the EL2004's four output bits";
+    const auto cycle = [&] {
+        now += 1'000'000;
+        link.set_time(now);
+        ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+    };
+    const auto inputs = [&] { return m.inputs(1)[0] & 0x07; };
+    // The master writes outputs 1 and 4 of the EL2004: with this frame the EL2004 takes them, the input
+    // terminal samples them after it, and the master reads them with the next frame: one cycle later.
+    m.outputs(0)[0] = 0x09;
+    cycle();
+    cycle();
+    EXPECT_EQ(inputs(), 0x03) << "channel 0 (bit 0) and channel 3 (bit 3) on, 0x7010:1 off";
+    m.outputs(0)[0] = 0x02;
+    cycle();
+    cycle();
+    EXPECT_EQ(inputs(), 0x04) << "0x7010:1 (output 2) on";
+    // The modular device's DO8 output 0x7000:0 (USINT) on the analog input.
+    m.outputs(2)[0] = 0xC8;
+    cycle();
+    cycle();
+    EXPECT_EQ(static_cast<std::int16_t>(ld_le16(m.inputs(3).data())), 200);
+    // Below OP the outputs go to their safe state: the wire reads 0.
+    ASSERT_TRUE(m.request_state(m.slaves().at(0).station, AlState::SafeOp));
+    cycle();
+    cycle();
+    EXPECT_EQ(inputs(), 0x00);
+}
+
+TEST(IoTerminals, AWireToAnOutputTheDeviceLacksIsRefusedNamingTheLine) {
+    VECAT_REQUIRE_SHARED_DATA("sii/beckhoff-el2004.bin");
+    const auto refused = [](const std::string& text) {
+        try {
+            (void)network::build_network(network::parse_network(text, "net.yaml"), "net.yaml");
+        } catch (const network::NetworkFileError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    const auto with = [](const std::string& from, const std::string& to) {
+        std::string t = el2004_line();
+        t.replace(t.find(from), from.size(), to);
+        return t;
+    };
+    EXPECT_EQ(refused(el2004_line()), "accepted");
+    EXPECT_EQ(
+        refused(with("el2004:3}", "el2004:4}")),
+        "net.yaml:9: ins: wire: el2004 has one-bit outputs 0-3 (its RxPDO entries of one bit, in order)");
+    EXPECT_EQ(refused(with("el2004:0x7010:1", "el2004:0x7010:2")),
+              "net.yaml:10: ins: wire: el2004 maps no output PDO entry 0x7010:2 (its default RxPDOs map "
+              "0x7000:1, 0x7010:1, 0x7020:1, 0x7030:1)");
+    EXPECT_EQ(refused(with("mod:0x7000:0", "mod:0")),
+              "net.yaml:18: level: wire: mod has no one-bit outputs in its default RxPDOs; name an entry: "
+              "mod:0xINDEX:SUB");
+    // The reader checks the syntax, and that an entry is named only on a device of a file.
+    EXPECT_EQ(refused(with("el2004:0x7010:1", "el2004:7010:1")),
+              "net.yaml:10: wire: DEVICE:0xINDEX:SUB, the entry's index in hexadecimal (0x7000)");
+    EXPECT_EQ(refused(with("el2004:0x7010:1", "el2004:0x7010:256")),
+              "net.yaml:10: wire: DEVICE:0xINDEX:SUB, the subindex 0-255 after the index");
+    EXPECT_EQ(
+        refused(with("el2004:0x7010:1", "level:0x7010:1")),
+        "net.yaml:10: ins: wire: level is a built-in device: a wire names its channel (DEVICE:CHANNEL); "
+        "DEVICE:0xINDEX:SUB is for devices of ESI files and SII dumps");
 }
 
 TEST(IoTerminals, TheNetworkFileRefusesBadInputsNamingTheLine) {

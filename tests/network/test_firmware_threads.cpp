@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -129,6 +130,16 @@ TEST(FirmwareGroups, SlavesThatShareStateRunInOneGroup) {
     EXPECT_NE(seg.firmware_group(4), seg.firmware_group(0));
     EXPECT_NE(seg.firmware_group(5), seg.firmware_group(6));
     EXPECT_EQ(seg.firmware_groups(), 8u);
+    // A wire from output PDO entries of ESI devices (examples/networks/modular.yaml: io, io-defaults, rack,
+    // levels wired to io and rack).
+    test::ServedNetwork modular{std::string(VECAT_SOURCE_DIR) + "/examples/networks/modular.yaml",
+                                test::ServedNetwork::From::File};
+    esc::Segment& m = *modular.built.segment;
+    ASSERT_EQ(m.size(), 4u);
+    EXPECT_EQ(m.firmware_group(0), m.firmware_group(3));
+    EXPECT_EQ(m.firmware_group(2), m.firmware_group(3));
+    EXPECT_NE(m.firmware_group(1), m.firmware_group(3));
+    EXPECT_EQ(m.firmware_groups(), 2u);
     // Drives coupled by TWINsync step each other: one group.
     auto line = cia402::make_drive_segment(device::default_drive(), 4);
     EXPECT_EQ(line->firmware_group(0), line->firmware_group(1));

@@ -11,13 +11,17 @@
 #include <filesystem>
 
 #include "common/bytes.hpp"
+#include "device/from_sii.hpp"
+#include "esc/sii_image.hpp"
 #include "esi/esi_reader.hpp"
+#include "esi/esi_writer.hpp"
 #include "master/coe_client.hpp"
 #include "master/master.hpp"
 #include "network/build.hpp"
 #include "network/network_file.hpp"
 #include "network_support.hpp"
 #include "protocol/objects.hpp"
+#include "protocol/sii.hpp"
 #include "serve/in_process_link.hpp"
 #include "shared_data.hpp"
 #include "test_support.hpp"
@@ -268,6 +272,131 @@ TEST(NetworkModules, TheEtg2001ExampleTakesChosenModules) {
     Served s("devices:\n  - name: axes\n    esi: " + file + "\n    modules: [0x201, 0x110]\n");
     std::string why;
     ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
+    for (int i = 0; i < 5; ++i)
+        ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
+}
+
+// VECAT-MOD-R of modular-io.xml: Slot elements that repeat (ETG.2000 SlotType MinInstances/MaxInstances):
+// "Head" once, "Inputs" 2 or 3 times with its own SlotPdoIncrement 0x10 and SlotIndexIncrement 0x100 (those
+// of Slots: 1 and 0x10), "Analog" 0 to 3 times in slot group 1 (group increments 0x10 and 0x100);
+// MaxSlotCount 6.
+std::vector<std::uint16_t> indexes(const std::vector<device::Pdo>& pdos) {
+    std::vector<std::uint16_t> v;
+    for (const auto& p : pdos)
+        v.push_back(p.index);
+    return v;
+}
+
+std::vector<std::uint16_t> entry_indexes(const std::vector<device::Pdo>& pdos) {
+    std::vector<std::uint16_t> v;
+    for (const auto& p : pdos)
+        for (const auto& e : p.entries)
+            v.push_back(e.index);
+    return v;
+}
+
+device::DeviceDescription repeating(std::optional<std::vector<std::optional<std::string>>> modules) {
+    esi::DeviceSelector sel;
+    sel.type = "VECAT-MOD-R";
+    sel.modules = std::move(modules);
+    return esi::import_esi_file(kModularIo, sel).desc;
+}
+
+TEST(NetworkModules, ARepeatingSlotTakesOneEntryPerInstanceWithItsOwnIncrements) {
+    const auto d =
+        repeating(std::vector<std::optional<std::string>>{"DO8", "0x1001", "0x1003", "0x1001", "AI1", "AO1"});
+    // Slot n from 0: Head 0, Inputs 1-3, Analog 4-5.
+    EXPECT_EQ(d.module_idents, (std::vector<std::uint32_t>{0x1002, 0x1001, 0x1003, 0x1001, 0x2001, 0x2002}));
+    // Inputs' own increments: n * 0x10 for the PDOs, n * 0x100 for the entries (not Slots' 1 and 0x10).
+    // AI1 in slot 4 by the increments of Slots: 0x1A04, 0x6040.
+    EXPECT_EQ(indexes(d.tx_pdos), (std::vector<std::uint16_t>{0x1A10, 0x1A20, 0x1A30, 0x1A04}));
+    EXPECT_EQ(entry_indexes(d.tx_pdos), (std::vector<std::uint16_t>{0x6100, 0x6200, 0x6300, 0x6040}));
+    // AO1 in slot 5, slot group 1: 0x1600 + 5 + 0x10, 0x7000 + 5 * 0x10 + 0x100.
+    EXPECT_EQ(indexes(d.rx_pdos), (std::vector<std::uint16_t>{0x1600, 0x1615}));
+    EXPECT_EQ(entry_indexes(d.rx_pdos), (std::vector<std::uint16_t>{0x7000, 0x7150}));
+    EXPECT_EQ(d.input_bytes(), 5u);
+    EXPECT_EQ(d.output_bytes(), 3u);
+    // The modules' own objects follow the same increments, one per instance.
+    const auto objs = device::dictionary_objects(d);
+    for (const std::uint16_t i :
+         std::initializer_list<std::uint16_t>{0x6100, 0x6200, 0x6300, 0x6040, 0x8040, 0x7150})
+        EXPECT_NE(object(objs, i), nullptr) << std::hex << i;
+    EXPECT_EQ(object(objs, 0x6010), nullptr) << "not by the increment of Slots";
+    EXPECT_EQ(idents(object(objs, md::detected_module_ident_list)), d.module_idents);
+    EXPECT_EQ(idents(object(objs, md::configured_module_ident_list)), d.module_idents);
+    // The SII and the generated ESI describe the same PDOs (the ESI without Slots of its own).
+    const auto sii = protocol::parse_sii(esc::build_sii_image(d));
+    const auto from_sii = device::description_from_sii(sii, nullptr);
+    EXPECT_EQ(indexes(from_sii.tx_pdos), indexes(d.tx_pdos));
+    EXPECT_EQ(entry_indexes(from_sii.rx_pdos), entry_indexes(d.rx_pdos));
+    const auto again = esi::import_esi_text(esi::write_esi(d)).desc;
+    EXPECT_EQ(indexes(again.tx_pdos), indexes(d.tx_pdos));
+    EXPECT_EQ(entry_indexes(again.rx_pdos), entry_indexes(d.rx_pdos));
+    EXPECT_EQ(idents(object(device::dictionary_objects(again), md::detected_module_ident_list)),
+              d.module_idents);
+}
+
+TEST(NetworkModules, ARepeatingSlotGetsMinInstancesDefaultModules) {
+    const auto d = repeating(std::nullopt);
+    // Head DO8, Inputs twice its default DI8 0x1001 (MinInstances 2), Analog once AI1 (MinInstances 0).
+    EXPECT_EQ(d.module_idents, (std::vector<std::uint32_t>{0x1002, 0x1001, 0x1001, 0x2001}));
+    EXPECT_EQ(indexes(d.tx_pdos), (std::vector<std::uint16_t>{0x1A10, 0x1A20, 0x1A03}));
+    EXPECT_EQ(entry_indexes(d.tx_pdos), (std::vector<std::uint16_t>{0x6100, 0x6200, 0x6030}));
+    // A list that ends in a Slot: the Slots after it keep their defaults.
+    const auto e = repeating(std::vector<std::optional<std::string>>{"DO8", "0x1003", "0x1003", "0x1003"});
+    EXPECT_EQ(e.module_idents, (std::vector<std::uint32_t>{0x1002, 0x1003, 0x1003, 0x1003, 0x2001}));
+    EXPECT_EQ(indexes(e.tx_pdos), (std::vector<std::uint16_t>{0x1A10, 0x1A20, 0x1A30, 0x1A04}));
+}
+
+TEST(NetworkModules, TooManyOrTooFewInstancesAreRefusedWithTheLineOfTheEntry) {
+    const auto mod_r = [](const std::string& modules) { return net(modules, "VECAT-MOD-R"); };
+    // A fourth DI8: Inputs is full (MaxInstances 3) and Analog does not take it.
+    EXPECT_REFUSED(mod_r("    modules:\n      - DO8\n      - 0x1001\n      - 0x1001\n      - 0x1001\n"
+                         "      - 0x1001\n"),
+                   "net.yaml:10: io: modules: slot 5 \"Analog\" does not take module \"DI8\" (ModuleIdent "
+                   "0x1001); it takes ModuleIdent #x2001, ModuleIdent #x2002; the Slot \"Inputs\" takes at "
+                   "most 3 (MaxInstances)");
+    // More than all Slots take.
+    EXPECT_REFUSED(mod_r("    modules: [DO8, 0x1001, 0x1001, AI1, AI1, AI1, AO1]\n"),
+                   "net.yaml:5: io: modules: 7 modules for 3 slots, which take at most 7 (MaxInstances); the "
+                   "Slot \"Analog\" takes at most 3 (MaxInstances)");
+    // MaxSlotCount 6 of Slots: the 7th slot.
+    EXPECT_REFUSED(mod_r("    modules:\n      - DO8\n      - 0x1001\n      - 0x1001\n      - 0x1001\n"
+                         "      - AI1\n      - AI1\n      - AO1\n"),
+                   "net.yaml:12: io: modules: 7 slots: the device has at most 6 (Slots MaxSlotCount)");
+    // Too few: Inputs takes at least 2 (MinInstances), given one, then a module it does not take ...
+    EXPECT_REFUSED(mod_r("    modules:\n      - DO8\n      - 0x1001\n      - AI1\n"),
+                   "net.yaml:8: io: modules: slot 3 \"Inputs\" does not take module \"AI1\" (ModuleIdent "
+                   "0x2001) and the Slot has 1 of at least 2 instances (MinInstances)");
+    // ... or the end of the list, at its last entry.
+    EXPECT_REFUSED(mod_r("    modules:\n      - DO8\n      - 0x1001\n"),
+                   "net.yaml:7: io: modules: 1 module for the Slot \"Inputs\", which takes at least 2 "
+                   "(MinInstances)");
+    // empty ends a Slot of MinInstances 0: Analog stays empty (one empty slot, 0 in 0xF050).
+    EXPECT_EQ(refusal(mod_r("    modules: [DO8, 0x1001, 0x1003, empty]\n")), "");
+    EXPECT_EQ(repeating(std::vector<std::optional<std::string>>{"DO8", "0x1001", "0x1003", std::nullopt})
+                  .module_idents,
+              (std::vector<std::uint32_t>{0x1002, 0x1001, 0x1003, 0}));
+    EXPECT_REFUSED(mod_r("    modules: [DO8, empty]\n"),
+                   "net.yaml:5: io: modules: slot 2 \"Inputs\" cannot stay empty (MinInstances 2)");
+}
+
+TEST(NetworkModules, ARepeatingSlotDeviceServesItsInstances) {
+    Served s(net("    modules: [DO8, 0x1001, 0x1003, 0x1001, AI1, AO1]\n", "VECAT-MOD-R"));
+    std::string why;
+    ASSERT_TRUE(s.master.startup(protocol::AlState::PreOp, &why)) << why;
+    const auto station = s.master.slaves().at(0).station;
+    master::CoeClient c(s.master, station);
+    EXPECT_EQ(c.upload(md::detected_module_ident_list, 0).data, (std::vector<std::uint8_t>{6}));
+    EXPECT_EQ(read32(c, md::detected_module_ident_list, 3), 0x1003u);
+    EXPECT_EQ(read32(c, md::detected_module_ident_list, 6), 0x2002u);
+    // The mapping of the 2nd instance of Inputs and of AO1: entry 0x6200:0, 8 bits; 0x7150:0, 16 bits.
+    EXPECT_EQ(read32(c, 0x1A20, 1), 0x62000008u);
+    EXPECT_EQ(read32(c, 0x1615, 1), 0x71500010u);
+    EXPECT_TRUE(c.upload(0x6300, 0).ok());
+    ASSERT_TRUE(s.master.startup(protocol::AlState::Op, &why)) << why;
+    EXPECT_EQ(s.master.slaves().at(0).out_bytes, 3u);
+    EXPECT_EQ(s.master.slaves().at(0).in_bytes, 5u);
     for (int i = 0; i < 5; ++i)
         ASSERT_EQ(s.master.exchange_process_data().value_or(0), s.master.expected_wkc());
 }

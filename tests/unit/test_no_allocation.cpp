@@ -79,8 +79,9 @@ TEST(NoAllocation, SegmentProcessingOfCyclicFrames) {
 }
 
 // A tree of mixed devices (network file: coupler, I/O terminals on its E-bus with signals and wires on their
-// inputs, a junction with drives and terminals on its ports), watched by the report on the master: cycles of
-// process data through it allocate nothing and take no lock.
+// inputs, one of them from an output PDO entry of a modular device of an ESI file, a junction with drives and
+// terminals on its ports), watched by the report on the master: cycles of process data through it allocate
+// nothing and take no lock.
 TEST(NoAllocation, MixedNetworkTreeWithTheReportOnTheMaster) {
     auto built = network::build_network(network::parse_network(R"(
 devices:
@@ -97,8 +98,12 @@ devices:
     inputs:
       0: {signal: sine, period_ms: 20, amplitude: 1000}
       1: {wire: ao:0}
+      2: {wire: mod:0x7000:0}
   - name: ao
     device: analog-out
+  - name: mod
+    esi: )" VECAT_SOURCE_DIR R"(/examples/networks/modular-io.xml
+    type: VECAT-MOD-3
   - name: junction
     device: junction
     upstream: coupler:1
