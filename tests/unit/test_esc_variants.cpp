@@ -134,7 +134,9 @@ TEST(SiiStatusBits, TheFirmwareReadsItsSiiAtInitToPreOp) {
         Slave slave(dev, cfg, std::make_unique<ProcessImageApplication>(0, 0));
         Esc& esc = slave.esc();
         ASSERT_FALSE(esc.device_emulation());
-        if (offered) EXPECT_EQ(write(esc, addr(Reg::SiiConfig), {0x01}), 1);
+        if (offered) {
+            EXPECT_EQ(write(esc, addr(Reg::SiiConfig), {0x01}), 1);
+        }
         EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x02, 0x00}), 1);
         slave.run(1'000'000);
         EXPECT_EQ(esc.peek(addr(Reg::SiiControl)) & sii_ctrl::ReservedUntilPdiAccess, offered ? 0 : 0x10)
