@@ -14,6 +14,7 @@ CoeApplication::CoeApplication(const device::DeviceDescription& d,
     // Quirks of a less complete device (device/quirks.hpp): what its SII and ESI say, the SDO server does.
     if (d.quirks.no_sdo_info) sdo_->set_information_served(false);
     if (d.quirks.no_complete_access) sdo_->set_complete_access_served(false);
+    if (d.quirks.sdo_download_echo) sdo_->set_download_echo(true);
     sync_ = std::make_unique<SyncParameters>(od_, d);
     pending_outputs_.reserve(1536);  // a whole frame's worth: no allocation in the cycle
     error_register_ = od_.find(protocol::obj::error_register);

@@ -236,7 +236,8 @@ void SdoServer::initiate_download(const SdoHeader& h, ConstBytes p, MailboxReply
         Reply r(out.reply_buffer());
         r.u16(coe_header(CoeService::SdoResponse));
         std::uint8_t rsp[kSdoHeaderSize];
-        SdoHeader{sdo::command(sdo::ScsInitiateDownload, complete ? sdo::CompleteAccess : 0), index, sub, 0}
+        SdoHeader{sdo::command(sdo::ScsInitiateDownload, complete ? sdo::CompleteAccess : 0), index, sub,
+                  download_echo_ ? h.data : 0}
             .pack(rsp);
         r.bytes(rsp);
         out.commit(MailboxType::CoE, r.size());

@@ -66,6 +66,9 @@ class SdoServer final : public esc::MailboxProtocol {
     // with the mailbox error "service not supported" (ETG.1000.4 Table 30), as such devices do. A copy of
     // one made by vecat clone is served so. Served by default.
     void set_information_served(bool served) { info_served_ = served; }
+    // Quirk sdo_download_echo: the initiate download response repeats the request's data field in its
+    // reserved bytes 4-7 (ETG.1000.6 5.6.2) instead of zeros.
+    void set_download_echo(bool echo) { download_echo_ = echo; }
     // A device without complete access (SII CoE details bit 5 clear, ETG.2010; quirk no_complete_access):
     // a complete access upload or download is aborted with 0x06010000 "unsupported access to an object"
     // (ETG.1000.6 Table 41), as such devices answer. Served by default.
@@ -128,6 +131,7 @@ class SdoServer final : public esc::MailboxProtocol {
     std::vector<std::uint8_t> info_buf_;
     bool info_served_ = true;
     bool complete_access_served_ = true;
+    bool download_echo_ = false;
 
     Transfer transfer_ = Idle{};
     // Since when the transfer has not moved: set by the first tick() after a change (the server has no

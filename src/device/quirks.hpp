@@ -44,18 +44,22 @@ struct Quirks {
     unsigned mailbox_drop_every = 0;
     // SII categories left out (sii_optional bits).
     std::uint8_t sii_without = 0;
+    // The initiate SDO download response carries the request's data field (bytes 4-7 of the SDO header)
+    // where ETG.1000.6 5.6.2 has reserved bytes (vecat sends 0): a firmware that answers in the request's
+    // buffer, as the EL3004 of ../shared/data/pcap does.
+    bool sdo_download_echo = false;
 
     bool any() const {
         return no_sdo_info || no_complete_access || max_pdo_entries || fixed_pdos || mailbox_delay_ns ||
-               mailbox_drop_every || sii_without;
+               mailbox_drop_every || sii_without || sdo_download_echo;
     }
     friend bool operator==(const Quirks&, const Quirks&) = default;
 };
 
 // One quirk as written in a network file's list and on the command line: `no_sdo_info`,
-// `no_complete_access`, `fixed_pdos`, `max_pdo_entries=N` (1..254), `mailbox_delay_ms=T` (0..500,
-// fractions allowed), `mailbox_drop_every=K` (2..1000), `sii_without=strings+pdo+dc` (any of them). Adds it
-// to q; returns "" or what is wrong with it.
+// `no_complete_access`, `fixed_pdos`, `sdo_download_echo`, `max_pdo_entries=N` (1..254), `mailbox_delay_ms=T`
+// (0..500, fractions allowed), `mailbox_drop_every=K` (2..1000), `sii_without=strings+pdo+dc` (any of them).
+// Adds it to q; returns "" or what is wrong with it.
 std::string parse_quirk(std::string_view text, Quirks& q);
 
 // The quirks of q as parse_quirk reads them, joined by ", " ("" for none): what vecat network check shows.
@@ -63,7 +67,7 @@ std::string to_string(const Quirks& q);
 
 // The names of the quirks, for messages and --help.
 inline constexpr std::string_view kQuirkNames =
-    "no_sdo_info, no_complete_access, fixed_pdos, max_pdo_entries=N, mailbox_delay_ms=T, "
+    "no_sdo_info, no_complete_access, fixed_pdos, sdo_download_echo, max_pdo_entries=N, mailbox_delay_ms=T, "
     "mailbox_drop_every=K, sii_without=strings+pdo+dc";
 
 // Sets d.quirks to q and makes the description agree with them: the CoE details flags (SII General

@@ -101,6 +101,17 @@ unsigned Esc::pdi_take_sync_pulses(std::uint64_t now_ns, SyncPulse* out, unsigne
     return n;
 }
 
+bool Esc::pdi_use_eeprom() {
+    constexpr std::uint8_t kOfferedToPdi = 0x01;  // 0x0500 bit 0
+    if (!(mem_[addr(Reg::SiiConfig)] & kOfferedToPdi)) return false;
+    // The PDI's commands and their data are not kept for EtherCAT to see (the firmware releases the
+    // interface, 0x0501 reads 0 again); what stays is bit 4 of 0x0502, cleared.
+    const std::uint16_t ctrl = ld_le16(&mem_[addr(Reg::SiiControl)]);
+    st_le16(&mem_[addr(Reg::SiiControl)],
+            static_cast<std::uint16_t>(ctrl & ~sii_ctrl::ReservedUntilPdiAccess));
+    return true;
+}
+
 void Esc::pdi_write_eeprom_word(unsigned word, std::uint16_t value) {
     if (2 * word + 1 < eeprom_.size()) st_le16(&eeprom_[2 * word], value);
 }

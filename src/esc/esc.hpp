@@ -103,6 +103,11 @@ class Esc {
     // Reads AL control like a PDI does: clears the AL control event.
     std::uint16_t pdi_read_al_control();
     void pdi_write_al_status(std::uint8_t status, std::uint16_t code);
+    // The firmware reads the SII through the PDI (ESC datasheet section I 11.2: EtherCAT has the EEPROM
+    // interface at power-up and may offer it to the PDI with 0x0500 bit 0). It may only while the master
+    // offers it: then the PDI takes the interface (0x0501 bit 0), issues its commands and releases it, and
+    // the ESC clears 0x0502 bit 4 (protocol::sii_ctrl::ReservedUntilPdiAccess). Returns whether it could.
+    bool pdi_use_eeprom();
     // Device emulation (0x0141 bit 0, from SII word 0): the ESC sets AL status from AL control itself;
     // devices without a µController (couplers, simple I/O terminals) have it.
     bool device_emulation() const;

@@ -361,6 +361,10 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
         // The ESC has set AL status to the value written, without any check (ESC datasheet section II
         // 0x0130); the device follows the state it shows.
         const std::uint8_t req = ctrl & kAlStateMask;
+        // PREOP -> SAFEOP with the EEPROM offered to the PDI clears 0x0502 bit 4 as a firmware's access
+        // does (an EL1004 with device emulation and digital I/O, ../shared/data/pcap; esc README).
+        if (req == static_cast<std::uint8_t>(AlState::SafeOp) && state_ == AlState::PreOp)
+            esc_.pdi_use_eeprom();
         if (is_valid_state(req)) enter(static_cast<AlState>(req), now_ns);
         return;
     }
@@ -393,6 +397,9 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
             enter(to, now_ns);
             break;
         case AlAction::CheckMailbox:
+            // The firmware reads the mailbox SyncManagers of its SII to check them (a device without
+            // mailbox has none to read), if the master offered it the EEPROM (0x0500).
+            if (desc_.sm_of_type(device::SmType::MailboxOut)) esc_.pdi_use_eeprom();
             code = check_mailbox_config();
             if (code == AlStatusCode::NoError) code = app_->check_transition(state_, to);
             if (code == AlStatusCode::NoError)
@@ -401,6 +408,7 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
                 set_error(code, AlState::Init, now_ns);
             break;
         case AlAction::CheckBoot:
+            esc_.pdi_use_eeprom();  // the bootstrap mailbox configuration of the SII
             code = check_boot_mailbox_config();
             if (code == AlStatusCode::NoError) code = app_->check_transition(state_, to);
             if (code == AlStatusCode::NoError)
@@ -409,7 +417,9 @@ void Slave::handle_al_control(std::uint64_t now_ns) {
                 set_error(code, AlState::Init, now_ns);
             break;
         case AlAction::CheckProcessData:
-            // The application first checks its mapping (0x0024/0x0025), then the SMs are compared with it.
+            // The application first checks its mapping (0x0024/0x0025), then the SMs are compared with it
+            // and with the process data SyncManagers the firmware reads from its SII.
+            esc_.pdi_use_eeprom();
             code = app_->check_transition(state_, to);
             if (code == AlStatusCode::NoError) code = check_process_data_config();
             if (code == AlStatusCode::NoError)

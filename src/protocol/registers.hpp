@@ -158,6 +158,9 @@ inline constexpr std::uint8_t EnhancedLinkDetection = 0xF2;
 // SII control/status bits (0x0502).
 namespace sii_ctrl {
 inline constexpr std::uint16_t WriteEnable = 0x0001;
+// Bit 4 is reserved in the datasheet. The ESCs of the EL1004, EL2828 and EL3004 read it as 1 from power-up
+// until their PDI first had the EEPROM interface (esc::Esc::pdi_use_eeprom); an EK1100 or EL2889 reads 0.
+inline constexpr std::uint16_t ReservedUntilPdiAccess = 0x0010;
 inline constexpr std::uint16_t Emulation = 0x0020;
 inline constexpr std::uint16_t Read8Bytes = 0x0040;
 inline constexpr std::uint16_t TwoAddressBytes = 0x0080;

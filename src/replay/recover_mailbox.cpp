@@ -122,6 +122,7 @@ void MailboxRecoverer::wrote(std::uint16_t ado, const std::uint8_t* data, std::s
     request_cmd_ = p[kCoeHeaderSize];
     request_index_ = ld_le16(p + kCoeHeaderSize + 1);
     request_sub_ = p[kCoeHeaderSize + 3];
+    request_data_ = ld_le32(p + kCoeHeaderSize + 4);
     request_value_.clear();
     const std::uint8_t cmd = request_cmd_;
     if (command_specifier(cmd) == sdo::CcsInitiateDownload && (cmd & sdo::Expedited)) {
@@ -195,8 +196,10 @@ void MailboxRecoverer::sdo_response(const std::uint8_t* p, std::size_t n) {
         const std::uint16_t index = ld_le16(p + 1);
         const std::uint8_t sub = p[3];
         if (index == request_index_ && sub == request_sub_ &&
-            command_specifier(request_cmd_) == sdo::CcsInitiateDownload)
+            command_specifier(request_cmd_) == sdo::CcsInitiateDownload) {
             dict_.written[{index, complete_access ? kWholeObject : sub}] = request_value_;
+            if (request_data_ != 0 && ld_le32(p + 4) == request_data_) dict_.download_echo = true;
+        }
         return;
     }
     if (command_specifier(cmd) == sdo::ScsUploadSegment && segmented_) {

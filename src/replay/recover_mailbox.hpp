@@ -24,6 +24,9 @@ struct RecoveredDictionary {
     // Downloads the device confirmed, with the value when it was expedited (else empty).
     std::map<std::pair<std::uint16_t, std::uint8_t>, std::vector<std::uint8_t>> written;
     std::optional<std::vector<std::uint16_t>> all_objects;  // a complete "all objects" list
+    // A download response repeated the request's non-zero data field in its reserved bytes 4-7 (ETG.1000.6
+    // 5.6.2): the device has quirk sdo_download_echo (device/quirks.hpp).
+    bool download_echo = false;
     bool empty() const { return values.empty() && objects.empty() && !all_objects && written.empty(); }
 };
 
@@ -49,6 +52,7 @@ class MailboxRecoverer {
     std::uint16_t request_index_ = 0;
     std::uint8_t request_sub_ = 0;
     std::vector<std::uint8_t> request_value_;  // of an expedited download
+    std::uint32_t request_data_ = 0;           // the data field of the SDO header (bytes 4-7)
     // A segmented upload in progress.
     bool segmented_ = false;
     std::uint32_t segmented_size_ = 0;

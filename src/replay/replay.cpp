@@ -410,13 +410,23 @@ std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
         if (s.sii_words_known() > 0) {
             std::vector<std::string> n;
             try {
-                parts = network::device_from_sii(recovered_sii_image(s), n);
+                // A download response that echoed the request's data: the device's quirk.
+                const std::function<void(device::DeviceDescription&)> echo =
+                    s.coe.download_echo
+                        ? std::function<void(device::DeviceDescription&)>(
+                              [](device::DeviceDescription& d) { d.quirks.sdo_download_echo = true; })
+                        : nullptr;
+                parts = network::device_from_sii(recovered_sii_image(s), n, echo);
+                if (s.coe.download_echo)
+                    notes.push_back(at +
+                                    "quirk sdo_download_echo: its SDO download responses repeat the "
+                                    "request's data in their reserved bytes");
                 if (!s.coe.empty() && parts.model.dictionary) {
                     // The mailbox answers the capture shows, over the dictionary generated from the SII.
                     auto dict = std::make_shared<network::DeviceDictionary>();
                     dict->objects = merge_dictionary(*parts.model.dictionary, s.coe, dict->values);
                     n.clear();
-                    parts = network::device_from_sii(recovered_sii_image(s), n, {}, dict);
+                    parts = network::device_from_sii(recovered_sii_image(s), n, echo, dict);
                     notes.push_back(at + fmt::format("CoE: {} objects, {} values from the capture's mailbox",
                                                      s.coe.objects.size(), s.coe.values.size()));
                 }

@@ -63,8 +63,8 @@ TEST(NetworkQuirks, EveryRefusalNamesTheLine) {
          "net.yaml:4: a: quirks: max_pdo_entries=4: the default mapping of 0x1600 has 7 entries"},
         {"devices:\n  - name: a\n    device: coupler\n  - name: b\n    device: digital-out\n    quirks: "
          "[no_complete_access]\n",
-         "net.yaml:6: b: quirks: no_sdo_info, no_complete_access, max_pdo_entries and fixed_pdos are CoE "
-         "quirks"},
+         "net.yaml:6: b: quirks: no_sdo_info, no_complete_access, max_pdo_entries, fixed_pdos and "
+         "sdo_download_echo are CoE quirks"},
         {"devices:\n  - name: a\n    device: digital-out\n    quirks: [mailbox_drop_every=3]\n",
          "net.yaml:4: a: quirks: mailbox_delay_ms and mailbox_drop_every: the device has no mailbox"},
         {"devices:\n  - name: a\n    sii: x.bin\n    quirks: [sii_without=pdo]\n",

@@ -142,6 +142,18 @@ TEST(RecoverMailbox, AbortsAndConfirmedDownloads) {
     EXPECT_TRUE(d.written.contains({0x1C13, 0}));
 }
 
+// A download response repeating the request's data field in its reserved bytes (the EL3004 of
+// ek1914-el3004-configure: 0x1C13:01 = 0x1A00) is the device's quirk sdo_download_echo; zeros are not.
+TEST(RecoverMailbox, DownloadResponseEchoingTheRequestData) {
+    auto m = with_mailboxes();
+    request(m, "0a000000003300202b131c01001a00000000");
+    reply(m, "0a0000000033003060131c01000000000000");
+    EXPECT_FALSE(m.result().download_echo);
+    request(m, "0a000000004300202b131c01001a00000000");
+    reply(m, "0a0000000043003060131c01001a00000000");
+    EXPECT_TRUE(m.result().download_echo);
+}
+
 // The merge: described objects replace generated ones, values become entries, absent objects go, the
 // objects a PDO mapping maps exist and are mappable, a confirmed assignment names PDOs that exist.
 TEST(RecoverMailbox, MergeOverTheGeneratedDictionary) {

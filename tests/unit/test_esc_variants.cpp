@@ -107,6 +107,61 @@ TEST(SiiStatusBits, ShownAndKeptAcrossCommands) {
     EXPECT_EQ(esc.peek(addr(Reg::SiiControl)) & 0x3E, 0x10);
 }
 
+// Bit 4 of 0x0502 (reserved in section II) reads 1 on some ESCs until their PDI had the EEPROM interface:
+// only while the master offers it (0x0500 bit 0, section I 11.2) may the PDI take it; an ECAT command keeps
+// the bit (above).
+TEST(SiiStatusBits, Bit4ClearedOnlyWhenThePdiUsesTheOfferedEeprom) {
+    EscConfig cfg;
+    cfg.sii_status_bits = 0x10;
+    Esc esc{cfg, build_sii_image(device::coupler())};
+    EXPECT_FALSE(esc.pdi_use_eeprom());
+    EXPECT_EQ(esc.peek(addr(Reg::SiiControl)), 0x50);
+    EXPECT_EQ(write(esc, addr(Reg::SiiConfig), {0x01}), 1);
+    EXPECT_TRUE(esc.pdi_use_eeprom());
+    EXPECT_EQ(esc.peek(addr(Reg::SiiControl)), 0x40);
+}
+
+// A firmware with a mailbox reads the mailbox SyncManagers of its SII at INIT -> PREOP, if the master offered
+// it the EEPROM: the EL3004 of ../shared/data/pcap reads 0x50 before, 0x40 after (0x0500 = 1 around the
+// request), and keeps 0x50 when the master did not offer it.
+TEST(SiiStatusBits, TheFirmwareReadsItsSiiAtInitToPreOp) {
+    auto dev = device::default_drive();
+    dev.rx_pdos.clear();
+    dev.tx_pdos.clear();
+    EscConfig cfg;
+    cfg.sii_status_bits = 0x10;
+    for (const bool offered : {false, true}) {
+        Slave slave(dev, cfg, std::make_unique<ProcessImageApplication>(0, 0));
+        Esc& esc = slave.esc();
+        ASSERT_FALSE(esc.device_emulation());
+        if (offered) {
+            EXPECT_EQ(write(esc, addr(Reg::SiiConfig), {0x01}), 1);
+        }
+        EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x02, 0x00}), 1);
+        slave.run(1'000'000);
+        EXPECT_EQ(esc.peek(addr(Reg::SiiControl)) & sii_ctrl::ReservedUntilPdiAccess, offered ? 0 : 0x10)
+            << "offered " << offered;
+    }
+}
+
+// With device emulation the bit goes at PREOP -> SAFEOP with the EEPROM offered to the PDI, not at INIT ->
+// PREOP (the EL1004 of ../shared/data/pcap: 0x50 in PREOP, 0x40 after SAFEOP; its SII word 0 is 0x0104).
+TEST(SiiStatusBits, DeviceEmulationClearsBit4AtSafeOp) {
+    EscConfig cfg;
+    cfg.sii_status_bits = 0x10;
+    Slave slave(device::coupler(), cfg, std::make_unique<ProcessImageApplication>(0, 0));
+    Esc& esc = slave.esc();
+    ASSERT_TRUE(esc.device_emulation());
+    EXPECT_EQ(write(esc, addr(Reg::SiiConfig), {0x01}), 1);
+    EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x02, 0x00}), 1);
+    slave.run(1'000'000);
+    EXPECT_EQ(esc.peek(addr(Reg::SiiControl)), 0x50);
+    EXPECT_EQ(write(esc, addr(Reg::AlControl), {0x04, 0x00}), 1);
+    slave.run(2'000'000);
+    EXPECT_EQ(esc.al_status(), 0x04);
+    EXPECT_EQ(esc.peek(addr(Reg::SiiControl)), 0x40);
+}
+
 // Section II 0x0120 without device emulation: AL control is a mailbox the firmware empties by reading it.
 // A firmware that takes its time (Slave::set_al_control_latency, recovered by the replay from real devices
 // that refused a second write 0.56 ms after the first) refuses a second write until it has read the first.

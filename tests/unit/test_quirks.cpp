@@ -179,6 +179,35 @@ TEST(Quirks, NoCompleteAccess) {
     EXPECT_EQ(ld_le16(single.data.data()), 0x1600);
 }
 
+// sdo_download_echo: the initiate download response repeats the request's data field (bytes 4-7 of the SDO
+// header, reserved in ETG.1000.6 5.6.2) instead of zeros, as the EL3004 of ../shared/data/pcap answers.
+TEST(Quirks, SdoDownloadResponseEchoesTheRequestData) {
+    // An expedited download of 0x1C12:00 = 0 with the bytes past the value non-zero, as a master may send.
+    std::vector<std::uint8_t> rq(protocol::kCoeHeaderSize + protocol::kSdoHeaderSize, 0);
+    st_le16(rq.data(), protocol::coe_header(protocol::CoeService::SdoRequest));
+    rq[2] = static_cast<std::uint8_t>(
+        protocol::sdo::command(protocol::sdo::CcsInitiateDownload,
+                               protocol::sdo::Expedited | protocol::sdo::SizeIndicated) |
+        (3u << protocol::sdo::ExpeditedUnusedShift));  // one byte
+    st_le16(rq.data() + 3, 0x1C12);
+    rq[5] = 0;
+    st_le32(rq.data() + 6, 0x1A2B3C00);
+    for (const bool echo : {false, true}) {
+        Preop p(echo ? with_quirks({"sdo_download_echo"}) : device::default_drive());
+        const auto reply = p.c->request(MailboxType::CoE, rq);
+        ASSERT_TRUE(reply);
+        ASSERT_GE(reply->payload.size(), rq.size());
+        EXPECT_EQ(reply->payload[2], protocol::sdo::command(protocol::sdo::ScsInitiateDownload, 0));
+        EXPECT_EQ(ld_le32(reply->payload.data() + 6), echo ? 0x1A2B3C00u : 0u) << "echo " << echo;
+    }
+    device::Quirks q;
+    EXPECT_EQ(device::parse_quirk("sdo_download_echo", q), "");
+    EXPECT_EQ(device::to_string(q), "sdo_download_echo");
+    device::DeviceDescription io = device::default_drive();
+    io.mailbox_protocols = 0;
+    EXPECT_NE(device::apply_quirks(io, q), "");  // a CoE quirk
+}
+
 // max_pdo_entries=N: each mapping object has N entry subindexes; subindex 0 beyond N is refused with
 // 0x06090031 "value too high", subindex N + 1 does not exist (0x06090011), and SDO information reports N
 // as the object's largest subindex. Like drives whose firmware keeps a fixed-size table per PDO.
