@@ -1,6 +1,6 @@
 // The slave's firmware (slave.hpp): the AL state machine, the mailbox layer with its quirks and the process
 // data exchange, run by the segment after frames, before frames that must find it current, and at its
-// deadlines. About 600 lines: the three share the slave's state and its run order (Slave::run).
+// deadlines. About 630 lines: the three share the slave's state and its run order (Slave::run).
 #include "esc/slave.hpp"
 
 #include <algorithm>
