@@ -2,6 +2,8 @@
 // the project master.
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -38,5 +40,15 @@ struct ServedNetwork {
     net::InProcessLink link;
     master::Master master;
 };
+
+// How many slaves' input images differ between two masters of the same network (after a cycle of each).
+inline std::size_t differing_inputs(master::Master& a, master::Master& b) {
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < a.slaves().size(); ++k) {
+        const ConstBytes x = a.inputs(k), y = b.inputs(k);
+        if (!std::equal(x.begin(), x.end(), y.begin(), y.end())) ++n;
+    }
+    return n;
+}
 
 }  // namespace vecat::test

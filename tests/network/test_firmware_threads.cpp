@@ -168,6 +168,8 @@ TEST(FirmwareThreads, ANetworkAnswersAsWithOneThread) {
     ASSERT_NE(mode, nullptr);
     ASSERT_NE(target, nullptr);
     std::size_t differences = 0;
+    int wired_ones = 0;  // cycles in which the wired input read 1
+    int cycles = 0;
     const std::uint64_t on_workers_before = threads.items_on_workers();
     // 600 cycles; more until the worker took part (on a loaded machine a spinning worker may get no CPU for
     // a while, and the caller then runs every group itself).
@@ -192,16 +194,18 @@ TEST(FirmwareThreads, ANetworkAnswersAsWithOneThread) {
             n->link.set_time(t);
             ASSERT_EQ(n->master.exchange_process_data().value_or(0), n->master.expected_wkc());
         }
-        for (std::size_t k = 0; k < n_slaves; ++k) {
-            const ConstBytes a = plain.master.inputs(k), b = threaded.master.inputs(k);
-            if (!std::equal(a.begin(), a.end(), b.begin(), b.end())) ++differences;
-        }
+        differences += test::differing_inputs(plain.master, threaded.master);
+        // The input "sensors" channel 0 is wired to the output "valves" channel 0 (bit 0 of i).
+        wired_ones += threaded.master.inputs(2)[0] & 1u;
+        ++cycles;
     }
     EXPECT_EQ(differences, 0u);
     // The drives did move, the wires did carry, and the workers ran some of the groups.
     auto* drive = dynamic_cast<cia402::Drive*>(&threaded.built.segment->slave(10).app());
     ASSERT_NE(drive, nullptr);
     EXPECT_GT(drive->position_actual(), 1'000'000);
+    EXPECT_GT(wired_ones, cycles / 3);  // the output toggles every cycle: about half of them
+    EXPECT_LT(wired_ones, 2 * cycles / 3);
     EXPECT_GT(threads.items_on_workers(), on_workers_before);
     EXPECT_EQ(plain.built.segment->counters().firmware_runs,
               threaded.built.segment->counters().firmware_runs);
