@@ -36,4 +36,18 @@ void BM_DriveServoPeriod(benchmark::State& state) {
 }
 BENCHMARK(BM_DriveServoPeriod)->Arg(8)->Arg(3);
 
+// A servo period of a drive whose power stage is off (switch on disabled, the motor at rest): what every
+// drive of a line costs while the master brings it up (INIT, PREOP, SAFEOP).
+void BM_DriveServoPeriodDisabled(benchmark::State& state) {
+    Drive d(vecat::device::default_drive());
+    std::uint64_t now = 1'000'000'000;
+    d.tick(now);
+    for (auto _ : state) {
+        now += Drive::kServoPeriodNs;
+        d.tick(now);
+    }
+    benchmark::DoNotOptimize(d.position_actual());
+}
+BENCHMARK(BM_DriveServoPeriodDisabled);
+
 }  // namespace

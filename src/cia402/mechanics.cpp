@@ -316,6 +316,19 @@ void Mechanics::integrate(double h) {
     if (left > 0.0) x_ = stuck(x_, span(left));  // event budget exhausted (degenerate): rest
 }
 
+// A substep with the loop off: control() zeroes the current command, the current, the integrator and the
+// limit flag and takes the encoder count and h as the last ones; integrate() then sticks at rest while the
+// load stays within the Coulomb friction (the current stays 0: cmd + (0 - cmd) e = 0); the I2t load stays
+// at 0. If all of these hold already (positive zeros, as those assignments leave them), the substep changes
+// nothing.
+bool Mechanics::resting_unpowered() const {
+    const auto plus_zero = [](double v) { return v == 0.0 && !std::signbit(v); };
+    return mode_ == LoopMode::Off && plus_zero(x_.w) && plus_zero(x_.i) && plus_zero(current_cmd_) &&
+           plus_zero(integral_) && !limited_ && plus_zero(i2t_) && last_h_ == h_ &&
+           std::abs(motor_.torque_constant * 0.0 - load_) <= std::abs(motor_.coulomb_friction) &&
+           std::isfinite(full_.ec) && last_count_ == encoder();
+}
+
 void Mechanics::step(double dt) {
     if (!(dt > 0.0) || !std::isfinite(dt)) return;
     if (dt != cached_dt_) {
@@ -324,6 +337,9 @@ void Mechanics::step(double dt) {
         full_ = span(h_);
         cached_dt_ = dt;
     }
+    // A drive that the master is bringing up (INIT to SAFEOP) has its power stage off and the motor at rest:
+    // then every substep leaves the state as it is, and none needs computing (the same result, bit for bit).
+    if (resting_unpowered()) return;
     const double ir2 = motor_.rated_current * motor_.rated_current;
     const double den = (motor_.peak_current * motor_.peak_current - ir2) * motor_.peak_time;
     for (unsigned k = 0; k < n_; ++k) {

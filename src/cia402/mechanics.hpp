@@ -118,6 +118,8 @@ class Mechanics {
     double crossing_time(const State& x, double dir, double left) const;
     void control(double h);
     void integrate(double h);
+    // Whether a substep of h_ would leave every member as it is: see step().
+    bool resting_unpowered() const;
     std::int64_t count_of(double p) const;
     void derive();
 

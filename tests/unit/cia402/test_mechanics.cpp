@@ -733,5 +733,52 @@ TEST(MechanicsDeterminism, SetPositionAndReset) {
     EXPECT_EQ(m.position(), 0.0);
 }
 
+// ---------------------------------------------------------------------------------------------------
+// Mechanics: the power stage off with the motor at rest (a drive the master is bringing up). Its substeps
+// are skipped (Mechanics::step): they must leave everything as computing them would.
+
+TEST(MechanicsUnpowered, AMotorAtRestStaysBitForBit) {
+    Mechanics m;
+    m.set_position(1.25);
+    m.set_load_torque(0.005);  // within the Coulomb friction of the default motor (0.01 Nm)
+    run(m, 250e-6, 10);
+    const double p = m.position(), w = m.velocity(), i = m.current(), h = m.i2t();
+    const std::int64_t count = m.encoder();
+    run(m, 250e-6, 4000);
+    EXPECT_TRUE(same_bits(m.position(), p));
+    EXPECT_TRUE(same_bits(m.velocity(), w));
+    EXPECT_TRUE(same_bits(m.current(), i));
+    EXPECT_TRUE(same_bits(m.i2t(), h));
+    EXPECT_EQ(m.encoder(), count);
+    EXPECT_EQ(w, 0.0);
+}
+
+TEST(MechanicsUnpowered, ALoadBeyondTheFrictionTurnsTheMotorAtRest) {
+    Mechanics m;
+    run(m, 250e-6, 10);  // at rest, unpowered: the substeps are skipped from here on
+    ASSERT_EQ(m.velocity(), 0.0);
+    m.set_load_torque(0.5);  // a hanging load, far beyond the friction
+    run(m, 250e-6, 40);
+    EXPECT_LT(m.velocity(), -1.0);  // the load drives it backwards
+}
+
+TEST(MechanicsUnpowered, AMotorSwitchedOffWhileTurningCoastsToRestAndStaysThere) {
+    Mechanics m;
+    m.command(LoopMode::Velocity, 0, 100, 0);
+    run(m, 250e-6, 400);
+    ASSERT_GT(m.velocity(), 50.0);
+    m.command(LoopMode::Off, 0, 0, 0);
+    run(m, 250e-6, 4000);  // friction stops it within a second
+    EXPECT_EQ(m.velocity(), 0.0);
+    EXPECT_EQ(m.current(), 0.0);
+    const double p = m.position();
+    run(m, 250e-6, 400);
+    EXPECT_TRUE(same_bits(m.position(), p));
+    // And a command powers it again.
+    m.command(LoopMode::Velocity, 0, 50, 0);
+    run(m, 250e-6, 400);
+    EXPECT_NEAR(m.velocity(), 50.0, 1.0);
+}
+
 }  // namespace
 }  // namespace vecat::cia402
