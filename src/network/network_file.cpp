@@ -1,3 +1,5 @@
+// The network file's reader (about 620 lines): every key of a device entry, the cabling, the inputs and
+// quirks, each checked with the line it is on, so that a refusal names where the file is wrong.
 #include "network/network_file.hpp"
 #include "network/yaml_reader.hpp"
 
