@@ -7,9 +7,14 @@
 #include <algorithm>
 #include <random>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "device/device_description.hpp"
 #include "esc/segment.hpp"
+#include "protocol/frame.hpp"
+#include "protocol/registers.hpp"
+#include "test_support.hpp"
 
 using namespace vecat;
 
@@ -104,4 +109,35 @@ TEST(HotConnectMoves, RefusesWhatHardwareCannotDo) {
     EXPECT_EQ(order, (std::vector<std::size_t>{0, 3, 1, 2}));
     EXPECT_EQ(seg->parent(1), 0);
     EXPECT_EQ(seg->parent_port(1), 3u);
+}
+
+// Each slave takes its own firmware schedule along when it moves (move_group permutes every per-slave entry):
+// a frame that reads a moved slave whose own cycle is due finds it caught up, and one that reads a slave that
+// is not due does not run it.
+TEST(HotConnectMoves, EachSlaveKeepsItsFirmwareScheduleWhenItMoves) {
+    auto seg = four_port_line(4);  // a line 0 -1-> 1 -1-> 2 -1-> 3 of plain process images
+    constexpr std::uint64_t kMs = 1'000'000;
+    const auto al_status_at = [](std::uint16_t position) {
+        return test::phys(static_cast<std::uint16_t>(-position), test::reg(protocol::Reg::AlStatus));
+    };
+    const auto read_runs = [&](std::uint16_t position, std::uint64_t now) {
+        const std::uint64_t before = seg->counters().firmware_runs;
+        EXPECT_EQ(test::raw_datagram(*seg, static_cast<std::uint8_t>(protocol::Command::APRD),
+                                     al_status_at(position), {0, 0}, now)
+                      .wkc,
+                  1);
+        return seg->counters().firmware_runs - before;
+    };
+    seg->tick(1 * kMs);  // every slave runs: each is due again a local cycle (250 us) later
+    // Slave 3 alone runs again at 2 ms (a read of its AL status finds it due).
+    ASSERT_EQ(read_runs(3, 2 * kMs), 1u);
+    // Slave 3 to port 3 of slave 0: the frame now reaches 0, 3, 1, 2.
+    std::vector<std::size_t> order;
+    std::string why;
+    ASSERT_TRUE(seg->move_group(3, 0, 3, order, &why)) << why;
+    ASSERT_EQ(order, (std::vector<std::size_t>{0, 3, 1, 2}));
+    // At 2.1 ms slave 2 (position 3, last run at 1 ms) is due and runs before the read; slave 3 (position 1,
+    // run at 2 ms) is not.
+    EXPECT_EQ(read_runs(3, 2 * kMs + 100'000), 1u);
+    EXPECT_EQ(read_runs(1, 2 * kMs + 100'000), 0u);
 }
