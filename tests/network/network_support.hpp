@@ -10,6 +10,7 @@
 #include "master/master.hpp"
 #include "network/build.hpp"
 #include "network/network_file.hpp"
+#include "protocol/cia402_objects.hpp"
 #include "serve/in_process_link.hpp"
 
 namespace vecat::test {
@@ -39,6 +40,25 @@ struct ServedNetwork {
     network::BuiltNetwork built;
     net::InProcessLink link;
     master::Master master;
+};
+
+// Where a vecat drive's default RxPDO has controlword, mode of operation and target position (all found:
+// valid()), and the cyclic synchronous position command written into a master's outputs of that drive.
+struct CspOutputs {
+    explicit CspOutputs(const master::SlaveInfo& drive)
+        : cw(master::find_entry(drive.out_entries, protocol::obj::controlword.index)),
+          mode(master::find_entry(drive.out_entries, protocol::obj::modes_of_operation.index)),
+          target(master::find_entry(drive.out_entries, protocol::obj::target_position.index)) {}
+    bool valid() const { return cw && mode && target; }
+    void write(master::Master& m, std::size_t slave, std::uint16_t control, std::int32_t position) const {
+        const Bytes out = m.outputs(slave);
+        st_le16(out.data() + cw->bit_offset / 8, control);
+        out[mode->bit_offset / 8] = 8;  // cyclic synchronous position
+        st_le32(out.data() + target->bit_offset / 8, static_cast<std::uint32_t>(position));
+    }
+    const master::MappedEntry* cw;
+    const master::MappedEntry* mode;
+    const master::MappedEntry* target;
 };
 
 // How many slaves' input images differ between two masters of the same network (after a cycle of each).

@@ -123,13 +123,8 @@ TEST(FirmwareBetweenFrames, TheMasterReadsTheSameAsWithoutIt) {
     test::ServedNetwork ticked{kNetwork, test::ServedNetwork::From::Text, kStart};
     for (test::ServedNetwork* n : {&plain, &ticked})
         ASSERT_TRUE(n->master.startup(AlState::Op));
-    const auto& rx = plain.master.slaves()[2].out_entries;
-    const auto* cw = master::find_entry(rx, protocol::obj::controlword.index);
-    const auto* mode = master::find_entry(rx, protocol::obj::modes_of_operation.index);
-    const auto* target = master::find_entry(rx, protocol::obj::target_position.index);
-    ASSERT_NE(cw, nullptr);
-    ASSERT_NE(mode, nullptr);
-    ASSERT_NE(target, nullptr);
+    const test::CspOutputs csp(plain.master.slaves()[2]);
+    ASSERT_TRUE(csp.valid());
     ASSERT_EQ(plain.link.now_ns(), ticked.link.now_ns()) << "both start-ups took the same time";
     std::int32_t position = 0;
     std::size_t differences = 0;
@@ -139,10 +134,7 @@ TEST(FirmwareBetweenFrames, TheMasterReadsTheSameAsWithoutIt) {
         if (i >= 20) position += 2'000;
         const std::uint64_t t = plain.link.now_ns() + kMs;
         for (test::ServedNetwork* n : {&plain, &ticked}) {
-            st_le16(n->master.outputs(2).data() + cw->bit_offset / 8, control);
-            n->master.outputs(2)[mode->bit_offset / 8] = 8;  // cyclic synchronous position
-            st_le32(n->master.outputs(2).data() + target->bit_offset / 8,
-                    static_cast<std::uint32_t>(position));
+            csp.write(n->master, 2, control, position);
             if (n == &ticked) {
                 n->built.segment->tick(t - 600'000);
                 n->built.segment->tick(t - 150'000);

@@ -160,13 +160,8 @@ TEST(FirmwareThreads, ANetworkAnswersAsWithOneThread) {
         ASSERT_TRUE(n->master.startup(AlState::Op));
     ASSERT_EQ(plain.link.now_ns(), threaded.link.now_ns()) << "both start-ups took the same time";
     const std::size_t n_slaves = plain.master.slaves().size();
-    const auto& rx = plain.master.slaves()[5].out_entries;
-    const auto* cw = master::find_entry(rx, protocol::obj::controlword.index);
-    const auto* mode = master::find_entry(rx, protocol::obj::modes_of_operation.index);
-    const auto* target = master::find_entry(rx, protocol::obj::target_position.index);
-    ASSERT_NE(cw, nullptr);
-    ASSERT_NE(mode, nullptr);
-    ASSERT_NE(target, nullptr);
+    const test::CspOutputs csp(plain.master.slaves()[5]);  // every drive has the default mapping
+    ASSERT_TRUE(csp.valid());
     std::size_t differences = 0;
     int wired_ones = 0;  // cycles in which the wired input read 1
     int cycles = 0;
@@ -184,10 +179,7 @@ TEST(FirmwareThreads, ANetworkAnswersAsWithOneThread) {
             n->master.outputs(1)[0] = static_cast<std::uint8_t>(i / 3);  // lamps
             for (std::size_t d = 5; d < n_slaves; ++d) {
                 const std::int32_t position = i < 20 ? 0 : (i - 20) * 1'000 * static_cast<std::int32_t>(d);
-                st_le16(n->master.outputs(d).data() + cw->bit_offset / 8, control);
-                n->master.outputs(d)[mode->bit_offset / 8] = 8;  // cyclic synchronous position
-                st_le32(n->master.outputs(d).data() + target->bit_offset / 8,
-                        static_cast<std::uint32_t>(position));
+                csp.write(n->master, d, control, position);
             }
             // Now and then a tick between frames (a serve loop's), at the same time in both.
             if (i % 7 == 3) n->built.segment->tick(t - 400'000);
