@@ -35,7 +35,9 @@ namespace {
 constexpr std::size_t kSourceMac0 = 6;
 constexpr std::uint8_t kForwardedBit = 0x02;
 constexpr std::size_t kFramesPerTally = 8;
-constexpr std::uint64_t kMaxTicksPerGap = 40'000;  // a longer pause is skipped over
+// A longer pause between two frames is skipped over: the firmware runs as if it had been this long. Whatever
+// a device does on its own (watchdogs, EEPROM loads, mailbox answers) is over well before it.
+constexpr std::uint64_t kMaxGapNs = 1'000'000'000;
 
 bool pure_read(Command c) {
     return c == Command::APRD || c == Command::FPRD || c == Command::BRD || c == Command::LRD;
@@ -171,15 +173,21 @@ class Replayer {
         return all;
     }
 
+    // The firmware between two frames runs as the serve loop runs it (Segment, "Firmware when it is
+    // needed"): at the slaves' deadlines (Segment::next_firmware_ns), no closer together than tick_ns. Each
+    // run catches up with the time since the last one, so a pause costs work by the slaves' deadlines (at
+    // most kMaxLagCycles local cycles apart), not by its length, and a longer one than kMaxGapNs none more.
     void advance(std::uint64_t t) {
         if (!started_) {
             started_ = true;
             last_tick_ = t;
             return;
         }
-        if (t > last_tick_ + kMaxTicksPerGap * o_.tick_ns) last_tick_ = t - kMaxTicksPerGap * o_.tick_ns;
-        while (last_tick_ + o_.tick_ns <= t) {
-            last_tick_ += o_.tick_ns;
+        if (t > last_tick_ + kMaxGapNs) last_tick_ = t - kMaxGapNs;
+        for (;;) {
+            const std::uint64_t next = std::max(last_tick_ + o_.tick_ns, line_.next_firmware_ns());
+            if (next > t) return;
+            last_tick_ = next;
             line_.tick(last_tick_);
         }
     }

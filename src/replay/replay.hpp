@@ -74,7 +74,7 @@ struct ReplayReport {
 
 struct ReplayOptions {
     std::size_t max_differences = 200;
-    std::uint64_t tick_ns = 250'000;  // firmware ticks between frames, as the serve loop does
+    std::uint64_t tick_ns = 250'000;  // the shortest time between two firmware runs without a frame
     // How far (in exchanges, and in time) the same read is looked for when judging a difference as timing.
     std::size_t timing_exchanges = 64;
     std::uint64_t timing_ns = 500'000'000;

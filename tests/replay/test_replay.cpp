@@ -135,6 +135,36 @@ TEST(Replay, AChangedReplyIsReportedAtItsFrame) {
     fs::remove(cap);
 }
 
+// A capture whose frames are minutes apart (a fuzzed one, or a master left waiting) costs work by its frames,
+// not by its length: between two frames the firmware runs at the slaves' deadlines, and a pause past a second
+// is skipped over. Ticking every 250 us through each pause, the 10 pauses here made 4 * 10^5 runs per slave.
+TEST(Replay, APauseBetweenFramesCostsRunsByTheSlavesDeadlinesNotByItsLength) {
+    constexpr std::size_t kPauses = 10;
+    const fs::path cap = record_mixed_line("pauses.pcapng", kPauses);
+    replay::Capture c = replay::read_capture(cap.string());
+    const replay::Pairing p = replay::pair_frames(c);
+    ASSERT_GT(p.exchanges.size(), kPauses);
+    const auto runs = [&](const replay::Capture& capture) {
+        auto line = mixed_line();
+        const replay::ReplayReport r = replay::replay(capture, p, *line);
+        EXPECT_EQ(r.exchanges, p.exchanges.size());
+        return std::pair{line->counters().firmware_runs, line->size()};
+    };
+    const auto [as_recorded, slaves] = runs(c);
+    // The last kPauses exchanges (the cycles in OP) come a minute after the one before each.
+    const std::size_t first = p.exchanges.size() - kPauses;
+    for (std::size_t x = first; x < p.exchanges.size(); ++x) {
+        const std::uint64_t t = c.frames[p.exchanges[first - 1].reply].time_ns + (x - first + 1) * 60'000'000'000ull;
+        c.frames[p.exchanges[x].request].time_ns = t;
+        c.frames[p.exchanges[x].reply].time_ns = t + 20'000;
+    }
+    const auto [paused, n] = runs(c);
+    // Deadlines are at most 16 local cycles (4 ms) apart: about 250 runs per slave and second of pause.
+    EXPECT_GT(paused, as_recorded + kPauses * slaves * 100);
+    EXPECT_LT(paused, as_recorded + kPauses * slaves * 300);
+    fs::remove(cap);
+}
+
 TEST(Replay, LineRebuiltFromACaptureHasTheRecordedDevicesAndTree) {
     const fs::path cap = record_mixed_line("rebuild.pcapng", 50);
     const replay::Capture c = replay::read_capture(cap.string());
