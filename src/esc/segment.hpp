@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "common/bytes.hpp"
+#include "esc/address_index.hpp"
 #include "esc/slave.hpp"
 #include "protocol/frame.hpp"
 
@@ -350,7 +351,14 @@ class Segment {
     void process_datagrams(Bytes frame, const protocol::ParsedFrame& pf, std::size_t intact,
                            std::size_t latch_pos, std::uint64_t now_ns);
     void refresh_addressing();
-    std::vector<Esc::Addressing> addressing_;      // per slave
+    std::vector<Esc::Addressing> addressing_;  // per slave
+    // The index of addressing_ (fresh: made from it since it last changed), and the slaves it gives for the
+    // frame at hand. find_candidates: false for a frame with other than configured-address and logical
+    // datagrams, which goes to every slave.
+    AddressIndex address_index_;
+    bool index_fresh_ = false;
+    std::vector<std::uint32_t> candidates_;
+    bool find_candidates(const protocol::ParsedFrame& pf, std::size_t intact);
     std::atomic<std::uint64_t> address_epoch_{1};  // counted up by the ESCs (Esc::set_address_change_counter)
     std::uint64_t addressed_epoch_ = 0;            // ... when addressing_ was last made whole
     std::uint64_t addressed_slaves_epoch_ = ~std::uint64_t{0};

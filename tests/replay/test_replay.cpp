@@ -154,7 +154,8 @@ TEST(Replay, APauseBetweenFramesCostsRunsByTheSlavesDeadlinesNotByItsLength) {
     // The last kPauses exchanges (the cycles in OP) come a minute after the one before each.
     const std::size_t first = p.exchanges.size() - kPauses;
     for (std::size_t x = first; x < p.exchanges.size(); ++x) {
-        const std::uint64_t t = c.frames[p.exchanges[first - 1].reply].time_ns + (x - first + 1) * 60'000'000'000ull;
+        const std::uint64_t t =
+            c.frames[p.exchanges[first - 1].reply].time_ns + (x - first + 1) * 60'000'000'000ull;
         c.frames[p.exchanges[x].request].time_ns = t;
         c.frames[p.exchanges[x].reply].time_ns = t + 20'000;
     }

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <set>
 
 #include "device/simple_devices.hpp"
 #include "esc/segment.hpp"
@@ -63,7 +64,9 @@ std::vector<std::uint8_t> make_frame(const std::vector<Datagram>& ds) {
 }
 
 // A random datagram among the ones that matter here: addressing registers, FMMUs, RAM, logical access.
-Datagram random_datagram(std::mt19937& rng) {
+// indexed_only: configured-address and logical commands only (and NOP), the frames the segment hands to the
+// slaves its AddressIndex names.
+Datagram random_datagram(std::mt19937& rng, bool indexed_only = false) {
     const auto pick = [&](auto... v) {
         const std::uint16_t values[] = {static_cast<std::uint16_t>(v)...};
         return values[rng() % sizeof...(v)];
@@ -72,7 +75,12 @@ Datagram random_datagram(std::mt19937& rng) {
                                             Command::FPRD, Command::FPWR, Command::FPRW, Command::BRD,
                                             Command::BWR,  Command::BRW,  Command::LRD,  Command::LWR,
                                             Command::LRW,  Command::ARMW, Command::FRMW};
-    Datagram d{kCommands[rng() % std::size(kCommands)], 0, 0, {}};
+    static constexpr Command kIndexed[] = {Command::NOP, Command::FPRD, Command::FPWR, Command::FPRW,
+                                           Command::LRD, Command::LWR,  Command::LRW};
+    Datagram d{indexed_only ? kIndexed[rng() % std::size(kIndexed)] : kCommands[rng() % std::size(kCommands)],
+               0,
+               0,
+               {}};
     const std::uint16_t station = pick(0, 0x1000, 0x1001, 0x1002, 0x1003, 0x2000);
     const std::size_t len = 1 + rng() % 16;
     d.data.resize(len);
@@ -108,8 +116,8 @@ Datagram random_datagram(std::mt19937& rng) {
         d.data.assign(16, 0);
         st_le32(d.data.data(), 0x10000u + rng() % 32);
         st_le16(d.data.data() + 4, static_cast<std::uint16_t>(1 + rng() % 8));
-        d.data[6] = 0;
-        d.data[7] = 7;
+        d.data[6] = static_cast<std::uint8_t>(rng() % 8);  // start and stop bits: a bit-wise mapping too
+        d.data[7] = static_cast<std::uint8_t>(rng() % 8);
         st_le16(d.data.data() + 8, static_cast<std::uint16_t>(0x1000 + rng() % 16));
         d.data[11] = static_cast<std::uint8_t>(1 + rng() % 3);
         d.data[12] = static_cast<std::uint8_t>(rng() % 4 ? 1 : 0);
@@ -117,9 +125,10 @@ Datagram random_datagram(std::mt19937& rng) {
     return d;
 }
 
-}  // namespace
-
-TEST(DatagramRouting, AnswersAsIfEveryEscSawEveryDatagram) {
+// Random frames against the plain rule. indexed_only: after a first frame that gives the slaves station
+// addresses 0x1000..0x1005, frames of configured-address and logical datagrams only; those that write a
+// station address or an FMMU change the index while the frame passes.
+void answers_as_if_every_esc_saw_every_datagram(bool indexed_only) {
     const device::DeviceDescription desc = device::digital_output_terminal(8);
     auto seg = esc::make_segment(desc, kSlaves);
     std::vector<std::unique_ptr<esc::Esc>> reference;
@@ -128,19 +137,32 @@ TEST(DatagramRouting, AnswersAsIfEveryEscSawEveryDatagram) {
         reference.push_back(
             std::make_unique<esc::Esc>(seg->slave(k).esc().config(), seg->slave(k).esc().eeprom()));
     }
-    std::mt19937 rng(20261126);
-    std::size_t addressed_by_alias = 0, logical_hits = 0;
-    for (int n = 0; n < 4000; ++n) {
-        std::vector<Datagram> ds;
-        const std::size_t count = 1 + rng() % 6;
-        for (std::size_t i = 0; i < count; ++i)
-            ds.push_back(random_datagram(rng));
+    std::mt19937 rng(indexed_only ? 20261127 : 20261126);
+    std::size_t addressed_by_alias = 0, logical_hits = 0, distinct_stations = 0;
+    const auto exchange = [&](const std::vector<Datagram>& ds, int n) {
         std::vector<std::uint8_t> a = make_frame(ds), b = a;
         std::size_t len = a.size();
         ASSERT_TRUE(seg->process_frame(Bytes(a.data(), a.size()), len, kNow));
         process_everywhere(reference, b);
         b[6] |= 0x02;  // the mark of a processed frame
         ASSERT_EQ(a, b) << "frame " << n;
+    };
+    if (indexed_only) {
+        std::vector<Datagram> ds;
+        for (std::size_t k = 0; k < kSlaves; ++k) {
+            ds.push_back({Command::APWR, static_cast<std::uint16_t>(-static_cast<int>(k)), 0x0010, {0, 0}});
+            st_le16(ds.back().data.data(), static_cast<std::uint16_t>(0x1000 + k));
+        }
+        exchange(ds, -1);
+    }
+    for (int n = 0; n < 4000; ++n) {
+        std::vector<Datagram> ds;
+        const std::size_t count = 1 + rng() % 6;
+        for (std::size_t i = 0; i < count; ++i)
+            ds.push_back(random_datagram(rng, indexed_only));
+        exchange(ds, n);
+        if (::testing::Test::HasFatalFailure()) return;
+        std::set<std::uint16_t> stations;
         for (std::size_t k = 0; k < kSlaves; ++k) {
             const esc::Esc& e = seg->slave(k).esc();
             for (std::uint16_t r : {0x0010, 0x0012, 0x0100, 0x0103, 0x0130, 0x1000, 0x1008, 0x1010, 0x1018})
@@ -149,11 +171,24 @@ TEST(DatagramRouting, AnswersAsIfEveryEscSawEveryDatagram) {
             const esc::Esc::Addressing x = e.addressing();
             addressed_by_alias += x.alias_enabled && x.alias != x.station;
             logical_hits += x.log_first_bit <= x.log_last_bit;
+            stations.insert(x.station);
         }
+        distinct_stations += stations.size();
     }
     // The random frames did reach the cases this is about.
-    EXPECT_GT(addressed_by_alias, 100u);
+    if (!indexed_only) EXPECT_GT(addressed_by_alias, 100u);
     EXPECT_GT(logical_hits, 100u);
+    if (indexed_only) EXPECT_GT(distinct_stations, 4000u * 2);  // not all slaves at one address
+}
+
+}  // namespace
+
+TEST(DatagramRouting, AnswersAsIfEveryEscSawEveryDatagram) {
+    answers_as_if_every_esc_saw_every_datagram(false);
+}
+
+TEST(DatagramRouting, FramesOfConfiguredAddressAndLogicalDatagramsAnswerAsIfEveryEscSawThem) {
+    answers_as_if_every_esc_saw_every_datagram(true);
 }
 
 TEST(DatagramRouting, AnAutoIncrementDatagramLeavesWithTheAddressCountedUpByEverySlave) {
