@@ -123,6 +123,7 @@ class Recoverer {
         }
         blocks_from_writes(fmmu_wkc_, kFmmuBlocks, true);
         blocks_from_writes(sm_wkc_, kSmBlocks, false);
+        info_from_broadcast();
         // Configuration words the master did not read, from the registers the ESC loaded them into.
         for (const Loaded& l : loaded_) {
             RecoveredSlave& rs = line_.slaves[l.slave];
@@ -240,6 +241,10 @@ class Recoverer {
                 }
             }
             if (cmd == Command::BRD && r.wkc() == 1 && line_.slave_count == 1) al_status_read(0, read);
+            if (cmd == Command::BRD && r.wkc() == line_.slave_count)
+                for (std::uint16_t a = 0; a < kEscInfoBytes; ++a)
+                    if (read.covers(a) && !broadcast_info_[a] && (!e.request_recorded || written.at(a) == 0))
+                        broadcast_info_[a] = read.at(a);
             if ((cmd == Command::APRD || cmd == Command::FPRD || cmd == Command::APRW ||
                  cmd == Command::FPRW) &&
                 r.wkc() >= 1)
@@ -342,6 +347,27 @@ class Recoverer {
             t.reading = (w.u16(addr(Reg::SiiControl)) & kSiiReadCommand) != 0;
     }
 
+    // ESC information that no datagram to the slave alone read, from a broadcast read that every slave of
+    // the line counted (and the master sent with zeros there): each ESC ORs its bytes into a BRD's data
+    // (ETG.1000.4 5.4; esc::Esc::ecat_read). On a line of one that is the slave's own data, every
+    // byte of it. On a longer line it is the OR of all: each slave whose byte is unknown gets that OR for the
+    // ESC type, revision and build (0x0000-0x0003), the one value that leaves the broadcast read as the
+    // master saw it whatever the others hold; the FMMU and SyncManager counts, RAM size, ports and features
+    // shape the ESC and stay as they are.
+    void info_from_broadcast() {
+        const std::size_t n = line_.slave_count;
+        constexpr std::uint16_t kIdentityBytes = 4;
+        for (std::uint16_t a = 0; a < kEscInfoBytes; ++a) {
+            if (!broadcast_info_[a] || (n > 1 && a >= kIdentityBytes)) continue;
+            for (std::size_t s = 0; s < n; ++s) {
+                RecoveredSlave& rs = line_.slaves[s];
+                if (rs.esc_info[a]) continue;
+                rs.esc_info[a] = broadcast_info_[a];
+                ++rs.esc_info_from_broadcast;
+            }
+        }
+    }
+
     void was_read(std::size_t s, const Window& w) {
         RecoveredSlave& rs = line_.slaves[s];
         for (std::uint16_t a = 0; a < kEscInfoBytes; ++a)
@@ -384,6 +410,7 @@ class Recoverer {
     static constexpr std::size_t kFmmuBlocks = 16, kSmBlocks = 16;  // the register space's blocks
     std::array<std::optional<std::uint16_t>, kFmmuBlocks> fmmu_wkc_{};
     std::array<std::optional<std::uint16_t>, kSmBlocks> sm_wkc_{};
+    std::array<std::optional<std::uint8_t>, kEscInfoBytes> broadcast_info_{};  // a BRD every slave counted
     struct Loaded {
         std::size_t slave;
         unsigned word;

@@ -33,6 +33,9 @@ struct RefusedTransition {
 struct RecoveredSlave {
     std::optional<std::uint16_t> station;  // configured station address
     std::array<std::optional<std::uint8_t>, kEscInfoBytes> esc_info{};
+    // How many of those came from a broadcast read rather than a datagram to this slave alone (see
+    // recover_line).
+    std::size_t esc_info_from_broadcast = 0;
     std::optional<std::uint16_t> dl_status;
     std::optional<bool> sii_read_8_bytes;         // 0x0502 bit 6, as the ESC reported it
     std::optional<bool> sii_two_address_bytes;    // 0x0502 bit 7: an EEPROM larger than 16 Kbit

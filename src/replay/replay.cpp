@@ -474,11 +474,15 @@ std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
         const std::size_t info = static_cast<std::size_t>(
             std::count_if(s.esc_info.begin(), s.esc_info.end(), [](const auto& b) { return b.has_value(); }));
         notes.push_back(
-            at + fmt::format("ESC type 0x{:02X} rev {} build {}, {} FMMUs, {} SMs, {} KiB, ports 0x{:02X}, "
-                             "features 0x{:04X} ({} of {} information bytes from the capture)",
-                             parts.esc.type, parts.esc.revision, parts.esc.build, parts.esc.fmmu_count,
-                             parts.esc.sm_count, parts.esc.ram_bytes / 1024, parts.esc.port_descriptor,
-                             parts.esc.features, info, kEscInfoBytes));
+            at +
+            fmt::format("ESC type 0x{:02X} rev {} build {}, {} FMMUs, {} SMs, {} KiB, ports 0x{:02X}, "
+                        "features 0x{:04X} ({} of {} information bytes from the capture{})",
+                        parts.esc.type, parts.esc.revision, parts.esc.build, parts.esc.fmmu_count,
+                        parts.esc.sm_count, parts.esc.ram_bytes / 1024, parts.esc.port_descriptor,
+                        parts.esc.features, info, kEscInfoBytes,
+                        s.esc_info_from_broadcast == 0
+                            ? std::string()
+                            : fmt::format(", {} of them from a broadcast read", s.esc_info_from_broadcast)));
         auto slave =
             std::make_unique<esc::Slave>(parts.model, parts.esc, parts.factory(*parts.model.description));
         if (s.al_control_latency_ns) {
