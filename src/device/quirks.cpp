@@ -53,12 +53,13 @@ std::string parse_quirk(std::string_view text, Quirks& q) {
     const bool flag = eq == std::string_view::npos;
     const std::string n(name);
     if (name == "no_sdo_info" || name == "no_complete_access" || name == "fixed_pdos" ||
-        name == "sdo_download_echo") {
+        name == "sdo_download_echo" || name == "mailbox_open_early") {
         if (!flag) return n + ": takes no value";
         if (name == "no_sdo_info") q.no_sdo_info = true;
         if (name == "no_complete_access") q.no_complete_access = true;
         if (name == "fixed_pdos") q.fixed_pdos = true;
         if (name == "sdo_download_echo") q.sdo_download_echo = true;
+        if (name == "mailbox_open_early") q.mailbox_open_early = true;
         return "";
     }
     if (flag && (name == "max_pdo_entries" || name == "mailbox_delay_ms" || name == "mailbox_drop_every" ||
@@ -97,6 +98,7 @@ std::string to_string(const Quirks& q) {
     if (q.no_complete_access) parts.emplace_back("no_complete_access");
     if (q.fixed_pdos) parts.emplace_back("fixed_pdos");
     if (q.sdo_download_echo) parts.emplace_back("sdo_download_echo");
+    if (q.mailbox_open_early) parts.emplace_back("mailbox_open_early");
     if (q.max_pdo_entries) parts.push_back("max_pdo_entries=" + std::to_string(q.max_pdo_entries));
     if (q.mailbox_delay_ns) {
         char ms[32];
@@ -124,8 +126,9 @@ std::string apply_quirks(DeviceDescription& d, const Quirks& q) {
         (q.no_sdo_info || q.no_complete_access || q.max_pdo_entries || q.fixed_pdos || q.sdo_download_echo))
         return "no_sdo_info, no_complete_access, max_pdo_entries, fixed_pdos and sdo_download_echo are CoE "
                "quirks; the device has no CoE mailbox";
-    if (!d.sm_of_type(SmType::MailboxOut) && (q.mailbox_delay_ns || q.mailbox_drop_every))
-        return "mailbox_delay_ms and mailbox_drop_every: the device has no mailbox";
+    if (!d.sm_of_type(SmType::MailboxOut) &&
+        (q.mailbox_delay_ns || q.mailbox_drop_every || q.mailbox_open_early))
+        return "mailbox_delay_ms, mailbox_drop_every and mailbox_open_early: the device has no mailbox";
     // The CoE details byte of the SII General category and the ESI Mailbox/CoE flags (ETG.2010 General,
     // ETG.2000 CoE element) come from coe_details: clearing a bit tells a master that reads them.
     if (q.no_sdo_info) d.coe_details &= static_cast<std::uint8_t>(~coe_details::SdoInfo);

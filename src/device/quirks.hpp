@@ -48,18 +48,24 @@ struct Quirks {
     // where ETG.1000.6 5.6.2 has reserved bytes (vecat sends 0): a firmware that answers in the request's
     // buffer, as the EL3004 of ../shared/data/pcap does.
     bool sdo_download_echo = false;
+    // The firmware opens the mailbox-in buffer as soon as the master has read the last message, writing its
+    // first byte, and completes it when the next message is ready: between the two the master reads the
+    // SyncManager status as 0x80, write buffer in use (ESC datasheet section II 0x0805 bit 7), where an ESC
+    // whose firmware writes each message at once shows 0x02, interrupt read. The EL3004 of
+    // ../shared/data/pcap does this.
+    bool mailbox_open_early = false;
 
     bool any() const {
         return no_sdo_info || no_complete_access || max_pdo_entries || fixed_pdos || mailbox_delay_ns ||
-               mailbox_drop_every || sii_without || sdo_download_echo;
+               mailbox_drop_every || sii_without || sdo_download_echo || mailbox_open_early;
     }
     friend bool operator==(const Quirks&, const Quirks&) = default;
 };
 
 // One quirk as written in a network file's list and on the command line: `no_sdo_info`,
-// `no_complete_access`, `fixed_pdos`, `sdo_download_echo`, `max_pdo_entries=N` (1..254), `mailbox_delay_ms=T`
-// (0..500, fractions allowed), `mailbox_drop_every=K` (2..1000), `sii_without=strings+pdo+dc` (any of them).
-// Adds it to q; returns "" or what is wrong with it.
+// `no_complete_access`, `fixed_pdos`, `sdo_download_echo`, `mailbox_open_early`, `max_pdo_entries=N`
+// (1..254), `mailbox_delay_ms=T` (0..500, fractions allowed), `mailbox_drop_every=K` (2..1000),
+// `sii_without=strings+pdo+dc` (any of them). Adds it to q; returns "" or what is wrong with it.
 std::string parse_quirk(std::string_view text, Quirks& q);
 
 // The quirks of q as parse_quirk reads them, joined by ", " ("" for none): what vecat network check shows.
@@ -67,8 +73,8 @@ std::string to_string(const Quirks& q);
 
 // The names of the quirks, for messages and --help.
 inline constexpr std::string_view kQuirkNames =
-    "no_sdo_info, no_complete_access, fixed_pdos, sdo_download_echo, max_pdo_entries=N, mailbox_delay_ms=T, "
-    "mailbox_drop_every=K, sii_without=strings+pdo+dc";
+    "no_sdo_info, no_complete_access, fixed_pdos, sdo_download_echo, mailbox_open_early, max_pdo_entries=N, "
+    "mailbox_delay_ms=T, mailbox_drop_every=K, sii_without=strings+pdo+dc";
 
 // Sets d.quirks to q and makes the description agree with them: the CoE details flags (SII General
 // category, ESI CoE element), the PDOs (fixed, capacity). Returns "" or why the device cannot have them

@@ -144,6 +144,10 @@ class Esc {
     bool pdi_mailbox_take(unsigned i, Bytes out);
     // Puts a reply into an ECAT-read mailbox (fills the whole SM length); false when still full.
     bool pdi_mailbox_put(unsigned i, ConstBytes data);
+    // The PDI writes the first byte of an ECAT-read mailbox that the master has read completely (interrupt
+    // read set), and not the last: the buffer is in use, interrupt read cleared (status 0x80), and stays so
+    // until pdi_mailbox_put completes it. Nothing happens in any other state.
+    void pdi_mailbox_open(unsigned i);
     bool sm_repeat_request(unsigned i) const;
     void pdi_set_repeat_ack(unsigned i, bool ack);
 
@@ -243,6 +247,9 @@ class Esc {
         // completely written, cleared when its first byte is read; interrupt read, set when it was completely
         // read, cleared when its first byte is written. Either side (ECAT or PDI) may be the writer.
         bool irq_write = false, irq_read = false;
+        // Status bit 7, write buffer in use: the PDI wrote the first byte of an ECAT-read mailbox and not yet
+        // the last (pdi_mailbox_open).
+        bool pdi_opened = false;
         // buffered: buffer numbers 0..2 at start + n * length
         std::uint8_t buf_ecat = 0, buf_next = kNone, buf_pdi = 1;
         bool ecat_reading = false;

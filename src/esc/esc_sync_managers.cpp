@@ -152,6 +152,7 @@ void Esc::update_sm(unsigned i) {
         s.ecat_writes = c.ecat_writes();
         s.mbx_full = false;
         s.irq_write = s.irq_read = false;
+        s.pdi_opened = false;
         s.ecat_reading = false;
         s.ever_written = false;
         s.buf_next = SmState::kNone;
@@ -196,6 +197,7 @@ void Esc::update_sm_status(unsigned i) {
         if (s.mbx_full) st |= sm::StatusMailboxFull;
         if (s.irq_write) st |= sm::StatusIrqWrite;
         if (s.irq_read) st |= sm::StatusIrqRead;
+        if (s.pdi_opened) st |= sm::StatusWriteBufferInUse;
     } else {
         const std::uint8_t last =
             s.buf_next != SmState::kNone ? s.buf_next : (s.ecat_writes ? s.buf_pdi : s.buf_ecat);
@@ -250,8 +252,18 @@ bool Esc::pdi_mailbox_put(unsigned i, ConstBytes data) {
     s.mbx_full = true;
     s.irq_write = true;
     s.irq_read = false;
+    s.pdi_opened = false;
     update_sm_status(i);
     return true;
+}
+
+void Esc::pdi_mailbox_open(unsigned i) {
+    if (i >= cfg_.sm_count) return;
+    SmState& s = sm_[i];
+    if (!s.active || !s.mailbox || s.ecat_writes || s.mbx_full || !s.irq_read || s.pdi_opened) return;
+    s.pdi_opened = true;
+    s.irq_read = false;  // cleared by the first byte written (section II 0x0805 bit 1)
+    update_sm_status(i);
 }
 
 bool Esc::pdi_buffer_read(unsigned i, Bytes out) {

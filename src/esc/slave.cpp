@@ -514,6 +514,8 @@ void Slave::post_replies() {
     if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0) return;
     for_each_sending_protocol([&](MailboxProtocol& p) { p.poll(*sink_); });
     if (q_count_ > 0) send_pending_replies();
+    // Quirk mailbox_open_early: the buffer the master emptied is opened for the next message at once.
+    if (desc_.quirks.mailbox_open_early) esc_.pdi_mailbox_open(static_cast<unsigned>(sm_mbx_in_));
 }
 
 bool Slave::mailbox_output_pending() const {

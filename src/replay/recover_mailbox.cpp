@@ -135,7 +135,18 @@ void MailboxRecoverer::wrote(std::uint16_t ado, const std::uint8_t* data, std::s
 }
 
 void MailboxRecoverer::read(std::uint16_t ado, const std::uint8_t* data, std::size_t len) {
+    constexpr std::uint16_t kInStatus = protocol::sm_addr(1) + protocol::sm::Status;
+    if (in_read_ && ado <= kInStatus && kInStatus < ado + len) {
+        in_read_ = false;
+        const std::uint8_t st = data[kInStatus - ado];
+        ++status_after_read_;
+        if ((st & protocol::sm::StatusWriteBufferInUse) && !(st & protocol::sm::StatusIrqRead))
+            ++opened_after_read_;
+        // More than half of them, and more than once.
+        dict_.open_early = opened_after_read_ >= 2 && 2 * opened_after_read_ > status_after_read_;
+    }
     if (!in_start_ || ado != *in_start_ || len < kMailboxHeaderSize) return;
+    in_read_ = true;
     const auto h = protocol::parse_mailbox_header(ConstBytes(data, len));
     if (!h || h->type != static_cast<std::uint8_t>(protocol::MailboxType::CoE)) return;
     const std::size_t n = std::min<std::size_t>(h->length, len - kMailboxHeaderSize);

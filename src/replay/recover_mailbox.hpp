@@ -27,6 +27,9 @@ struct RecoveredDictionary {
     // A download response repeated the request's non-zero data field in its reserved bytes 4-7 (ETG.1000.6
     // 5.6.2): the device has quirk sdo_download_echo (device/quirks.hpp).
     bool download_echo = false;
+    // After most of the master's reads of the mailbox-in area, the next read of that SyncManager's status
+    // showed the write buffer in use (0x0805 bit 7) and not interrupt read: quirk mailbox_open_early.
+    bool open_early = false;
     bool empty() const { return values.empty() && objects.empty() && !all_objects && written.empty(); }
 };
 
@@ -47,6 +50,9 @@ class MailboxRecoverer {
     void store(std::uint16_t index, std::uint8_t sub, bool complete_access, std::vector<std::uint8_t> bytes);
 
     std::optional<std::uint16_t> out_start_, in_start_;
+    // The SM1 status read first after each read of the mailbox-in area, and how often it showed it opened.
+    bool in_read_ = false;
+    std::size_t status_after_read_ = 0, opened_after_read_ = 0;
     // The last SDO request the master sent (command byte, index, subindex).
     std::uint8_t request_cmd_ = 0;
     std::uint16_t request_index_ = 0;

@@ -418,17 +418,26 @@ std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
         if (s.sii_words_known() > 0) {
             std::vector<std::string> n;
             try {
-                // A download response that echoed the request's data: the device's quirk.
+                // The device's quirks the capture shows: a download response that echoed the request's
+                // data, a mailbox-in buffer opened as soon as the master emptied it.
+                const bool echoes = s.coe.download_echo, opens = s.coe.open_early;
                 const std::function<void(device::DeviceDescription&)> echo =
-                    s.coe.download_echo
-                        ? std::function<void(device::DeviceDescription&)>(
-                              [](device::DeviceDescription& d) { d.quirks.sdo_download_echo = true; })
-                        : nullptr;
+                    echoes || opens ? std::function<void(device::DeviceDescription&)>(
+                                          [echoes, opens](device::DeviceDescription& d) {
+                                              d.quirks.sdo_download_echo = echoes;
+                                              d.quirks.mailbox_open_early = opens;
+                                          })
+                                    : nullptr;
                 parts = network::device_from_sii(recovered_sii_image(s), n, echo);
-                if (s.coe.download_echo)
+                if (echoes)
                     notes.push_back(at +
                                     "quirk sdo_download_echo: its SDO download responses repeat the "
                                     "request's data in their reserved bytes");
+                if (opens)
+                    notes.push_back(
+                        at +
+                        "quirk mailbox_open_early: its SM1 status reads 0x80 (write buffer in use) "
+                        "right after the master read a message");
                 if (!s.coe.empty() && parts.model.dictionary) {
                     // The mailbox answers the capture shows, over the dictionary generated from the SII.
                     auto dict = std::make_shared<network::DeviceDictionary>();

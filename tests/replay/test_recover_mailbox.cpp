@@ -154,6 +154,25 @@ TEST(RecoverMailbox, DownloadResponseEchoingTheRequestData) {
     EXPECT_TRUE(m.result().download_echo);
 }
 
+// The SM1 status read first after the master read a message: 0x80 (write buffer in use, not interrupt read)
+// after most of them, as the EL3004 of the ek1914 captures shows, is the device's quirk mailbox_open_early;
+// 0x02 after most of them is an ESC whose firmware writes each message at once.
+TEST(RecoverMailbox, Sm1OpenedAfterMostReadsIsTheQuirkMailboxOpenEarly) {
+    const auto sm1_status = [](MailboxRecoverer& m, std::uint8_t st) { m.read(0x080D, &st, 1); };
+    for (const std::uint8_t after : {0x02, 0x80}) {
+        auto m = with_mailboxes();
+        sm1_status(m, 0x80);  // not after a read: not counted
+        sm1_status(m, 0x80);
+        for (int i = 0; i < 3; ++i) {
+            request(m, "0a00000000130020400a1000000000000000");
+            reply(m, "0a000000001300304b0a1000303800000000");
+            sm1_status(m, after);
+            sm1_status(m, 0x09);  // the next read after it: not counted either
+        }
+        EXPECT_EQ(m.result().open_early, after == 0x80) << int{after};
+    }
+}
+
 // The merge: described objects replace generated ones, values become entries, absent objects go, the
 // objects a PDO mapping maps exist and are mappable, a confirmed assignment names PDOs that exist.
 TEST(RecoverMailbox, MergeOverTheGeneratedDictionary) {

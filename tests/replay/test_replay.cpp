@@ -321,9 +321,9 @@ INSTANTIATE_TEST_SUITE_P(SharedCaptures, RealCaptureReplay,
                                          RealCapture{"ek1100-alias-address.pcapng", 99.99, 99.99},
                                          RealCapture{"dc-setup-ek1914.pcapng", 99.99, 99.99},
                                          RealCapture{"issue-255.pcapng", 99.99, 99.99},
-                                         RealCapture{"ek1914-el3004-configure.pcapng", 99.99, 97.3},
-                                         RealCapture{"ek1914-el3004-mailbox.pcapng", 99.99, 99.4},
-                                         RealCapture{"ek1914-no-complete-access.pcapng", 99.99, 94.1},
+                                         RealCapture{"ek1914-el3004-configure.pcapng", 99.99, 99.99},
+                                         RealCapture{"ek1914-el3004-mailbox.pcapng", 99.99, 99.99},
+                                         RealCapture{"ek1914-no-complete-access.pcapng", 99.99, 99.99},
                                          RealCapture{"segmented-upload-ek1914.pcapng", 99.99, 99.99}),
                          [](const testing::TestParamInfo<RealCapture>& i) {
                              std::string n = i.param.file;

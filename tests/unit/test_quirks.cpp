@@ -10,6 +10,7 @@
 
 #include "device/device_description.hpp"
 #include "device/quirks.hpp"
+#include "device/simple_devices.hpp"
 #include "master/coe_client.hpp"
 #include "protocol/coe.hpp"
 #include "protocol/mailbox.hpp"
@@ -206,6 +207,39 @@ TEST(Quirks, SdoDownloadResponseEchoesTheRequestData) {
     device::DeviceDescription io = device::default_drive();
     io.mailbox_protocols = 0;
     EXPECT_NE(device::apply_quirks(io, q), "");  // a CoE quirk
+}
+
+// mailbox_open_early: once the master has read a message from SM1, the firmware opens the buffer for the next
+// one at once: the SM1 status reads 0x80 (write buffer in use, ESC datasheet section II 0x0805 bit 7), not
+// 0x02 (interrupt read), until the next message is there (0x09), as the EL3004 of ../shared/data/pcap shows.
+TEST(Quirks, MailboxInOpenedAsSoonAsTheMasterReadIt) {
+    constexpr std::uint16_t kSm1Status = protocol::sm_addr(1) + protocol::sm::Status;
+    for (const bool early : {false, true}) {
+        SCOPED_TRACE(early ? "mailbox_open_early" : "plain");
+        Preop p(early ? with_quirks({"mailbox_open_early"}) : device::default_drive());
+        const auto status = [&] {
+            std::uint8_t st = 0xFF;
+            EXPECT_EQ(p.b.master.fprd(p.station(), kSm1Status, Bytes(&st, 1)), 1);
+            return st;
+        };
+        EXPECT_EQ(status(), 0x00);  // nothing read yet: not opened
+        for (int i = 0; i < 3; ++i) {
+            const auto reply = p.c->request(MailboxType::CoE, upload_request(0x1000, 0));
+            ASSERT_TRUE(reply);
+            EXPECT_EQ(expedited_value(*reply), device::default_drive().device_type);
+            p.b.advance(1'000'000);  // the firmware's run after the read
+            EXPECT_EQ(status(), early ? 0x80 : 0x02);
+            // An opened buffer is not a message: the master's read of SM1 is not counted.
+            std::vector<std::uint8_t> in(p.b.master.slaves()[0].sii.std_tx_mbx_size);
+            EXPECT_EQ(p.b.master.fprd(p.station(), p.b.master.slaves()[0].sii.std_tx_mbx_offset, Bytes(in)),
+                      0);
+        }
+    }
+    device::Quirks q;
+    EXPECT_EQ(device::parse_quirk("mailbox_open_early", q), "");
+    EXPECT_EQ(device::to_string(q), "mailbox_open_early");
+    device::DeviceDescription io = device::digital_output_terminal(8);
+    EXPECT_NE(device::apply_quirks(io, q), "");  // no mailbox
 }
 
 // max_pdo_entries=N: each mapping object has N entry subindexes; subindex 0 beyond N is refused with
