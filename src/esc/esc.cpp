@@ -57,7 +57,7 @@ void saturating_inc(std::uint8_t& c) {
 
 Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
     : cfg_(cfg),
-      mem_(kRegisterSpaceSize + std::max<std::uint32_t>(cfg.ram_bytes, 8192), 0),
+      mem_(kRegisterSpaceSize + std::max<std::uint32_t>(cfg.ram_bytes, kMinRamBytes), 0),
       dc_(mem_.data(), cfg.dc_drift_ppm, cfg.dc_initial_ns),
       eeprom_(std::move(eeprom)),
       wmask_(make_write_mask_table(std::min<unsigned>(cfg.fmmu_count, kMaxFmmus),
@@ -78,7 +78,7 @@ Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
     mem_[addr(Reg::RamSize)] = static_cast<std::uint8_t>(std::min<std::uint32_t>(cfg_.ram_bytes / 1024, 255));
     mem_[addr(Reg::PortDescriptor)] = cfg_.port_descriptor;
     st_le16(&mem_[addr(Reg::Features)], cfg_.features);
-    st_le32(&mem_[addr(Reg::DlControl)], 0x00070001);
+    st_le32(&mem_[addr(Reg::DlControl)], cfg_.dl_control);
     st_le16(&mem_[addr(Reg::AlStatus)], static_cast<std::uint16_t>(AlState::Init));
     st_le32(&mem_[addr(Reg::AlEventMask)], 0x00FFFF0F);
     st_le16(&mem_[addr(Reg::WatchdogDivider)], kDefaultWatchdogDivider);

@@ -17,13 +17,17 @@
 
 namespace vecat::esc {
 
+inline constexpr std::uint32_t kMinRamBytes = 1024;
+
 struct EscConfig {
     std::uint8_t type = 0x11;  // same family code as an ET1100
     std::uint8_t revision = 0x00;
     std::uint16_t build = 0x0002;
     std::uint8_t fmmu_count = 8;
     std::uint8_t sm_count = 8;
-    std::uint32_t ram_bytes = 8192;       // process RAM from 0x1000, at least 8 KiB
+    // Process RAM from 0x1000, in whole KiB as 0x0006 reports it: 8 KiB (ET1100), 1 KiB (ET1200, as the EL
+    // terminals of ../shared/data/pcap report); at least kMinRamBytes.
+    std::uint32_t ram_bytes = 8192;
     std::uint8_t port_descriptor = 0x0F;  // ports 0 and 1: MII; ports 2, 3 not implemented
     std::uint16_t features = protocol::feature::DcAvailable | protocol::feature::Dc64Bit |
                              protocol::feature::EnhancedLinkMii | protocol::feature::SeparateFcsErrors |
@@ -32,6 +36,9 @@ struct EscConfig {
     // Further read-only bits of SII control/status 0x0502 (bits 1-5: bit 5 EEPROM emulation by the PDI,
     // bits 1-4 reserved, which some ESCs read as 1: an EL2828 shows 0x50).
     std::uint8_t sii_status_bits = 0;
+    // DL control (0x0100-0x0103) at power-up (ESC datasheet section II: forwarding rule 1, RX FIFO size 7). A
+    // line rebuilt from a capture takes what the real ESC showed before the master wrote it.
+    std::uint32_t dl_control = 0x00070001;
     // The DC system time unit (0x0910-0x09FF: system time, offset, delay, time loop, SYNC and latch). Some
     // ESCs that report DC in 0x0008 have the receive times (0x0900-0x090F) only: they neither read nor
     // write the rest, and count no access to it (EL2828, EL1004, EK1914, EL3004 in ../shared/data/pcap).

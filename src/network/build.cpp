@@ -514,9 +514,9 @@ BuiltNetwork build_network(const NetworkFile& f, const std::string& file) {
         Made& m = made[i];
         attach_io(e, m, b);
         apply_esc(m.esc, e.esc);
-        if (e.esc.ram_kib && *e.esc.ram_kib < 8)
-            b.notes.push_back(at + "esc: ram_kib " + std::to_string(*e.esc.ram_kib) +
-                              ": the emulated ESC has at least 8 KiB of process RAM and reports 8");
+        if (e.esc.ram_kib && *e.esc.ram_kib == 0)
+            b.notes.push_back(
+                at + "esc: ram_kib 0: the emulated ESC has at least 1 KiB of process RAM and reports 1");
         ports.push_back(ports_of(m.esc));
         b.segment->add(std::make_unique<esc::Slave>(m.model, m.esc, m.factory(*m.model.description)),
                        m.factory);

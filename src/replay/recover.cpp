@@ -104,6 +104,7 @@ class Recoverer {
         line_.slave_count = count_slaves();
         line_.slaves.resize(line_.slave_count);
         sii_.resize(line_.slave_count);
+        dl_control_written_.resize(line_.slave_count);
         mailbox_.resize(line_.slave_count);
         al_.resize(line_.slave_count);
         for (const Exchange& e : p_.exchanges)
@@ -124,6 +125,7 @@ class Recoverer {
         blocks_from_writes(fmmu_wkc_, kFmmuBlocks, true);
         blocks_from_writes(sm_wkc_, kSmBlocks, false);
         info_from_broadcast();
+        dc_units_from_broadcasts();
         // Configuration words the master did not read, from the registers the ESC loaded them into.
         for (const Loaded& l : loaded_) {
             RecoveredSlave& rs = line_.slaves[l.slave];
@@ -180,14 +182,22 @@ class Recoverer {
     }
 
   private:
+    // The slaves of the line: every ESC counts a broadcast read of its registers, and a broadcast write of
+    // its DL control (0x0100-0x0103, writable on every ESC; ESC datasheet section II), so the largest such
+    // working counter is their number (a capture of TwinCAT's device scan holds only the latter).
     std::size_t count_slaves() const {
         std::size_t n = 0;
+        constexpr std::uint16_t kDlControl = addr(Reg::DlControl), kDlControlEnd = kDlControl + 4;
         for (const Exchange& e : p_.exchanges) {
             const auto& f = c_.frames[e.reply].bytes;
             const protocol::ParsedFrame pf = protocol::parse_frame(f);
             for (std::size_t i = 0; i < pf.count; ++i) {
                 protocol::DatagramView d(const_cast<std::uint8_t*>(f.data()) + pf.offsets[i]);
-                if (d.command() == Command::BRD && d.ado() < protocol::kRegisterSpaceSize)
+                const bool counted_by_all =
+                    (d.command() == Command::BRD && d.ado() < protocol::kRegisterSpaceSize) ||
+                    (d.command() == Command::BWR && d.length() > 0 && d.ado() >= kDlControl &&
+                     d.ado() + d.length() <= kDlControlEnd);
+                if (counted_by_all)
                     n = std::max<std::size_t>(n, std::min<std::size_t>(d.wkc(), kMaxRecoveredSlaves));
             }
         }
@@ -253,6 +263,8 @@ class Recoverer {
                     mailbox_[*s].read(read.ado, read.data, read.len);
                     al_status_read(*s, read);
                 }
+            if (cmd == Command::BWR && in_dc_system_time_unit(r))
+                dc_broadcast_wkc_ = std::max<std::size_t>(dc_broadcast_wkc_.value_or(0), r.wkc());
             if (!broadcast(cmd) && in_dc_system_time_unit(r))
                 if (auto s = position(cmd, adp)) {
                     auto& unit = line_.slaves[*s].dc_system_time_unit;
@@ -336,6 +348,9 @@ class Recoverer {
     }
 
     void wrote(std::size_t s, const Window& w) {
+        for (std::uint16_t b = 0; b < 4; ++b)
+            if (w.covers(static_cast<std::uint16_t>(addr(Reg::DlControl) + b)))
+                dl_control_written_[s][b] = true;
         if (w.covers(addr(Reg::StationAddress), 2)) {
             const std::uint16_t station = w.u16(addr(Reg::StationAddress));
             line_.slaves[s].station = station;
@@ -368,8 +383,28 @@ class Recoverer {
         }
     }
 
+    // The DC system time unit of slaves no datagram of their own tells about: a broadcast write into it
+    // counted by c of the line's slaves says c of them have it (ESC datasheet section II 0x0910: an ESC
+    // without it does not count those registers). Which ones it does not say; as with the FMMU counts, the
+    // first slaves get it (couplers come first and have it, the EL terminals of ../shared/data/pcap lack it).
+    void dc_units_from_broadcasts() {
+        if (!dc_broadcast_wkc_ || *dc_broadcast_wkc_ > line_.slave_count) return;
+        std::size_t left = *dc_broadcast_wkc_;
+        for (const auto& rs : line_.slaves)
+            if (rs.dc_system_time_unit.value_or(false)) left = left ? left - 1 : 0;
+        for (auto& rs : line_.slaves) {
+            if (rs.dc_system_time_unit) continue;
+            rs.dc_system_time_unit = left > 0;
+            left -= left > 0;
+        }
+    }
+
     void was_read(std::size_t s, const Window& w) {
         RecoveredSlave& rs = line_.slaves[s];
+        for (std::uint16_t b = 0; b < 4; ++b) {
+            const auto a = static_cast<std::uint16_t>(addr(Reg::DlControl) + b);
+            if (w.covers(a) && !rs.dl_control[b] && !dl_control_written_[s][b]) rs.dl_control[b] = w.at(a);
+        }
         for (std::uint16_t a = 0; a < kEscInfoBytes; ++a)
             if (w.covers(a) && !rs.esc_info[a]) rs.esc_info[a] = w.at(a);
         if (w.covers(addr(Reg::DlStatus), 2) && !rs.dl_status) rs.dl_status = w.u16(addr(Reg::DlStatus));
@@ -405,12 +440,14 @@ class Recoverer {
     const Pairing& p_;
     RecoveredLine line_;
     std::vector<SiiTracker> sii_;
+    std::vector<std::array<bool, 4>> dl_control_written_;  // per slave: DL control bytes the master wrote
     std::vector<MailboxRecoverer> mailbox_;
     std::vector<AlTracker> al_;
     static constexpr std::size_t kFmmuBlocks = 16, kSmBlocks = 16;  // the register space's blocks
     std::array<std::optional<std::uint16_t>, kFmmuBlocks> fmmu_wkc_{};
     std::array<std::optional<std::uint16_t>, kSmBlocks> sm_wkc_{};
     std::array<std::optional<std::uint8_t>, kEscInfoBytes> broadcast_info_{};  // a BRD every slave counted
+    std::optional<std::size_t> dc_broadcast_wkc_;  // the largest of BWRs into the DC system time unit
     struct Loaded {
         std::size_t slave;
         unsigned word;

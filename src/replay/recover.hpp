@@ -37,11 +37,15 @@ struct RecoveredSlave {
     // recover_line).
     std::size_t esc_info_from_broadcast = 0;
     std::optional<std::uint16_t> dl_status;
+    // DL control (0x0100-0x0103) bytes as first read before the capture wrote them: what the ESC held when
+    // the capture began (its reset value, or what an earlier master left; esc::EscConfig::dl_control).
+    std::array<std::optional<std::uint8_t>, 4> dl_control{};
     std::optional<bool> sii_read_8_bytes;         // 0x0502 bit 6, as the ESC reported it
     std::optional<bool> sii_two_address_bytes;    // 0x0502 bit 7: an EEPROM larger than 16 Kbit
     std::optional<std::uint8_t> sii_status_bits;  // 0x0502 bits 1-5 as read (esc::EscConfig::sii_status_bits)
     // Whether the ESC has the DC system time unit (esc::EscConfig::dc_system_time_unit): a datagram to this
-    // slave alone within 0x0910-0x09FF counted (true) or not counted (false; only when none counted).
+    // slave alone within 0x0910-0x09FF counted (true) or not counted (false; only when none counted); else
+    // from the working counter of broadcast writes there (see recover_line).
     std::optional<bool> dc_system_time_unit;
     // FMMU and SyncManager counts (0x0004, 0x0005) when the master did not read them: worked out from the
     // working counters of its broadcast writes to the 16 FMMU and SyncManager blocks (see recover_line).
@@ -62,15 +66,18 @@ struct RecoveredSlave {
 };
 
 struct RecoveredLine {
-    std::size_t slave_count = 0;  // from the broadcast reads' working counters
+    // From the working counters of broadcast reads of registers and broadcast writes of DL control.
+    std::size_t slave_count = 0;
     std::vector<RecoveredSlave> slaves;
 };
 
 // Walks every exchange in order. A broadcast write to FMMU block k is counted by the slaves that have more
 // than k FMMUs (ESC datasheet section I: writes to absent registers are not counted), so the working counters
 // of the writes to blocks 0..15 give how many slaves have each count; which slave has which is not in them:
-// the larger counts go to the first slaves (a coupler, with the larger ESC, comes before its terminals).
-// Needs the capture's slave count first for replies without their request (auto-increment addresses in a
+// the larger counts go to the first slaves (a coupler, with the larger ESC, comes before its terminals). The
+// same holds for broadcast writes into the DC system time unit, for slaves that no datagram of their own
+// tells about. ESC information and DL control bytes that no datagram to the slave alone read come from a
+// broadcast read or the first read before any write (RecoveredSlave). Needs the capture's slave count first for replies without their request (auto-increment addresses in a
 // reply have been counted up by every slave the frame passed).
 RecoveredLine recover_line(const Capture& c, const Pairing& p);
 

@@ -302,18 +302,20 @@ namespace {
 // digital I/O; a device without SyncManagers and without a mailbox has no PDI at all. Neither has a
 // µController to set AL status, so both have device emulation (0x0141 bit 0). Anything else is a device
 // with a µController on an SPI PDI (the PDI type is not visible on the wire).
+// PDI types (ESC datasheet section II 0x0140).
+constexpr std::uint8_t kDigitalIoPdi = 0x04, kSpiPdi = 0x05;
+
 std::uint16_t presumed_pdi_control(const std::vector<std::uint8_t>& img) {
     const protocol::SiiInfo info = protocol::parse_sii(img);
     constexpr std::uint16_t kDeviceEmulation = std::uint16_t{protocol::esc_config::DeviceEmulation} << 8;
-    constexpr std::uint16_t kDigitalIo = 0x04, kSpi = 0x05;
     for (const auto& sm : info.sync_managers)
         if (sm.start >= protocol::addr(protocol::Reg::DigitalOutputData) &&
             sm.start < protocol::addr(protocol::Reg::DigitalOutputData) + protocol::kDigitalOutputSize)
-            return kDeviceEmulation | kDigitalIo;
+            return kDeviceEmulation | kDigitalIoPdi;
     const bool mailbox = (info.std_rx_mbx_size != 0 && info.std_rx_mbx_size != 0xFFFF) ||
                          (info.mailbox_protocols != 0 && info.mailbox_protocols != 0xFFFF);
     if (info.sync_managers.empty() && !mailbox) return kDeviceEmulation;
-    return kSpi;
+    return kSpiPdi;
 }
 
 }  // namespace
@@ -342,6 +344,25 @@ std::vector<std::uint8_t> recovered_sii_image(const RecoveredSlave& s) {
 }
 
 namespace {
+
+// The known words of s over an SII image (grown to hold them, in whole 128-byte blocks). An ESC whose first
+// DL status read showed its PDI watchdog reloaded has a PDI (ESC datasheet section II 0x0110 bit 1): one of
+// digital I/O, as the EL terminals that show it, when the image has none and the capture did not read the
+// PDI control word. The checksum of the configuration words made again when the capture did not hold it
+// (ETG.2010, word 7).
+std::vector<std::uint8_t> sii_laid_over(std::vector<std::uint8_t> img, const RecoveredSlave& s) {
+    namespace sii = protocol::sii;
+    const auto known = [&](unsigned w) { return w < s.known.size() && s.known[w]; };
+    const std::size_t bytes = (std::max(img.size(), 2 * s.sii.size()) + 127) / 128 * 128;
+    img.resize(bytes, 0xFF);
+    for (std::size_t w = 0; w < s.sii.size(); ++w)
+        if (s.known[w]) st_le16(img.data() + 2 * w, s.sii[w]);
+    if (!known(sii::PdiControl) && s.dl_status && (*s.dl_status & protocol::dl_status::PdiWatchdogOk) &&
+        img[2 * sii::PdiControl] == 0)
+        img[2 * sii::PdiControl] = kDigitalIoPdi;
+    if (!known(sii::Checksum)) img[2 * sii::Checksum] = protocol::sii_config_crc(ConstBytes(img.data(), 14));
+    return img;
+}
 
 // The application of a device rebuilt from a capture, which refuses the state changes the real device
 // refused there (RefusedTransition); everything else is the wrapped application's.
@@ -391,12 +412,16 @@ esc::EscConfig recovered_config(const RecoveredSlave& s, esc::EscConfig cfg) {
     if (s.sms_from_writes) cfg.sm_count = *s.sms_from_writes;
     if (byte(4)) cfg.fmmu_count = *byte(4);
     if (byte(5)) cfg.sm_count = *byte(5);
-    if (byte(6) && *byte(6) >= 8) cfg.ram_bytes = std::uint32_t{*byte(6)} * 1024;
+    if (byte(6) && *byte(6) > 0) cfg.ram_bytes = std::uint32_t{*byte(6)} * 1024;
     if (byte(7)) cfg.port_descriptor = *byte(7);
     if (byte(8) && byte(9)) cfg.features = static_cast<std::uint16_t>(*byte(8) | *byte(9) << 8);
     if (s.sii_read_8_bytes) cfg.sii_read_8_bytes = *s.sii_read_8_bytes;
     if (s.dc_system_time_unit) cfg.dc_system_time_unit = *s.dc_system_time_unit;
     if (s.sii_status_bits) cfg.sii_status_bits = *s.sii_status_bits;
+    for (unsigned b = 0; b < 4; ++b)
+        if (s.dl_control[b])
+            cfg.dl_control =
+                (cfg.dl_control & ~(0xFFu << (8 * b))) | (std::uint32_t{*s.dl_control[b]} << (8 * b));
     return cfg;
 }
 
@@ -465,6 +490,15 @@ std::unique_ptr<esc::Segment> build_recovered_line(const RecoveredLine& line,
                 return std::unique_ptr<esc::Application>(
                     std::make_unique<esc::ProcessImageApplication>(dd.output_bytes(), dd.input_bytes()));
             };
+            // The words the capture holds, laid over the bare device's image: the master reads back what it
+            // read from the real device (TwinCAT's scan reads the identity words only).
+            if (s.sii_words_known() > 0) {
+                parts.model.sii_image = std::make_shared<const std::vector<std::uint8_t>>(
+                    sii_laid_over(*parts.model.sii_image, s));
+                notes.push_back(
+                    at + fmt::format("a bare device, with the {} SII words of the capture in its image",
+                                     s.sii_words_known()));
+            }
         }
         parts.esc = recovered_config(s, parts.esc);
         if (!s.refused.empty()) {

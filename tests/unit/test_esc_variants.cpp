@@ -194,3 +194,24 @@ TEST(DeviceEmulation, TheFirmwareNeverWritesAlStatus) {
     EXPECT_EQ(esc.al_status_code(), 0);
     EXPECT_EQ(slave.state(), AlState::PreOp);
 }
+
+// Section II 0x0006: the process RAM size in KiB. An ET1200 (the EL terminals of ../shared/data/pcap) has
+// 1 KiB, 0x1000-0x13FF, and reports 1. The DL control register starts at its configured value (a line
+// rebuilt from a capture takes what the ESC showed), 0x00070001 by default.
+TEST(EscRam, AnEscReportsItsRamAndDlControlAsConfigured) {
+    EscConfig cfg;
+    cfg.ram_bytes = 1024;
+    cfg.dl_control = 0x00C70001;
+    Esc esc(cfg, {});
+    std::vector<std::uint8_t> b(1);
+    EXPECT_EQ(read(esc, 0x0006, b), 1);
+    EXPECT_EQ(b[0], 1);
+    EXPECT_EQ(esc.config().ram_bytes, 1024u);
+    EXPECT_EQ(write(esc, 0x13FF, {0x55}), 1);
+    EXPECT_EQ(read(esc, 0x13FF, b), 1);
+    EXPECT_EQ(b[0], 0x55);
+    EXPECT_EQ(esc.peek(0x0102), 0xC7);
+    Esc standard(EscConfig{}, {});
+    EXPECT_EQ(standard.peek(0x0006), 8);
+    EXPECT_EQ(standard.peek(0x0102), 0x07);
+}
