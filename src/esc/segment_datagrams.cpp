@@ -30,18 +30,25 @@ bool Segment::find_candidates(const ParsedFrame& pf, std::size_t intact) {
         address_index_.rebuild(addressing_);
         index_fresh_ = true;
     }
+    // In the frame's order, each once. A datagram adds each slave at most once, so the list stays within
+    // twice the line's length when it is made unique whenever it grows past the length (no allocation once
+    // the line had this many slaves).
+    const auto in_order = [&] {
+        std::sort(candidates_.begin(), candidates_.end());
+        candidates_.erase(std::unique(candidates_.begin(), candidates_.end()), candidates_.end());
+    };
     candidates_.clear();
-    candidates_.reserve(slaves_.size());  // (no allocation once the line had this many slaves)
+    candidates_.reserve(2 * slaves_.size());
     for (std::size_t i = 0; i < pf.count; ++i) {
         const DatagramReach& r = reach_[i];
         if (r.reach == Reach::Fixed)
             address_index_.fixed(r.adp, candidates_);
         else if (r.reach == Reach::Logical)
             address_index_.logical(r.first_bit, r.last_bit, candidates_);
+        if (candidates_.size() > slaves_.size()) in_order();
     }
-    // In the frame's order, each once, and only those it reaches.
-    std::sort(candidates_.begin(), candidates_.end());
-    candidates_.erase(std::unique(candidates_.begin(), candidates_.end()), candidates_.end());
+    in_order();
+    // Only those it reaches.
     std::erase_if(candidates_, [&](std::uint32_t k) { return k >= intact || !reached_[k]; });
     return true;
 }

@@ -176,9 +176,13 @@ void answers_as_if_every_esc_saw_every_datagram(bool indexed_only) {
         distinct_stations += stations.size();
     }
     // The random frames did reach the cases this is about.
-    if (!indexed_only) EXPECT_GT(addressed_by_alias, 100u);
+    if (!indexed_only) {
+        EXPECT_GT(addressed_by_alias, 100u);
+    }
     EXPECT_GT(logical_hits, 100u);
-    if (indexed_only) EXPECT_GT(distinct_stations, 4000u * 2);  // not all slaves at one address
+    if (indexed_only) {
+        EXPECT_GT(distinct_stations, 4000u * 2);  // not all slaves at one address
+    }
 }
 
 }  // namespace
