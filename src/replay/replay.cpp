@@ -38,6 +38,10 @@ constexpr std::size_t kFramesPerTally = 8;
 // A longer pause between two frames is skipped over: the firmware runs as if it had been this long. Whatever
 // a device does on its own (watchdogs, EEPROM loads, mailbox answers) is over well before it.
 constexpr std::uint64_t kMaxGapNs = 1'000'000'000;
+// At most this many firmware passes between two frames; the rest of a longer pause goes in one more pass
+// (each run catches up with the time since the last). The replay's work stays bounded by the capture's
+// frames whatever the devices' deadlines (a SYNC0 of a short cycle wants a run every 250 us).
+constexpr unsigned kMaxTicksPerGap = 64;
 
 bool pure_read(Command c) {
     return c == Command::APRD || c == Command::FPRD || c == Command::BRD || c == Command::LRD;
@@ -176,7 +180,8 @@ class Replayer {
     // The firmware between two frames runs as the serve loop runs it (Segment, "Firmware when it is
     // needed"): at the slaves' deadlines (Segment::next_firmware_ns), no closer together than tick_ns. Each
     // run catches up with the time since the last one, so a pause costs work by the slaves' deadlines (at
-    // most kMaxLagCycles local cycles apart), not by its length, and a longer one than kMaxGapNs none more.
+    // most kMaxLagCycles local cycles apart), not by its length; a longer one than kMaxGapNs none more, and
+    // past kMaxTicksPerGap passes the rest of it is one pass.
     void advance(std::uint64_t t) {
         if (!started_) {
             started_ = true;
@@ -184,11 +189,13 @@ class Replayer {
             return;
         }
         if (t > last_tick_ + kMaxGapNs) last_tick_ = t - kMaxGapNs;
-        for (;;) {
-            const std::uint64_t next = std::max(last_tick_ + o_.tick_ns, line_.next_firmware_ns());
+        for (unsigned ticks = 1;; ++ticks) {
+            std::uint64_t next = std::max(last_tick_ + o_.tick_ns, line_.next_firmware_ns());
             if (next > t) return;
+            if (ticks == kMaxTicksPerGap) next = t;
             last_tick_ = next;
             line_.tick(last_tick_);
+            if (next == t) return;
         }
     }
 

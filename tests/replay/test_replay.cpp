@@ -136,9 +136,10 @@ TEST(Replay, AChangedReplyIsReportedAtItsFrame) {
 }
 
 // A capture whose frames are minutes apart (a fuzzed one, or a master left waiting) costs work by its frames,
-// not by its length: between two frames the firmware runs at the slaves' deadlines, and a pause past a second
-// is skipped over. Ticking every 250 us through each pause, the 10 pauses here made 4 * 10^5 runs per slave.
-TEST(Replay, APauseBetweenFramesCostsRunsByTheSlavesDeadlinesNotByItsLength) {
+// not by its length: between two frames the firmware runs at the slaves' deadlines, at most 64 passes of the
+// line (the rest of a pause in the last one), and a pause past a second is skipped over. Ticking every 250 us
+// through each pause, the 10 pauses here made 4 * 10^5 runs per slave.
+TEST(Replay, APauseBetweenFramesCostsAtMost64PassesOfTheFirmware) {
     constexpr std::size_t kPauses = 10;
     const fs::path cap = record_mixed_line("pauses.pcapng", kPauses);
     replay::Capture c = replay::read_capture(cap.string());
@@ -160,9 +161,12 @@ TEST(Replay, APauseBetweenFramesCostsRunsByTheSlavesDeadlinesNotByItsLength) {
         c.frames[p.exchanges[x].reply].time_ns = t + 20'000;
     }
     const auto [paused, n] = runs(c);
-    // Deadlines are at most 16 local cycles (4 ms) apart: about 250 runs per slave and second of pause.
-    EXPECT_GT(paused, as_recorded + kPauses * slaves * 100);
-    EXPECT_LT(paused, as_recorded + kPauses * slaves * 300);
+    // Deadlines are at most 16 local cycles (4 ms) apart: a second of pause wants about 250 passes, and gets
+    // 64; the recorded millisecond between two cycles had about 4.
+    std::printf("firmware runs: %zu as recorded, %zu with the pauses, %zu slaves\n",
+                static_cast<std::size_t>(as_recorded), static_cast<std::size_t>(paused), slaves);
+    EXPECT_GT(paused, as_recorded + kPauses * slaves * 50);
+    EXPECT_LE(paused, as_recorded + kPauses * slaves * 64);
     fs::remove(cap);
 }
 
