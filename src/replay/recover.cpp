@@ -253,7 +253,8 @@ class Recoverer {
             if (cmd == Command::BRD && r.wkc() == 1 && line_.slave_count == 1) al_status_read(0, read);
             if (cmd == Command::BRD && r.wkc() == line_.slave_count)
                 for (std::uint16_t a = 0; a < kEscInfoBytes; ++a)
-                    if (read.covers(a) && !broadcast_info_[a] && (!e.request_recorded || written.at(a) == 0))
+                    if (read.covers(a) && !broadcast_info_[a] &&
+                        (!e.request_recorded || (written.covers(a) && written.at(a) == 0)))
                         broadcast_info_[a] = read.at(a);
             if ((cmd == Command::APRD || cmd == Command::FPRD || cmd == Command::APRW ||
                  cmd == Command::FPRW) &&
