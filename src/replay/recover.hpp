@@ -77,8 +77,9 @@ struct RecoveredLine {
 // the larger counts go to the first slaves (a coupler, with the larger ESC, comes before its terminals). The
 // same holds for broadcast writes into the DC system time unit, for slaves that no datagram of their own
 // tells about. ESC information and DL control bytes that no datagram to the slave alone read come from a
-// broadcast read or the first read before any write (RecoveredSlave). Needs the capture's slave count first for replies without their request (auto-increment addresses in a
-// reply have been counted up by every slave the frame passed).
+// broadcast read or the first read before any write (RecoveredSlave). Needs the capture's slave count first
+// for replies without their request (auto-increment addresses in a reply have been counted up by every slave
+// the frame passed).
 RecoveredLine recover_line(const Capture& c, const Pairing& p);
 
 // The request datagram's ADP for a datagram whose capture holds only the reply.

@@ -66,7 +66,8 @@ TEST(NetworkQuirks, EveryRefusalNamesTheLine) {
          "net.yaml:6: b: quirks: no_sdo_info, no_complete_access, max_pdo_entries, fixed_pdos and "
          "sdo_download_echo are CoE quirks"},
         {"devices:\n  - name: a\n    device: digital-out\n    quirks: [mailbox_drop_every=3]\n",
-         "net.yaml:4: a: quirks: mailbox_delay_ms, mailbox_drop_every and mailbox_open_early: the device has no "
+         "net.yaml:4: a: quirks: mailbox_delay_ms, mailbox_drop_every and mailbox_open_early: the device has "
+         "no "
          "mailbox"},
         {"devices:\n  - name: a\n    sii: x.bin\n    quirks: [sii_without=pdo]\n",
          "net.yaml:4: a: quirks: sii_without: an sii: device serves its dump as it is"},
