@@ -319,10 +319,14 @@ void Drive::advance(std::uint64_t now_ns) {
     const bool first = twin_->end() == 0;
     // The dictionary cannot change while the steps run (frames and SDO requests come in between calls).
     if (now_ns - sim_ns_ >= period_ns_) configure();
+    // Only the last period's feedback values reach the dictionary: nothing reads them in between (the
+    // periods before it publish their events only). Coupled drives, and a drive whose TWINsync link is on,
+    // publish every period: the partner and the option card's telegram read the objects.
+    const bool each = partner || twin_->active();
     while (now_ns - sim_ns_ >= period_ns_) {
         sim_ns_ += period_ns_;
         if (partner && !first) partner->step_to(sim_ns_);
-        servo_step();
+        servo_step(each || now_ns - sim_ns_ < period_ns_);
         if (partner && first) partner->step_to(sim_ns_);
     }
 }
@@ -343,7 +347,7 @@ void Drive::step_to(std::uint64_t t_ns) {
 
 // One servo period: the TWINsync telegram of the partner's last cycle (its receive mapping writes
 // parameters), the set-points, the core's step, the feedback, and this drive's telegram.
-void Drive::servo_step() {
+void Drive::servo_step(bool publish) {
     twin_->receive(sim_ns_, twinsync_local());
     // (A receive mapping may write parameters, the manufacturer objects 0x2000 + P: read again.)
     if (parameter_writes_ != parameters_read_) read_parameters();
@@ -351,8 +355,8 @@ void Drive::servo_step() {
     if (const auto wired = wired_probe_inputs(sim_ns_))
         io_.parameters.probe_inputs = static_cast<std::uint8_t>(probe_inputs_object_ | (*wired & 3u));
     read_twinsync();
-    core_->step(io_);
-    write_feedback();
+    core_->step(io_, publish);
+    write_feedback(publish);
     if (!digital_output_image_.empty())
         st_le32(digital_output_image_.data(),
                 o_->digital_outputs.get_or(0) & o_->digital_output_mask.get_or(0));
@@ -556,13 +560,12 @@ void Drive::read_twinsync() {
     t.master_torque_tf = o.tw_master_torque_tf.get_or(0.0f);
 }
 
-void Drive::write_feedback() {
+void Drive::write_feedback(bool publish) {
     Objects& o = *o_;
     DriveFeedback& f = io_.feedback;
     // The faults of the period, in the order they happened.
     if (f.raised) raise_fault(f.raised->code, f.raised->register_bits, f.raised->data);
     if (f.cleared) clear_faults();
-    o.digital_inputs.set(f.digital_inputs);
     if (f.probe) {
         coe::Value<std::int32_t>* values[2][2] = {{&o.probe1_positive, &o.probe1_negative},
                                                   {&o.probe2_positive, &o.probe2_negative}};
@@ -576,40 +579,47 @@ void Drive::write_feedback() {
                 }
         o.probe_status.set(f.probe_status);
     }
-    o.statusword.set(f.statusword);
-    o.modes_display.set(f.mode_display);
-    o.position_demand.set(f.position_demand);
-    o.position_demand_internal.set(f.position_demand_internal);
-    o.position_internal.set(f.position_internal);
-    o.position_actual.set(f.position_actual);
-    o.following_error_actual.set(f.following_error);
-    o.velocity_demand.set(f.velocity_demand);
-    o.velocity_actual.set(f.velocity_actual);
-    o.torque_demand.set(f.torque_demand);
-    o.torque_actual.set(f.torque_actual);
-    o.current_actual.set(f.current_actual);
-    o.temperature.set(f.temperature);
+    if (publish) {
+        o.digital_inputs.set(f.digital_inputs);
+        o.statusword.set(f.statusword);
+        o.modes_display.set(f.mode_display);
+        o.position_demand.set(f.position_demand);
+        o.position_demand_internal.set(f.position_demand_internal);
+        o.position_internal.set(f.position_internal);
+        o.position_actual.set(f.position_actual);
+        o.following_error_actual.set(f.following_error);
+        o.velocity_demand.set(f.velocity_demand);
+        o.velocity_actual.set(f.velocity_actual);
+        o.torque_demand.set(f.torque_demand);
+        o.torque_actual.set(f.torque_actual);
+        o.current_actual.set(f.current_actual);
+        o.temperature.set(f.temperature);
+    }
+    // The variant's objects: its events, and values of the last published feedback.
     variant_->write_feedback(io_);
-    if (f.twinsync) {
-        const TwinsyncValues& v = f.twinsync_values;
-        o.tw_local_ref_torque.set(v.ref_torque);
-        o.tw_local_act_torque.set(v.act_torque);
-        o.tw_torque_actual_scaled.set(v.act_torque);
-        o.tw_local_ref_speed.set(v.ref_speed);
-        o.tw_local_ff_speed.set(v.ref_speed);
-        o.tw_local_act_speed.set(v.act_speed);
-        o.tw_speed_actual_rpm.set(v.speed_actual_rpm);
-        o.tw_speed_setpoint_rpm.set(v.speed_setpoint_rpm);
-        o.tw_local_ref_pos.set(v.ref_pos);
-        o.tw_local_act_pos.set(v.act_pos);
-        o.tw_position_actual.set(v.act_pos);
-        o.tw_local_eps.set(v.eps);
-        // P2650: the drive's own current error, unless the receive mapping brings the slave's (TWD, SCON,
-        // PCON, VE masters: "interpreted as the error of the slave drive").
-        if (!twin_->receives(twinsync::p::CurrentError)) {
-            o.tw_error_number.set(v.error_number);
-            o.tw_error_location.set(v.error_location);
-        }
+    if (f.twinsync) write_twinsync_values();
+}
+
+void Drive::write_twinsync_values() {
+    Objects& o = *o_;
+    const TwinsyncValues& v = io_.feedback.twinsync_values;
+    o.tw_local_ref_torque.set(v.ref_torque);
+    o.tw_local_act_torque.set(v.act_torque);
+    o.tw_torque_actual_scaled.set(v.act_torque);
+    o.tw_local_ref_speed.set(v.ref_speed);
+    o.tw_local_ff_speed.set(v.ref_speed);
+    o.tw_local_act_speed.set(v.act_speed);
+    o.tw_speed_actual_rpm.set(v.speed_actual_rpm);
+    o.tw_speed_setpoint_rpm.set(v.speed_setpoint_rpm);
+    o.tw_local_ref_pos.set(v.ref_pos);
+    o.tw_local_act_pos.set(v.act_pos);
+    o.tw_position_actual.set(v.act_pos);
+    o.tw_local_eps.set(v.eps);
+    // P2650: the drive's own current error, unless the receive mapping brings the slave's (TWD, SCON,
+    // PCON, VE masters: "interpreted as the error of the slave drive").
+    if (!twin_->receives(twinsync::p::CurrentError)) {
+        o.tw_error_number.set(v.error_number);
+        o.tw_error_location.set(v.error_location);
     }
 }
 

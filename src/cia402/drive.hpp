@@ -89,7 +89,8 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
   private:
     void advance(std::uint64_t now_ns);
     void step_to(std::uint64_t t_ns);
-    void servo_step();
+    // publish: the period's feedback values go to the dictionary (DriveCore::step).
+    void servo_step(bool publish = true);
     template <class F>
     void for_each_parameter(F&& f);
     void read_parameters();
@@ -98,7 +99,9 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     void for_each_command(F&& f);
     void read_command();
     void read_twinsync();
-    void write_feedback();
+    // The period's events, and its values when `publish`.
+    void write_feedback(bool publish = true);
+    void write_twinsync_values();
     twinsync::LocalState twinsync_local() const;
 
     std::unique_ptr<VariantObjects> variant_;  // before o_: which manufacturer objects it binds

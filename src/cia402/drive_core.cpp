@@ -80,7 +80,7 @@ void DriveCore::start(DriveIo& io) {
     write_feedback(io);
 }
 
-void DriveCore::step(DriveIo& io) {
+void DriveCore::step(DriveIo& io, bool publish) {
     const double dt = static_cast<double>(period_ns_) * 1e-9;
     ++steps_;
     axis_.io = &io;
@@ -115,7 +115,7 @@ void DriveCore::step(DriveIo& io) {
     const double previous_inc = previous_machine_inc_;
     run_mechanics(io, dt);
     run_touch_probe(io, encoder_was_valid ? previous_inc : previous_machine_inc_, previous_machine_inc_);
-    write_feedback(io);
+    write_feedback(io, publish);
     // The TWINsync values every cycle while the link is on; otherwise only for SDO reads, every 4 ms.
     if (io.twinsync.active || steps_ % 16 == 0) {
         fb.twinsync = true;
@@ -436,7 +436,7 @@ void DriveCore::run_touch_probe(DriveIo& io, double previous_inc, double machine
     io.feedback.probe = true;
 }
 
-void DriveCore::write_feedback(DriveIo& io) {
+void DriveCore::write_feedback(DriveIo& io, bool publish) {
     const DriveParameters& p = io.parameters;
     DriveFeedback& fb = io.feedback;
     const double dt = static_cast<double>(period_ns_) * 1e-9;
@@ -466,6 +466,11 @@ void DriveCore::write_feedback(DriveIo& io) {
     if (ms.bit13) status |= sw::Bit13;
     // HIWIN 9.4: "accuracy compensation initiated" after homing (bit 15, manufacturer specific).
     if (mode_ == Mode::Homing && hm_.compensated()) status |= kAccuracyCompensation;
+    const double rated_a = std::max<double>(p.rated_current, 1.0) * 1e-3;
+    // Drive temperature: 35 C plus a rise with the square of the current.
+    const double i_rel = mech_.current() / rated_a;
+    temperature_ += (350.0 + 300.0 * i_rel * i_rel - temperature_) * dt / 60.0;
+    if (!publish) return;
     const bool limit_switch = axis_.positive_limit || axis_.negative_limit;
     if (axis_.internal_limit || limit_switch) status |= sw::InternalLimit;
     if (limit_switch || (enabled && mech_.torque_limited())) status |= sw::Warning;
@@ -486,11 +491,7 @@ void DriveCore::write_feedback(DriveIo& io) {
     const double per = axis_.nm_per_permille;
     fb.torque_demand = sat16(axis_.loop == LoopMode::Torque ? axis_.torque_cmd : mech_.torque() / per);
     fb.torque_actual = sat16(mech_.torque() / per);
-    const double rated_a = std::max<double>(p.rated_current, 1.0) * 1e-3;
     fb.current_actual = sat16(mech_.current() / rated_a * 1000.0);
-    // Drive temperature: 35 C plus a rise with the square of the current.
-    const double i_rel = mech_.current() / rated_a;
-    temperature_ += (350.0 + 300.0 * i_rel * i_rel - temperature_) * dt / 60.0;
     fb.temperature = sat16(temperature_);
 }
 

@@ -41,8 +41,12 @@ class DriveCore {
     void configure(const DriveIo& io);
     // Before the first period: the inputs and the feedback of the drive as it starts.
     void start(DriveIo& io);
-    // One servo period.
-    void step(DriveIo& io);
+    // One servo period. With publish false, the feedback's values (positions, velocities, torques, the
+    // statusword...) are not worked out: a caller that runs several periods in a row and shows only the
+    // last one's values asks for them in the last. The period's events (faults raised and cleared, probe
+    // latches, the TWINsync values) and the state behind the values (the status bits' timers, the
+    // temperature) are the same either way, so the last period's values are too.
+    void step(DriveIo& io, bool publish = true);
     // The servo period, the speed control's sampling time (the TWIN sampling time of P0302 on a drive
     // with the TWINsync parameters: 250 us, 125 us at 8 kHz). kPeriodNs until set.
     void set_period_ns(std::uint64_t ns) { period_ns_ = ns > 0 ? ns : kPeriodNs; }
@@ -81,7 +85,7 @@ class DriveCore {
     void apply_gains(const DriveParameters& p);
     void run_mechanics(const DriveIo& io, double dt);
     void run_touch_probe(DriveIo& io, double previous_inc, double machine_inc);
-    void write_feedback(DriveIo& io);
+    void write_feedback(DriveIo& io, bool publish = true);
     double machine_increments() const;  // motor position in encoder increments (homing does not move it)
     double user_to_rad(double user) const { return axis_.ratios.user_to_radians(user - axis_.home_shift); }
 

@@ -69,11 +69,15 @@ double IoBus::output(std::size_t slot, unsigned channel) const noexcept {
 void IoBus::force(std::size_t slot, unsigned channel, double v) {
     Input& in = inputs_.at(slot);
     in.value.at(channel) = v;
-    in.forced.at(channel) = 1;
+    if (!in.forced.at(channel)) ++forced_channels_;
+    in.forced[channel] = 1;
 }
 
 void IoBus::release(std::size_t slot, unsigned channel) {
-    if (slot < inputs_.size() && channel < inputs_[slot].forced.size()) inputs_[slot].forced[channel] = 0;
+    if (slot < inputs_.size() && channel < inputs_[slot].forced.size() && inputs_[slot].forced[channel]) {
+        inputs_[slot].forced[channel] = 0;
+        --forced_channels_;
+    }
 }
 
 bool IoBus::forced(std::size_t slot, unsigned channel, double& v) const noexcept {
@@ -103,10 +107,11 @@ void InputTerminal::exchange(std::uint64_t now_ns, ConstBytes outputs, bool appl
     }
     const std::uint64_t t = now_ns >= origin_ns_ ? now_ns - origin_ns_ : 0;
     std::vector<std::uint8_t>& img = inputs();
+    const bool any_forced = bus_->any_forced();
     for (unsigned c = 0; c < sources_.size(); ++c) {
         const InputSource& s = sources_[c];
         double v = 0;
-        if (!bus_->forced(slot_, c, v))
+        if (!any_forced || !bus_->forced(slot_, c, v))
             v = s.wire_slot != IoBus::kNone ? bus_->output(s.wire_slot, s.signal.channel)
                                             : value_at(s.signal, t);
         if (kind_ == ChannelKind::Digital) {

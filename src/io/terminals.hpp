@@ -70,6 +70,8 @@ class IoBus {
     void force(std::size_t slot, unsigned channel, double v);
     void release(std::size_t slot, unsigned channel);
     bool forced(std::size_t slot, unsigned channel, double& v) const noexcept;
+    // Whether any input channel of the bus is forced (a cheap test before looking at each channel).
+    bool any_forced() const noexcept { return forced_channels_ != 0; }
 
   private:
     struct Output {
@@ -86,6 +88,7 @@ class IoBus {
     };
     std::vector<Output> outputs_;
     std::vector<Input> inputs_;
+    std::size_t forced_channels_ = 0;
 };
 
 // What one input channel reads when it is not forced.

@@ -355,6 +355,7 @@ class WiredDrive final : public cia402::Drive, public io::ForceableInputs {
     // A forced input reads its value; the others their sources (none: 0). The drive ORs them with 0x2100:6.
     std::optional<std::uint8_t> wired_probe_inputs(std::uint64_t sim_ns) override {
         std::uint8_t bits = 0;
+        if (probes_.empty() && !bus_->any_forced()) return bits;
         for (unsigned c = 0; c < kDriveProbeInputs; ++c) {
             double v = 0;
             if (!bus_->forced(input_slot_, c, v) && !probes_.empty()) {

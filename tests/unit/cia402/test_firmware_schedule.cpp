@@ -1,10 +1,11 @@
 // Firmware when it is needed (Segment::set_local_cycle_ns, Segment::next_firmware_ns): a line whose firmware
 // runs only when a frame comes and at its deadlines gives the master the same bytes, frame by frame, as a
 // line whose firmware also runs at every servo period between frames (what the serve loop did before), for
-// the same frame times. Two drives coupled by TWINsync, in DC-synchronous mode and in free run, through
-// start-up, enabling, motion, SDO traffic, a drive fault with its emergency, and the master falling silent
-// (the SyncManager watchdog in free run, the sync error in DC mode). Time is driven by hand, so each run is
-// repeatable.
+// the same frame times. Two drives coupled by TWINsync and a third on its own (whose periods between two
+// frames publish only the last one's feedback, Drive::advance), in DC-synchronous mode and in free run,
+// through start-up, enabling, motion, SDO traffic, a drive fault with its emergency, and the master falling
+// silent (the SyncManager watchdog in free run, the sync error in DC mode). Time is driven by hand, so each
+// run is repeatable.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -24,6 +25,7 @@ namespace {
 
 constexpr std::uint64_t kServoPeriod = cia402::Drive::kServoPeriodNs;
 constexpr std::uint64_t kMs = 1'000'000;
+constexpr std::size_t kDrives = 3;
 // The mailbox-in SyncManager's status register (SM1, ETG.1000.4 / ESC datasheet section II 0x080D).
 // SYNC0 between two servo periods of the drives, a third of a cycle after the frames.
 constexpr std::int32_t kSync0Shift = 330'000;
@@ -36,7 +38,7 @@ struct Line {
         : schedule(s),
           use_dc(dc),
           desc(device::default_drive()),
-          seg(cia402::make_drive_segment(desc, 2, {})),  // cabled by TWINsync: they step in lockstep
+          seg(cia402::make_drive_segment(desc, kDrives, {})),  // 0 and 1 cabled by TWINsync: in lockstep
           link(*seg),
           master(link) {
         link.set_time(now);
@@ -77,7 +79,7 @@ struct Line {
         marks.push_back(log.size());
         pass_to(now + kMs);
         put(master.exchange_process_data().value_or(0xFFFF), 2);
-        for (std::size_t i = 0; i < 2; ++i) {
+        for (std::size_t i = 0; i < kDrives; ++i) {
             const auto in = master.inputs(i);
             log.insert(log.end(), in.begin(), in.end());
             const auto st = master.slaves()[i].station;
@@ -112,7 +114,7 @@ struct Line {
     std::uint64_t ticks = 0;
     std::vector<std::uint8_t> log;
     // What the scenario saw, so that the comparison is not between two lines that did nothing.
-    std::int32_t travelled = 0;
+    std::int32_t travelled = 0, swung = 0;
     bool faulted = false, emergency = false, watchdog = false;
 };
 
@@ -134,20 +136,25 @@ void scenario(Line& l) {
     l.request(AlState::Op);
     for (int i = 0; i < 100; ++i)
         l.cycle();
-    for (std::size_t i = 0; i < 2; ++i)
+    for (std::size_t i = 0; i < kDrives; ++i)
         EXPECT_EQ(l.master.read_al_status(l.master.slaves()[i].station).state(), AlState::Op);
     // Enable in CSP holding the position, then move: drive 0 at a constant speed, drive 1 back and forth.
-    const std::int32_t p0 = l.position(0), p1 = l.position(1);
+    // Drive 2 (not coupled) moves as drive 1.
+    const std::int32_t p0 = l.position(0), p1 = l.position(1), p2 = l.position(2);
     for (std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
         for (int i = 0; i < 10; ++i) {
             l.set_csp(0, cw, p0);
             l.set_csp(1, cw, p1);
+            l.set_csp(2, cw, p2);
             l.cycle();
         }
     for (int k = 1; k <= 300; ++k) {
+        const std::int32_t swing = k % 100 < 50 ? 30 * (k % 50) : 30 * (50 - k % 50);
         l.set_csp(0, 0x0F, p0 + 40 * k);
-        l.set_csp(1, 0x0F, p1 + (k % 100 < 50 ? 30 * (k % 50) : 30 * (50 - k % 50)));
+        l.set_csp(1, 0x0F, p1 + swing);
+        l.set_csp(2, 0x0F, p2 + swing);
         l.cycle();
+        l.swung = std::max(l.swung, l.position(2) - p2);
         if (k == 150) {
             // SDO traffic between cycles: an upload and a download (the following error window of drive 0).
             master::CoeClient c(l.master, l.master.slaves()[0].station);
@@ -187,6 +194,7 @@ TEST_P(FirmwareSchedule, RunningOnlyWhenNeededGivesTheMasterTheSameBytesAsEveryS
     // The scenario did what it says on both lines.
     for (const Line* l : {&every, &needed}) {
         EXPECT_GT(l->travelled, 10'000);
+        EXPECT_GT(l->swung, 1'000);
         EXPECT_TRUE(l->faulted);
         EXPECT_TRUE(l->emergency);
         EXPECT_TRUE(l->watchdog);
