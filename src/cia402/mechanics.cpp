@@ -113,12 +113,14 @@ bool Mechanics::torque_limited() const {
 std::int64_t Mechanics::count_of(double p) const {
     // floor(p / 2 pi * 2^bits); the scaling by 2^bits is exact. Saturates instead of overflowing.
     const double x = p / two_pi;
-    const double v = std::floor(counts_per_turn_ > 0 ? x * counts_per_turn_
-                                                     : std::ldexp(x, static_cast<int>(motor_.encoder_bits)));
+    const double v =
+        counts_per_turn_ > 0 ? x * counts_per_turn_ : std::ldexp(x, static_cast<int>(motor_.encoder_bits));
     if (std::isnan(v)) return 0;
     if (v >= 9.2e18) return std::numeric_limits<std::int64_t>::max();
     if (v <= -9.2e18) return std::numeric_limits<std::int64_t>::min();
-    return static_cast<std::int64_t>(v);
+    // floor(v): the conversion truncates (exactly, in this range), one less below a negative fraction.
+    const auto t = static_cast<std::int64_t>(v);
+    return static_cast<double>(t) > v ? t - 1 : t;
 }
 
 std::int64_t Mechanics::encoder() const {

@@ -39,10 +39,24 @@ constexpr std::array<TransitionRow, 14> kTable{{
 // Transition 16 (QUICK STOP ACTIVE -> OPERATION ENABLED) depends on the quick stop option code and
 // transition 15 (fault reset) on the fault being gone; update() handles both.
 
+// The table's row of each (state, command), or none: every servo period looks one up.
+constexpr std::size_t kStates = static_cast<std::size_t>(S::Fault) + 1;
+constexpr std::size_t kCommands = static_cast<std::size_t>(C::FaultReset) + 1;
+constexpr auto kRowOf = [] {
+    std::array<std::array<std::int8_t, kCommands>, kStates> at{};
+    for (auto& row : at)
+        row.fill(-1);
+    for (std::size_t i = kTable.size(); i-- > 0;)  // the first row of a pair wins, as in a scan
+        at[static_cast<std::size_t>(kTable[i].from)][static_cast<std::size_t>(kTable[i].command)] =
+            static_cast<std::int8_t>(i);
+    return at;
+}();
+
 const TransitionRow* find(State s, Command c) {
-    for (const auto& r : kTable)
-        if (r.from == s && r.command == c) return &r;
-    return nullptr;
+    const auto si = static_cast<std::size_t>(s), ci = static_cast<std::size_t>(c);
+    if (si >= kStates || ci >= kCommands) return nullptr;
+    const std::int8_t i = kRowOf[si][ci];
+    return i < 0 ? nullptr : &kTable[static_cast<std::size_t>(i)];
 }
 
 }  // namespace

@@ -33,6 +33,13 @@ TouchProbe::Latched TouchProbe::step(const Period& p, const FactorRatios& ratios
     Latched out;
     // HIWIN: probe 2 does not exist (its function bits are ignored, its status stays 0).
     const std::uint16_t fn = p.on_index_only ? static_cast<std::uint16_t>(p.function & 0x00FF) : p.function;
+    if (!(fn & (kEnable | kEnable << 8))) {
+        // Both disabled (as the loop below would leave them): no latch, status cleared.
+        status_ = 0;
+        previous_function_ = fn;
+        previous_inputs_ = p.inputs;
+        return out;
+    }
     for (int n = 0; n < 2; ++n) {
         const unsigned shift = 8u * static_cast<unsigned>(n);
         const std::uint16_t f = static_cast<std::uint16_t>(fn >> shift);
