@@ -10,7 +10,7 @@
 namespace vecat::io {
 
 std::size_t IoBus::add_output(std::string name, ChannelKind kind, unsigned channels) {
-    outputs_.push_back(Output{std::move(name), kind, channels, nullptr, {}});
+    outputs_.push_back(Output{std::move(name), kind, channels, nullptr, nullptr, {}});
     return outputs_.size() - 1;
 }
 
@@ -38,17 +38,23 @@ unsigned IoBus::add_point(std::size_t slot, ImagePoint p) {
 
 namespace {
 
-// The value of an entry in an image; 0 where the image is shorter.
-double point_value(const std::vector<std::uint8_t>& img, const ImagePoint& p) noexcept {
+// The value of bit_length bits from bit `from` of bytes, little-endian; sign-extended when the point is
+// signed.
+double bits_value(const std::uint8_t* bytes, std::uint32_t from, const ImagePoint& p) noexcept {
     std::uint64_t raw = 0;
     for (unsigned b = 0; b < p.bit_length; ++b) {
-        const std::uint32_t at = p.bit_offset + b;
-        if (at / 8 >= img.size()) return 0;
-        raw |= static_cast<std::uint64_t>((img[at / 8] >> (at % 8)) & 1u) << b;
+        const std::uint32_t at = from + b;
+        raw |= static_cast<std::uint64_t>((bytes[at / 8] >> (at % 8)) & 1u) << b;
     }
     if (p.is_signed && p.bit_length > 0 && ((raw >> (p.bit_length - 1)) & 1u))
         return static_cast<double>(static_cast<std::int64_t>(raw) - (std::int64_t{1} << p.bit_length));
     return static_cast<double>(raw);
+}
+
+// The value of an entry at its place in an image; 0 where the image is shorter.
+double point_value(const std::vector<std::uint8_t>& img, const ImagePoint& p) noexcept {
+    if (p.bit_length == 0 || (p.bit_offset + p.bit_length - 1) / 8 >= img.size()) return 0;
+    return bits_value(img.data(), p.bit_offset, p);
 }
 
 }  // namespace
@@ -58,7 +64,12 @@ double IoBus::output(std::size_t slot, unsigned channel) const noexcept {
     const Output& o = outputs_[slot];
     if (!o.image || channel >= o.channels) return 0;
     const std::vector<std::uint8_t>& img = *o.image;
-    if (o.kind == ChannelKind::Entries) return point_value(img, o.points[channel]);
+    if (o.kind == ChannelKind::Entries) {
+        // A device with a dictionary: the object, in OP (ObjectOutputs); else the place in the image.
+        if (o.objects && channel < o.objects->values.size() && o.objects->values[channel])
+            return o.objects->in_op ? bits_value(o.objects->values[channel], 0, o.points[channel]) : 0.0;
+        return point_value(img, o.points[channel]);
+    }
     if (o.kind == ChannelKind::Digital)
         return channel / 8 < img.size() ? static_cast<double>((img[channel / 8] >> (channel % 8)) & 1u) : 0.0;
     return 2 * channel + 1 < img.size()

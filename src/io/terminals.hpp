@@ -4,7 +4,8 @@
 // is cleared; a wire may also take an output PDO entry of a device of an ESI file or SII dump (OutputsOnBus).
 // The terminals of one network share an IoBus: the output images for the wires, resolved to
 // slots once when the network is built, and the forced inputs, which outlive a restart of their terminal.
-// Nothing on the cyclic path allocates or looks anything up by name.
+// Nothing on the cyclic path allocates or looks anything up by name: the objects a wire reads of a device
+// with a dictionary are found once, when its application is made.
 #pragma once
 
 #include <algorithm>
@@ -31,13 +32,29 @@ namespace vecat::io {
 // ESI file or SII dump, each channel one output PDO entry of its image (IoBus::add_point).
 enum class ChannelKind : std::uint8_t { Digital, Analog, Entries };
 
-// Where an output PDO entry is in a device's output image: bits [bit_offset, bit_offset + bit_length),
-// little-endian (ETG.1000.6 5.6.7.4.7: entries packed in mapping order), 1 to 32 bits; signed: an INTEGER
-// type, its value sign-extended.
+// An output PDO entry of a device: index:subindex, 1 to 32 bits; signed: an INTEGER type, its value
+// sign-extended. Its place in the device's output image in the default mapping: bits [bit_offset,
+// bit_offset + bit_length), little-endian (ETG.1000.6 5.6.7.4.7: entries packed in mapping order). A device
+// that holds its outputs as objects (a CoE dictionary) shows the object's value instead (ObjectOutputs).
 struct ImagePoint {
     std::uint32_t bit_offset = 0;
     std::uint8_t bit_length = 1;
     bool is_signed = false;
+    std::uint16_t index = 0;
+    std::uint8_t subindex = 0;
+};
+
+// The outputs of a device that holds them as objects (its RxPDOs are mapped into a dictionary, which a master
+// may remap): for each point of its Entries slot the object's value, wherever the master mapped it or if it
+// mapped it at all. Set up once when the application is made; the device's application owns it.
+struct ObjectOutputs {
+    // Point c's object value: its bytes, little-endian, the value from bit 0 (as a mapped entry is stored,
+    // coe::ProcessDataMap); nullptr: the device has no such object, the point's place in the image is read.
+    std::vector<const std::uint8_t*> values;
+    // In OP. Below OP the outputs are in their safe state (ETG.1000.6, the AL state machine: SAFEOP keeps
+    // them there): every point reads 0, whatever its object holds (an object no RxPDO maps keeps a value
+    // written by SDO).
+    bool in_op = false;
 };
 
 class IoBus {
@@ -49,14 +66,19 @@ class IoBus {
     std::size_t output_slot(std::string_view name) const;  // kNone when there is none
     // A point of the image of an Entries output slot: its channel (the same point given again: its channel).
     unsigned add_point(std::size_t slot, ImagePoint p);
-    // The output terminal of a slot shows its image there while it exists. A restarted terminal's new
-    // application publishes before the old one goes: withdrawing takes the image away only if it is still
-    // the one shown.
-    void publish(std::size_t slot, const std::vector<std::uint8_t>* image) {
+    const std::vector<ImagePoint>& points(std::size_t slot) const { return outputs_.at(slot).points; }
+    // The output terminal of a slot shows its image there while it exists, a device with a dictionary also
+    // its objects (objects: values for every point of the slot). A restarted terminal's new application
+    // publishes before the old one goes: withdrawing takes the image away only if it is still the one shown.
+    void publish(std::size_t slot, const std::vector<std::uint8_t>* image,
+                 const ObjectOutputs* objects = nullptr) {
         outputs_.at(slot).image = image;
+        outputs_[slot].objects = objects;
     }
     void withdraw(std::size_t slot, const std::vector<std::uint8_t>* image) {
-        if (outputs_.at(slot).image == image) outputs_[slot].image = nullptr;
+        if (outputs_.at(slot).image != image) return;
+        outputs_[slot].image = nullptr;
+        outputs_[slot].objects = nullptr;
     }
     // The state an output slot stands for, as a key of esc::Application::shared_state: its device writes
     // the image that wired inputs read, so they run on one firmware thread.
@@ -79,7 +101,8 @@ class IoBus {
         ChannelKind kind = ChannelKind::Digital;
         unsigned channels = 0;
         const std::vector<std::uint8_t>* image = nullptr;
-        std::vector<ImagePoint> points;  // Entries: channel c is points[c]
+        const ObjectOutputs* objects = nullptr;  // Entries of a device with a dictionary
+        std::vector<ImagePoint> points;          // Entries: channel c is points[c]
     };
     struct Input {
         std::string name;
@@ -144,18 +167,33 @@ class OutputTerminal final : public esc::ProcessImageApplication {
     std::size_t slot_;
 };
 
+// Where an application holds the value of an output PDO entry: its object's bytes (ObjectOutputs::values),
+// or nullptr when it has none. Called once per point when the application is made.
+template <class App>
+using ObjectLocator = const std::uint8_t* (*)(App& app, const ImagePoint& point);
+
 // The outputs of a device of an ESI file or SII dump on the bus, for wires (App: its application, a
 // coe::CoeApplication, a drive, a bare process image): after each exchange that applies outputs, the image
 // the master wrote (as long as the default mapping's image; a longer one is cut) is copied into a buffer made
-// once, which the bus shows; the safe state clears it. A subclass, so that whoever looks for the
-// application's own type (CoE faults, telemetry) still finds it.
+// once, which the bus shows; the safe state clears it. With a locator (a device with a CoE dictionary, filled
+// in by src/network, which may know src/coe) each point reads its object where the locator finds one, in OP:
+// the master may map the entry elsewhere or not at all (ETG.1000.6 5.6.7.4), the object is the output. A
+// subclass, so that whoever looks for the application's own type (CoE faults, telemetry) still finds it.
 template <class App>
 class OutputsOnBus final : public App {
   public:
     template <class... Args>
-    OutputsOnBus(std::shared_ptr<IoBus> bus, std::size_t slot, unsigned image_bytes, Args&&... args)
+    OutputsOnBus(std::shared_ptr<IoBus> bus, std::size_t slot, unsigned image_bytes,
+                 ObjectLocator<App> locate, Args&&... args)
         : App(std::forward<Args>(args)...), bus_(std::move(bus)), slot_(slot), image_(image_bytes, 0) {
-        bus_->publish(slot_, &image_);
+        bool any = false;
+        if (locate) {
+            for (const ImagePoint& p : bus_->points(slot_)) {
+                objects_.values.push_back(locate(*this, p));
+                any |= objects_.values.back() != nullptr;
+            }
+        }
+        bus_->publish(slot_, &image_, any ? &objects_ : nullptr);
     }
     ~OutputsOnBus() override { bus_->withdraw(slot_, &image_); }
     OutputsOnBus(const OutputsOnBus&) = delete;
@@ -168,6 +206,10 @@ class OutputsOnBus final : public App {
         App::outputs_safe_state();
         std::fill(image_.begin(), image_.end(), 0);
     }
+    void on_state_change(protocol::AlState from, protocol::AlState to) override {
+        App::on_state_change(from, to);
+        objects_.in_op = to == protocol::AlState::Op;
+    }
     // Wired inputs read its outputs: they run on one firmware thread with it.
     void shared_state(std::vector<const void*>& keys) const override {
         App::shared_state(keys);
@@ -178,6 +220,7 @@ class OutputsOnBus final : public App {
     std::shared_ptr<IoBus> bus_;
     std::size_t slot_;
     std::vector<std::uint8_t> image_;
+    ObjectOutputs objects_;
 };
 
 // The fault set_input slave=N channel=C value=V: the input reads V until the fault ends. Registered with the

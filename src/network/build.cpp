@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <fstream>
 #include <iterator>
+#include <type_traits>
 
 #include "cia402/drive.hpp"
 #include "coe/coe_application.hpp"
@@ -105,11 +106,25 @@ std::unique_ptr<esc::Application> process_image(const device::DeviceDescription&
     return std::make_unique<esc::ProcessImageApplication>(d.output_bytes(), d.input_bytes());
 }
 
-// An application of type App for a device description, its outputs on the bus when a wire takes them.
+// Where a CoE application holds an output PDO entry: the value of its object in the dictionary, which the
+// process data write wherever the master mapped the entry (coe::ProcessDataMap::copy_outputs) and an SDO
+// download where it mapped it nowhere. nullptr when the dictionary has no such entry or it is shorter than
+// the point (a wire then reads the entry's place in the image of the default mapping).
+template <class App>
+const std::uint8_t* object_value(App& app, const io::ImagePoint& p) {
+    coe::Entry* e = app.dictionary().find(p.index, p.subindex);
+    if (!e || e->capacity() * 8 < p.bit_length) return nullptr;
+    return e->storage().data();
+}
+
+// An application of type App for a device description, its outputs on the bus when a wire takes them: the
+// objects of a CoE application, the image of another.
 template <class App, class... Args>
 std::unique_ptr<App> make_app(const OutputTap& tap, const device::DeviceDescription& d, Args&&... args) {
     if (tap.slot == io::IoBus::kNone) return std::make_unique<App>(std::forward<Args>(args)...);
-    return std::make_unique<io::OutputsOnBus<App>>(tap.bus, tap.slot, d.output_bytes(),
+    io::ObjectLocator<App> locate = nullptr;
+    if constexpr (std::is_base_of_v<coe::CoeApplication, App>) locate = &object_value<App>;
+    return std::make_unique<io::OutputsOnBus<App>>(tap.bus, tap.slot, d.output_bytes(), locate,
                                                    std::forward<Args>(args)...);
 }
 
@@ -375,9 +390,10 @@ class WiredDrive final : public cia402::Drive, public io::ForceableInputs {
     std::size_t slot_;        // the output slot of its digital outputs (kNone: no wire takes them)
 };
 
-// The place of a wire's output in the image of a device of an ESI file or SII dump (docs/network-file.md):
-// channel N, its N-th one-bit output PDO entry; 0xINDEX:SUB, that output PDO entry (1 to 32 bits). Both in
-// the default mapping: the assigned RxPDOs in order, their entries packed (gaps count). Throws the line's
+// A wire's output of a device of an ESI file or SII dump (docs/network-file.md): channel N, its N-th one-bit
+// output PDO entry; 0xINDEX:SUB, that output PDO entry (1 to 32 bits). Both named in the default mapping
+// (the assigned RxPDOs in order, their entries packed, gaps count), which gives the entry's place in the
+// image; a device with a CoE dictionary shows the entry's object instead (make_app). Throws the line's
 // NetworkFileError (at: "FILE:LINE: NAME: ") when the device has no such output.
 io::ImagePoint wire_point(const device::DeviceDescription& d, const std::string& target, const io::Signal& s,
                           const std::string& at) {
@@ -393,9 +409,10 @@ io::ImagePoint wire_point(const device::DeviceDescription& d, const std::string&
                     throw NetworkFileError(
                         fmt::format("{}wire: {}: 0x{:04X}:{} has {} bits; a wire takes 1 to 32", at, target,
                                     e.index, e.subindex, e.bit_length));
-                return {offset, e.bit_length, protocol::is_signed(e.type)};
+                return {offset, e.bit_length, protocol::is_signed(e.type), e.index, e.subindex};
             }
-            if (real && !s.wire_entry && e.bit_length == 1 && bits++ == s.channel) return {offset, 1, false};
+            if (real && !s.wire_entry && e.bit_length == 1 && bits++ == s.channel)
+                return {offset, 1, false, e.index, e.subindex};
             if (real && mapped.size() < 8) mapped.push_back(fmt::format("0x{:04X}:{}", e.index, e.subindex));
             offset += e.bit_length;
         }
