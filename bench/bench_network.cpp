@@ -39,7 +39,7 @@ void BM_Network1000Cycle(benchmark::State& state) {
     if (state.range(0) == 2) {
         // The drives' RxPDO starts with the controlword, the mode and the target position; their TxPDO
         // with the statusword and the actual position (the vecat drive's default mapping).
-        for (const std::uint16_t cw : {0x06, 0x07, 0x0F})
+        for (const std::uint16_t cw : {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}})
             for (int c = 0; c < 10; ++c) {
                 for (std::size_t i = 0; i < m.slaves().size(); ++i) {
                     auto out = m.outputs(i);

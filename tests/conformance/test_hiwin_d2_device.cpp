@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <initializer_list>
 #include <map>
 #include <optional>
 
@@ -160,7 +161,8 @@ TEST(HiwinD2Device, Hiwin_3_5_And_3_6_ObjectsAsTheTablesGiveThem) {
         EXPECT_FLOAT_EQ(f, v);
     }
     // Objects of the vecat drive the D2 does not have.
-    for (std::uint16_t absent : {0x603F, 0x605A, 0x6067, 0x6077, 0x608F, 0x60BB, 0x2110, 0x2111})
+    for (std::uint16_t absent :
+         std::initializer_list<std::uint16_t>{0x603F, 0x605A, 0x6067, 0x6077, 0x608F, 0x60BB, 0x2110, 0x2111})
         EXPECT_EQ(abort_of(d.coe.upload(absent, 0)), 0x06020000u) << std::hex << absent;
 }
 
@@ -194,7 +196,8 @@ TEST(HiwinD2Device, Hiwin_7_DefaultLayout) {
     EXPECT_EQ(value_of(d.coe.upload(0x1A00, 2), false), 0x60640020);
     EXPECT_EQ(value_of(d.coe.upload(0x1A00, 3), false), 0x606C0020);
     // 0x1600-0x1602 and 0x1A00-0x1A03, six subindexes each (3.3).
-    for (std::uint16_t i : {0x1600, 0x1601, 0x1602, 0x1A00, 0x1A01, 0x1A02, 0x1A03})
+    for (std::uint16_t i :
+         std::initializer_list<std::uint16_t>{0x1600, 0x1601, 0x1602, 0x1A00, 0x1A01, 0x1A02, 0x1A03})
         EXPECT_TRUE(d.coe.upload(i, 6).ok()) << std::hex << i;
     EXPECT_EQ(abort_of(d.coe.upload(0x1603, 0)), 0x06020000u);
     EXPECT_EQ(abort_of(d.coe.upload(0x1A04, 0)), 0x06020000u);
@@ -304,9 +307,9 @@ TEST(HiwinD2Device, Hiwin_9_1_2_DcSetsTheInterpolationPeriodFromSync0) {
 // drive's 0x6098 is CiA 402's INT8.
 TEST(HiwinD2Device, Hiwin_9_4_BadInput_HomingMethods) {
     D2 d(AlState::PreOp);
-    for (std::uint16_t m : {0, 1, 2, 3, 4, 5, 6, 33, 34})
+    for (std::uint16_t m : std::initializer_list<std::uint16_t>{0, 1, 2, 3, 4, 5, 6, 33, 34})
         EXPECT_TRUE(d.coe.download_value<std::uint16_t>(0x6098, 0, m).ok()) << m;
-    for (std::uint16_t m : {7, 17, 35, 37, 0xFFFF})
+    for (std::uint16_t m : std::initializer_list<std::uint16_t>{7, 17, 35, 37, 0xFFFF})
         EXPECT_EQ(abort_of(d.coe.download_value<std::uint16_t>(0x6098, 0, m)), 0x06090030u) << m;
     EXPECT_EQ(abort_of(d.coe.download_value<std::int8_t>(0x6098, 0, 35)), 0x06070013u) << "CiA 402 format";
     D2 v(AlState::PreOp, device::default_drive());
@@ -422,7 +425,7 @@ struct D2InOp : ::testing::Test {
 // 9.4 through a master: each method homes, and afterwards 0x6064 reads 0 at the home position (offset 0):
 // the axis stands within what it braked past it. 0x2020 (3.7) shows the index touched.
 TEST_F(D2InOp, Hiwin_9_4_HomesWithEachMethod) {
-    for (std::uint16_t method : {1, 2, 3, 4, 5, 6, 33, 34}) {
+    for (std::uint16_t method : std::initializer_list<std::uint16_t>{1, 2, 3, 4, 5, 6, 33, 34}) {
         SCOPED_TRACE(method);
         if (method == 5 || method == 6) {
             // Start above the home switch dog (3 to 4 revolutions of the machine).
@@ -440,7 +443,7 @@ TEST_F(D2InOp, Hiwin_9_4_HomesWithEachMethod) {
                                                       {3, 2 * kRev + kRev / 4},   {4, 4 * kRev + kRev / 4},
                                                       {5, 4 * kRev + kRev / 4},   {6, 2 * kRev + kRev / 4}};
         if (expected.count(method))
-            EXPECT_NEAR(home_at, expected.at(method), 2);
+            EXPECT_NEAR(static_cast<double>(home_at), static_cast<double>(expected.at(method)), 2);
         else
             EXPECT_EQ(((home_at - kRev / 4) % kRev + kRev) % kRev, 0) << "33/34: on an index";
         EXPECT_EQ(value_of(d.coe.upload(0x2020, 0), true), 1) << "3.7: index touched";

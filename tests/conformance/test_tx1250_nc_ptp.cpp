@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <vector>
 
 #include "device/drive_objects.hpp"
@@ -195,7 +196,7 @@ TEST_F(Tx1250, Tx1250_2_2_OverrideTypesReferToTheReducedOrTheUserVelocity) {
     enable(Mode::ProfilePosition);
     io.parameters.velocity_override = 500'000;
     const double level = std::sqrt(20.0 * 0.1) * kRev;
-    for (std::uint8_t type : {1, 2, 3, 4}) {
+    for (std::uint8_t type : std::initializer_list<std::uint8_t>{1, 2, 3, 4}) {
         io.parameters.override_type = type;
         const std::int32_t from = io.feedback.position_actual;
         start_move(from + kRev / 10);
@@ -211,7 +212,7 @@ TEST_F(Tx1250, Tx1250_2_2_OverrideTypesReferToTheReducedOrTheUserVelocity) {
 // "a smaller optimal velocity level" above the old one.
 TEST_F(Tx1250, Tx1250_2_2_OverrideNotAchievableKeepsTheTableOrReducesTheLevel) {
     enable(Mode::ProfilePosition);
-    for (std::uint8_t type : {1, 2, 3, 4}) {
+    for (std::uint8_t type : std::initializer_list<std::uint8_t>{1, 2, 3, 4}) {
         io.parameters.override_type = type;
         io.parameters.velocity_override = 200'000;
         run_ms(1);

@@ -263,7 +263,9 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
     // Both threads count: the master's and the serve loop's (and the firmware's worker).
     EXPECT_EQ(locks, 0u);
     // Each frame writes the outputs of 20 drives: a batch of runs after it, for the worker too.
-    if (threads > 1) EXPECT_GT(firmware.items_on_workers(), on_workers_before);
+    if (threads > 1) {
+        EXPECT_GT(firmware.items_on_workers(), on_workers_before);
+    }
 }
 
 TEST(NoAllocation, RawSocketServeLoop) {
