@@ -1,6 +1,7 @@
 #include "cia402/mechanics.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -28,6 +29,11 @@ double h2(double x, double m) {
 
 double sign(double v) {
     return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0);
+}
+
+// The same bits (0.0 and -0.0 differ, a NaN equals itself).
+bool same(double a, double b) {
+    return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
 }
 
 }  // namespace
@@ -68,11 +74,20 @@ void Mechanics::derive() {
 }
 
 void Mechanics::set_gains(const ControlGains& g) {
+    if (!same(g.position_kp, gains_.position_kp) || !same(g.velocity_kp, gains_.velocity_kp) ||
+        !same(g.velocity_ti, gains_.velocity_ti) || !same(g.current_bandwidth, gains_.current_bandwidth))
+        fixed_ = false;
     gains_ = g;
     derive();
 }
 
 void Mechanics::command(LoopMode mode, double position, double velocity_ff, double torque_ff) {
+    if (mode != mode_ || !same(position, position_cmd_) || !same(velocity_ff, velocity_ff_) ||
+        !same(torque_ff, torque_ff_))
+        fixed_ = false;
+    const State x0 = x_;
+    const double cmd0 = current_cmd_, integral0 = integral_;
+    const bool limited0 = limited_;
     mode_ = mode;
     position_cmd_ = position;
     velocity_ff_ = velocity_ff;
@@ -83,14 +98,19 @@ void Mechanics::command(LoopMode mode, double position, double velocity_ff, doub
         x_.i = 0.0;
         limited_ = false;
     }
+    if (!same(x0.i, x_.i) || !same(cmd0, current_cmd_) || !same(integral0, integral_) || limited0 != limited_)
+        fixed_ = false;
 }
 
 void Mechanics::set_torque_limits(double positive, double negative) {
+    const double pos0 = limit_pos_, neg0 = limit_neg_;
     if (!std::isnan(positive)) limit_pos_ = std::abs(positive);
     if (!std::isnan(negative)) limit_neg_ = std::abs(negative);
+    if (!same(pos0, limit_pos_) || !same(neg0, limit_neg_)) fixed_ = false;
 }
 
 void Mechanics::set_load_torque(double nm) {
+    if (!same(nm, load_)) fixed_ = false;
     load_ = nm;
 }
 
@@ -130,9 +150,11 @@ std::int64_t Mechanics::encoder() const {
 void Mechanics::set_position(double rad) {
     x_.p = rad;
     last_count_ = encoder();
+    fixed_ = false;
 }
 
 void Mechanics::reset() {
+    fixed_ = false;
     x_ = {0.0, 0.0, 0.0};
     mode_ = LoopMode::Off;
     position_cmd_ = velocity_ff_ = torque_ff_ = 0.0;
@@ -146,12 +168,13 @@ void Mechanics::reset() {
 }
 
 void Mechanics::inject_encoder_fault(bool on) {
+    if (on != encoder_fault_) fixed_ = false;
     if (on && !encoder_fault_) frozen_count_ = count_of(x_.p);
     if (!on && encoder_fault_) last_count_ = count_of(x_.p);  // no velocity spike when it comes back
     encoder_fault_ = on;
 }
 
-void Mechanics::inject_overcurrent(bool on) {
+void Mechanics::inject_overcurrent(bool on) {  // (no part of a substep: overcurrent() reads it)
     overcurrent_injected_ = on;
 }
 
@@ -338,17 +361,32 @@ void Mechanics::step(double dt) {
         h_ = dt / n_;
         full_ = span(h_);
         cached_dt_ = dt;
+        fixed_ = false;
     }
     // A drive that the master is bringing up (INIT to SAFEOP) has its power stage off and the motor at rest:
     // then every substep leaves the state as it is, and none needs computing (the same result, bit for bit).
-    if (resting_unpowered()) return;
+    // So does a held motor once its substeps reached a fixed point.
+    if (fixed_ || resting_unpowered()) return;
     const double ir2 = motor_.rated_current * motor_.rated_current;
     const double den = (motor_.peak_current * motor_.peak_current - ir2) * motor_.peak_time;
     for (unsigned k = 0; k < n_; ++k) {
+        // (Only a motor at rest can stay where it is: the state is compared only then.)
+        const bool resting = x_.w == 0.0;
+        const State x0 = x_;
+        const double cmd0 = current_cmd_, integral0 = integral_, i2t0 = i2t_, h0 = last_h_;
+        const std::int64_t count0 = last_count_;
+        const bool limited0 = limited_;
         control(h_);
         const double i0 = x_.i;
         integrate(h_);
         if (den > 0.0) i2t_ = std::max(0.0, i2t_ + (0.5 * (i0 * i0 + x_.i * x_.i) - ir2) * h_ / den);
+        ++substeps_run_;
+        if (resting && same(x0.p, x_.p) && same(x0.w, x_.w) && same(x0.i, x_.i) && same(cmd0, current_cmd_) &&
+            same(integral0, integral_) && same(i2t0, i2t_) && same(h0, last_h_) && count0 == last_count_ &&
+            limited0 == limited_) {
+            fixed_ = true;  // the substeps left of this step, and of the next ones, change nothing either
+            return;
+        }
     }
 }
 

@@ -95,6 +95,10 @@ class Mechanics {
     // Thermal load of the I2t protection: integral of (i^2 - rated^2) / ((peak^2 - rated^2) peak_time),
     // never below 0. From cold it reaches 1 after peak_time at peak current, never at rated current.
     double i2t() const { return i2t_; }
+    // Substeps computed so far. A substep that leaves every member as it found it (a motor held at
+    // standstill, its current settled) is a fixed point: with the same inputs every further one is too, and
+    // step() skips them until an input changes (the result is the same, bit for bit).
+    std::uint64_t substeps_run() const { return substeps_run_; }
 
   private:
     struct State {
@@ -143,6 +147,11 @@ class Mechanics {
     bool limited_ = false;
     std::int64_t last_count_ = 0;
     double last_h_ = 0;  // length of the substep since last_count_ (0: no sample yet)
+
+    // The last substep was a fixed point for the inputs as they are now (see substeps_run); any change of
+    // an input (command, limits, load, gains, position, faults, the substep's length) clears it.
+    bool fixed_ = false;
+    std::uint64_t substeps_run_ = 0;
 
     bool encoder_fault_ = false;
     std::int64_t frozen_count_ = 0;

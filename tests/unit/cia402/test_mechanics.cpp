@@ -782,5 +782,91 @@ TEST(MechanicsUnpowered, AMotorSwitchedOffWhileTurningCoastsToRestAndStaysThere)
     EXPECT_NEAR(m.velocity(), 50.0, 1.0);
 }
 
+// ---------------------------------------------------------------------------------------------------
+// Mechanics: a substep that leaves every member as it found it is a fixed point; step() skips the ones
+// after it until an input changes. A twin that computes every substep (steps of one substep each, before
+// each of which set_gains with its own gains makes it compute) must show the same bits at every step,
+// through holds, a load within and then beyond the friction, a torque limit, every mode and an encoder
+// fault.
+
+void fixed_point_scenario(Mechanics& m, bool compute_all, std::vector<Snapshot>& trace) {
+    const double dt = 250e-6;
+    const auto steps = [&](int n) {
+        for (int k = 0; k < n; ++k) {
+            if (compute_all) {
+                // One substep per step, each computed (Mechanics::substeps: a step of 250 us is four of them,
+                // which give the same bits as four steps of 62.5 us).
+                for (int s = 0; s < 4; ++s) {
+                    m.set_gains(m.gains());
+                    m.step(dt / 4);
+                }
+            } else {
+                m.step(dt);
+            }
+            trace.push_back(snap(m));
+        }
+    };
+    m.command(LoopMode::Position, 0.0, 0, 0);  // held where it is
+    steps(400);
+    m.command(LoopMode::Position, 0.5, 0, 0);  // a move; near the target the integrator still creeps
+    steps(1000);
+    // Held where its encoder stands (as a drive told to hold its actual position is): no error left.
+    m.command(LoopMode::Position, static_cast<double>(m.encoder()) * std::ldexp(2 * pi, -20), 0, 0);
+    steps(2000);
+    m.set_load_torque(0.006);  // within the Coulomb friction (0.01 Nm): still held
+    steps(400);
+    m.set_load_torque(0.4);  // far beyond: the loop must carry it
+    steps(800);
+    m.set_torque_limits(0.05, 0.05);  // too weak to hold it
+    steps(400);
+    m.set_torque_limits(3.0, 3.0);
+    m.command(LoopMode::Velocity, 0, 0, 0);
+    steps(400);
+    m.set_load_torque(0.0);
+    m.command(LoopMode::Torque, 0, 0, 0.005);  // below the friction
+    steps(400);
+    m.command(LoopMode::Off, 0, 0, 0);
+    steps(400);
+    m.command(LoopMode::Position, m.position(), 0, 0);
+    steps(400);
+    m.inject_encoder_fault(true);
+    m.set_load_torque(0.02);
+    steps(200);
+    m.inject_encoder_fault(false);
+    steps(400);
+}
+
+TEST(MechanicsFixedPoint, SkippedSubstepsLeaveTheSameBitsAsComputedOnes) {
+    Mechanics skipping, computing;
+    std::vector<Snapshot> ts, tc;
+    fixed_point_scenario(skipping, false, ts);
+    fixed_point_scenario(computing, true, tc);
+    ASSERT_EQ(ts.size(), tc.size());
+    for (std::size_t k = 0; k < ts.size(); ++k) {
+        SCOPED_TRACE(k);
+        expect_identical(ts[k], tc[k]);
+        if (::testing::Test::HasFailure()) break;
+    }
+    EXPECT_TRUE(same_bits(skipping.i2t(), computing.i2t()));
+    // The scenario's holds without an error left: their substeps were skipped.
+    EXPECT_LT(skipping.substeps_run() * 3, computing.substeps_run() * 2)
+        << skipping.substeps_run() << " of " << computing.substeps_run();
+}
+
+// A held motor that a load beyond the friction then pulls: the skipping stops at once.
+TEST(MechanicsFixedPoint, AChangedInputEndsTheSkipping) {
+    Mechanics m;
+    m.command(LoopMode::Position, 0.0, 0, 0);
+    run(m, 250e-6, 100);
+    const std::uint64_t held = m.substeps_run();
+    run(m, 250e-6, 100);
+    EXPECT_EQ(m.substeps_run(), held);  // a fixed point: nothing computed
+    EXPECT_EQ(m.velocity(), 0.0);
+    m.set_load_torque(0.5);
+    run(m, 250e-6, 1);
+    EXPECT_GT(m.substeps_run(), held);
+    EXPECT_NE(m.velocity(), 0.0);
+}
+
 }  // namespace
 }  // namespace vecat::cia402
