@@ -1,5 +1,5 @@
 // The motor model (mechanics.hpp) against closed forms and its own invariants, one section per loop mode
-// and effect (about 780 lines: each section is small, and they share the helpers at the top).
+// and effect (about 870 lines: each section is small, and they share the helpers at the top).
 #include <gtest/gtest.h>
 #include "cia402/mechanics.hpp"
 
