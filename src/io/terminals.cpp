@@ -29,7 +29,9 @@ std::size_t IoBus::output_slot(std::string_view name) const {
 unsigned IoBus::add_point(std::size_t slot, ImagePoint p) {
     Output& o = outputs_.at(slot);
     for (std::size_t i = 0; i < o.points.size(); ++i)
-        if (o.points[i].bit_offset == p.bit_offset && o.points[i].bit_length == p.bit_length)
+        if (const ImagePoint& q = o.points[i];
+            q.in_image == p.in_image && q.bit_length == p.bit_length &&
+            (p.in_image ? q.bit_offset == p.bit_offset : q.index == p.index && q.subindex == p.subindex))
             return static_cast<unsigned>(i);
     o.points.push_back(p);
     o.channels = static_cast<unsigned>(o.points.size());
@@ -51,9 +53,9 @@ double bits_value(const std::uint8_t* bytes, std::uint32_t from, const ImagePoin
     return static_cast<double>(raw);
 }
 
-// The value of an entry at its place in an image; 0 where the image is shorter.
+// The value of an entry at its place in an image; 0 where the image is shorter or the entry has no place.
 double point_value(const std::vector<std::uint8_t>& img, const ImagePoint& p) noexcept {
-    if (p.bit_length == 0 || (p.bit_offset + p.bit_length - 1) / 8 >= img.size()) return 0;
+    if (!p.in_image || p.bit_length == 0 || (p.bit_offset + p.bit_length - 1) / 8 >= img.size()) return 0;
     return bits_value(img.data(), p.bit_offset, p);
 }
 

@@ -36,12 +36,15 @@ enum class ChannelKind : std::uint8_t { Digital, Analog, Entries };
 // sign-extended. Its place in the device's output image in the default mapping: bits [bit_offset,
 // bit_offset + bit_length), little-endian (ETG.1000.6 5.6.7.4.7: entries packed in mapping order). A device
 // that holds its outputs as objects (a CoE dictionary) shows the object's value instead (ObjectOutputs).
+// in_image false: an entry of an RxPDO the default assignment leaves out (a master may assign it by SDO); it
+// has no place in the image (bit_offset means nothing) and reads only its object, 0 where there is none.
 struct ImagePoint {
     std::uint32_t bit_offset = 0;
     std::uint8_t bit_length = 1;
     bool is_signed = false;
     std::uint16_t index = 0;
     std::uint8_t subindex = 0;
+    bool in_image = true;
 };
 
 // The outputs of a device that holds them as objects (its RxPDOs are mapped into a dictionary, which a master
@@ -49,7 +52,8 @@ struct ImagePoint {
 // mapped it at all. Set up once when the application is made; the device's application owns it.
 struct ObjectOutputs {
     // Point c's object value: its bytes, little-endian, the value from bit 0 (as a mapped entry is stored,
-    // coe::ProcessDataMap); nullptr: the device has no such object, the point's place in the image is read.
+    // coe::ProcessDataMap); nullptr: the device has no such object, the point's place in the image is read
+    // (0 for a point with no place in it).
     std::vector<const std::uint8_t*> values;
     // In OP. Below OP the outputs are in their safe state (ETG.1000.6, the AL state machine: SAFEOP keeps
     // them there): every point reads 0, whatever its object holds (an object no RxPDO maps keeps a value
