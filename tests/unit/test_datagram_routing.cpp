@@ -5,6 +5,7 @@
 // on and off, FMMUs configured and moved, in the same frame as the datagrams that use them.
 #include <gtest/gtest.h>
 
+#include <initializer_list>
 #include <random>
 #include <set>
 
@@ -90,7 +91,7 @@ Datagram random_datagram(std::mt19937& rng, bool indexed_only = false) {
         case Command::LRD:
         case Command::LWR:
         case Command::LRW: {
-            const std::uint32_t logical = 0x10000u + rng() % 48;
+            const auto logical = static_cast<std::uint32_t>(0x10000u + rng() % 48);
             d.adp = static_cast<std::uint16_t>(logical);
             d.ado = static_cast<std::uint16_t>(logical >> 16);
             return d;
@@ -165,7 +166,8 @@ void answers_as_if_every_esc_saw_every_datagram(bool indexed_only) {
         std::set<std::uint16_t> stations;
         for (std::size_t k = 0; k < kSlaves; ++k) {
             const esc::Esc& e = seg->slave(k).esc();
-            for (std::uint16_t r : {0x0010, 0x0012, 0x0100, 0x0103, 0x0130, 0x1000, 0x1008, 0x1010, 0x1018})
+            for (std::uint16_t r : std::initializer_list<std::uint16_t>{
+                     0x0010, 0x0012, 0x0100, 0x0103, 0x0130, 0x1000, 0x1008, 0x1010, 0x1018})
                 ASSERT_EQ(e.peek32(r), reference[k]->peek32(r))
                     << "frame " << n << " slave " << k << " " << r;
             const esc::Esc::Addressing x = e.addressing();

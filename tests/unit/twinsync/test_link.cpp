@@ -2,6 +2,8 @@
 // faults, and the slave's synchronisation controller.
 #include <gtest/gtest.h>
 
+#include <initializer_list>
+
 #include "twinsync/link.hpp"
 
 namespace vecat::twinsync {
@@ -43,7 +45,7 @@ TEST(TwinLink, FrameMustFitTheSamplingTime) {
 // Chapter 2: the TWIN sampling time is 250 us or 125 us, 125 us at 8 kHz (P0302 = 3).
 TEST(TwinLink, SamplingTimeIs125UsAt8kHzAnd250UsOtherwise) {
     EXPECT_EQ(sampling_time_ns(3), 125'000u);
-    for (std::uint8_t code : {0, 1, 2, 4, 5})
+    for (std::uint8_t code : std::initializer_list<std::uint8_t>{0, 1, 2, 4, 5})
         EXPECT_EQ(sampling_time_ns(code), 250'000u) << int{code};
     EXPECT_FALSE(sampling_time_ns(6));
     // The payload against the sampling time: a 32-byte frame (26 PDO bytes) takes 160 us at 2 MBaud, which
