@@ -3,6 +3,8 @@
 // tests run without ../shared.
 #include <gtest/gtest.h>
 
+#include <initializer_list>
+
 #include "common/bytes.hpp"
 #include "device/object_description.hpp"
 #include "replay/recover_mailbox.hpp"
@@ -159,7 +161,7 @@ TEST(RecoverMailbox, DownloadResponseEchoingTheRequestData) {
 // 0x02 after most of them is an ESC whose firmware writes each message at once.
 TEST(RecoverMailbox, Sm1OpenedAfterMostReadsIsTheQuirkMailboxOpenEarly) {
     const auto sm1_status = [](MailboxRecoverer& m, std::uint8_t st) { m.read(0x080D, &st, 1); };
-    for (const std::uint8_t after : {0x02, 0x80}) {
+    for (const std::uint8_t after : std::initializer_list<std::uint8_t>{0x02, 0x80}) {
         auto m = with_mailboxes();
         sm1_status(m, 0x80);  // not after a read: not counted
         sm1_status(m, 0x80);
