@@ -13,17 +13,6 @@ namespace {
 namespace cw = protocol::cia402::cw;
 namespace error_register = protocol::error_register;
 
-std::int32_t wrap32(std::int64_t v) {
-    return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
-}
-
-// floor() as a 64-bit integer, saturated: with absurd parameters the simulated machine can run away past
-// the 64-bit range, and converting such a double is undefined (found by the random-values test under UBSan).
-std::int64_t floor64(double v) {
-    if (!(v == v)) return 0;
-    return static_cast<std::int64_t>(std::floor(std::clamp(v, -9.2e18, 9.2e18)));
-}
-
 // std::lround for |v| < 2^52 without the library call (several per servo step): halves away from zero.
 // v - trunc(v) is exact, so the result is the same.
 double round_half_away(double v) {

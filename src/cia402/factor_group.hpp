@@ -5,6 +5,8 @@
 // Integer conversions are exact (128-bit intermediate products, rounded towards minus infinity).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <numbers>
 
@@ -50,5 +52,18 @@ struct FactorGroup {
     double radians_to_user(double rad) const;
     FactorRatios ratios() const;
 };
+
+// Positions as the drive's integer objects hold them. floor() as a 64-bit integer, saturated: with absurd
+// parameters the simulated machine can run away past the 64-bit range, and converting such a double is
+// undefined (found by the random-values test under UBSan).
+inline std::int64_t floor64(double v) {
+    if (!(v == v)) return 0;
+    return static_cast<std::int64_t>(std::floor(std::clamp(v, -9.2e18, 9.2e18)));
+}
+
+// The low 32 bits, as a position object such as 0x6064 or 0x60BA wraps around (two's complement).
+inline std::int32_t wrap32(std::int64_t v) {
+    return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
+}
 
 }  // namespace vecat::cia402

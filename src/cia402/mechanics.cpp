@@ -85,8 +85,7 @@ void Mechanics::command(LoopMode mode, double position, double velocity_ff, doub
     if (mode != mode_ || !same(position, position_cmd_) || !same(velocity_ff, velocity_ff_) ||
         !same(torque_ff, torque_ff_))
         fixed_ = false;
-    const State x0 = x_;
-    const double cmd0 = current_cmd_, integral0 = integral_;
+    const double i0 = x_.i, cmd0 = current_cmd_, integral0 = integral_;
     const bool limited0 = limited_;
     mode_ = mode;
     position_cmd_ = position;
@@ -98,7 +97,7 @@ void Mechanics::command(LoopMode mode, double position, double velocity_ff, doub
         x_.i = 0.0;
         limited_ = false;
     }
-    if (!same(x0.i, x_.i) || !same(cmd0, current_cmd_) || !same(integral0, integral_) || limited0 != limited_)
+    if (!same(i0, x_.i) || !same(cmd0, current_cmd_) || !same(integral0, integral_) || limited0 != limited_)
         fixed_ = false;
 }
 

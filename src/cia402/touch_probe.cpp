@@ -6,15 +6,6 @@
 namespace vecat::cia402 {
 namespace {
 
-// As the drive's: floor() as a saturated 64-bit integer, and the 32-bit wrap of 0x6064.
-std::int64_t floor64(double v) {
-    if (!(v == v)) return 0;
-    return static_cast<std::int64_t>(std::floor(std::clamp(v, -9.2e18, 9.2e18)));
-}
-std::int32_t wrap32(std::int64_t v) {
-    return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
-}
-
 // 0x60B8 bits of one probe, and its 0x60B9 status bits.
 constexpr std::uint16_t kEnable = 0x01, kContinuous = 0x02, kPositiveEdge = 0x10, kNegativeEdge = 0x20;
 constexpr std::uint16_t kEnabled = 0x01, kPositiveStored = 0x02, kNegativeStored = 0x04;

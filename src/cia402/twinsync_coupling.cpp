@@ -18,10 +18,6 @@ using twinsync::Setting;
 
 namespace {
 
-std::int32_t wrap32(std::int64_t v) {
-    return static_cast<std::int32_t>(static_cast<std::uint32_t>(static_cast<std::uint64_t>(v)));
-}
-
 // The MSD display numbers the DriveCom states from 1 in the order of CiA 402's (0 is its start-up).
 twinsync::DriveComState drivecom_state(State s) {
     static_assert(static_cast<int>(State::NotReadyToSwitchOn) + 1 ==
