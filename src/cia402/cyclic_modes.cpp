@@ -26,7 +26,7 @@ void CyclicPositionMode::step(Axis& a, double dt) {
         // A modulo axis (0x607B): the set-point is a position in the range, nearest to the demand.
         if (a.modulo()) to_ = a.modulo_nearest(to_, from_);
         raw_ = raw;
-        since_ = 0;
+        since_.restart();
         valid_ = true;
     }
     if (a.halted) {
@@ -36,8 +36,9 @@ void CyclicPositionMode::step(Axis& a, double dt) {
     }
     a.stopping = StopKind::None;
     const double period = a.interpolation_period();
-    since_ += dt;
-    const double frac = std::min(1.0, since_ / period);
+    since_.advance(true, dt);
+    // (min(1, since / period): a quotient of at least 1 is 1.)
+    const double frac = since_.at_least(period) ? 1.0 : since_.seconds() / period;
     double p = from_ + (to_ - from_) * frac;
     // The velocity feed-forward is the demand's own change over this servo period.
     double v = (p - a.demand.p) / dt;

@@ -19,12 +19,13 @@ class CyclicPositionMode final : public OperationMode {
     void disable() override { valid_ = false; }
     void step(Axis& a, double dt) override;
     ModeStatus status(const Axis& a, const StatusInputs& in) override;
+    HoldTimer& setpoint_timer() { return since_; }
 
   private:
     // Interpolation between the last two set-points.
     double from_ = 0, to_ = 0;
     std::int32_t raw_ = 0;
-    double since_ = 0;  // s since the latest set-point arrived
+    HoldTimer since_;  // since the latest set-point arrived
     bool valid_ = false;
 };
 

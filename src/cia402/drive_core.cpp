@@ -1,8 +1,12 @@
 #include "cia402/drive_core.hpp"
 
+#include "cia402/settled.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numbers>
+#include <utility>
 
 #include "protocol/coe.hpp"
 
@@ -38,10 +42,20 @@ std::int16_t sat16(double v) {
 
 }  // namespace
 
-DriveCore::DriveCore(const MotorParameters& motor) : mech_(motor, ControlGains{}) {
+DriveCore::DriveCore(const MotorParameters& motor)
+    : mech_(motor, ControlGains{}), settled_(std::make_unique<Settled>(*this)) {
     axis_.inertia = motor.rotor_inertia + motor.load_inertia;
 }
 
+DriveCore::~DriveCore() = default;
+
+void DriveCore::set_period_ns(std::uint64_t ns) {
+    wake();  // (the skipped periods' time at the period they were skipped at)
+    period_ns_ = ns > 0 ? ns : kPeriodNs;
+}
+
+// (A settled drive needs no wake() here: the fields set here come from the DriveIo's parameters alone, and
+// a period is skipped only while the DriveIo is as the settled period found it.)
 void DriveCore::configure(const DriveIo& io) {
     axis_.io = &io;
     const DriveParameters& p = io.parameters;
@@ -64,6 +78,8 @@ void DriveCore::configure(const DriveIo& io) {
 }
 
 void DriveCore::start(DriveIo& io) {
+    wake();
+    settled_->on = false;
     axis_.io = &io;
     update_inputs(io);
     write_feedback(io);
@@ -71,11 +87,34 @@ void DriveCore::start(DriveIo& io) {
 
 void DriveCore::step(DriveIo& io, bool publish) {
     const double dt = static_cast<double>(period_ns_) * 1e-9;
-    ++steps_;
     axis_.io = &io;
     DriveFeedback& fb = io.feedback;
     fb.raised.reset();
     fb.cleared = fb.probe = fb.twinsync = false;
+    // A settled drive skips the period, unless it works out the TWINsync values (below).
+    Settled& settled = *settled_;
+    bool check = false;
+    if (settled.on) {
+        const bool same = (!settled.touched || settled.same_core(*this)) && settled.same_io(io);
+        if (same) settled.touched = false;
+        if (same && !io.twinsync.active && (steps_ + 1) % 16 != 0) {
+            ++steps_;
+            ++settled.pending;
+            ++settled.skipped;
+            // The temperature goes on towards its steady value (the only value of a settled period that may
+            // still change).
+            heat(io.parameters, dt);
+            if (publish) fb.temperature = sat16(temperature_);
+            return;
+        }
+        settled.on = false;
+        check = same;
+    }
+    catch_up_skipped();
+    // A period that publishes its feedback may settle (not one that leaves an older feedback in the DriveIo).
+    check = check || (publish && settled.enabled && settled.worth_checking(fb));
+    if (check) settled.take(*this, io);
+    ++steps_;
 
     axis_.controlword = coupling_.controlword(io.command.controlword, io.twinsync, sm_.state());
     update_inputs(io);
@@ -111,9 +150,15 @@ void DriveCore::step(DriveIo& io, bool publish) {
         fb.twinsync_values = coupling_.values(axis_, mech_, machine_increments(), active_fault_, io.twinsync);
     }
     axis_.previous_controlword = axis_.controlword;
+    if (check) {
+        settled.on = settled.settled(*this, io);
+        settled.touched = !settled.on;
+        if (!settled.on) settled.failed();
+    }
 }
 
 void DriveCore::compensate(double distance, double length, const CompensationLimits& limits) {
+    wake();
     // 0 = the move's own dynamics: VK = V, AK+ = A+, AK- = A-, VP = the cruise velocity of the move.
     const ProfileLimits move = axis_.profile_limits();
     CompensationLimits c = limits;
@@ -125,11 +170,13 @@ void DriveCore::compensate(double distance, double length, const CompensationLim
 }
 
 void DriveCore::stop_compensation() {
+    wake();
     // The move ends at its target plus what the compensation will have travelled.
     if (axis_.profile.stop_compensation() && pp_.moving()) pp_.set_target(axis_.profile.target());
 }
 
 void DriveCore::zero_position() {
+    wake();
     const double shift = -axis_.actual;
     axis_.home_shift += shift;
     axis_.actual = 0;
@@ -187,14 +234,11 @@ void DriveCore::check_faults(DriveIo& io, double dt) {
     // Following error (position loop): window 0xFFFFFFFF switches the monitoring off.
     const std::uint32_t window = p.following_error_window;
     const double timeout = p.following_error_timeout * 1e-3;
-    if (axis_.loop == LoopMode::Position && window != 0xFFFFFFFFu &&
-        std::abs(axis_.following_error) > window) {
-        axis_.following_error_time += dt;
-        if (axis_.following_error_time > timeout)
-            raise(io, {fault::FollowingError, error_register::DeviceProfile});
-    } else {
-        axis_.following_error_time = 0;
-    }
+    const bool outside =
+        axis_.loop == LoopMode::Position && window != 0xFFFFFFFFu && std::abs(axis_.following_error) > window;
+    axis_.following_error_time.advance(outside, dt);
+    if (outside && axis_.following_error_time.more_than(timeout))
+        raise(io, {fault::FollowingError, error_register::DeviceProfile});
     // Limit switch with reaction "fault".
     if (p.limit_switch_reaction == 1 && sm_.drive_enabled() && mode_ != Mode::Homing &&
         (axis_.negative_limit || axis_.positive_limit))
@@ -425,6 +469,13 @@ void DriveCore::run_touch_probe(DriveIo& io, double previous_inc, double machine
     io.feedback.probe = true;
 }
 
+// Drive temperature: 35 C plus a rise with the square of the current.
+void DriveCore::heat(const DriveParameters& p, double dt) {
+    const double rated_a = std::max<double>(p.rated_current, 1.0) * 1e-3;
+    const double i_rel = mech_.current() / rated_a;
+    temperature_ += (350.0 + 300.0 * i_rel * i_rel - temperature_) * dt / 60.0;
+}
+
 void DriveCore::write_feedback(DriveIo& io, bool publish) {
     const DriveParameters& p = io.parameters;
     DriveFeedback& fb = io.feedback;
@@ -437,11 +488,11 @@ void DriveCore::write_feedback(DriveIo& io, bool publish) {
     StatusInputs in;
     in.dt = dt;
     in.standing = std::abs(axis_.velocity) <= axis_.standstill_velocity;
-    speed_zero_time_ = in.standing ? speed_zero_time_ + dt : 0.0;
-    in.speed_zero_time = speed_zero_time_;
+    speed_zero_.advance(in.standing, dt);
+    in.speed_zero = &speed_zero_;
     const std::uint32_t fe_window = p.following_error_window;
     in.following_error = fe_window != 0xFFFFFFFFu && std::abs(axis_.following_error) > fe_window &&
-                         axis_.following_error_time > p.following_error_timeout * 1e-3;
+                         axis_.following_error_time.more_than(p.following_error_timeout * 1e-3);
     ModeStatus ms;
     if (enabled) {
         if (active_) ms = active_->status(axis_, in);
@@ -455,11 +506,9 @@ void DriveCore::write_feedback(DriveIo& io, bool publish) {
     if (ms.bit13) status |= sw::Bit13;
     // HIWIN 9.4: "accuracy compensation initiated" after homing (bit 15, manufacturer specific).
     if (mode_ == Mode::Homing && hm_.compensated()) status |= kAccuracyCompensation;
-    const double rated_a = std::max<double>(p.rated_current, 1.0) * 1e-3;
-    // Drive temperature: 35 C plus a rise with the square of the current.
-    const double i_rel = mech_.current() / rated_a;
-    temperature_ += (350.0 + 300.0 * i_rel * i_rel - temperature_) * dt / 60.0;
+    heat(p, dt);
     if (!publish) return;
+    const double rated_a = std::max<double>(p.rated_current, 1.0) * 1e-3;
     const bool limit_switch = axis_.positive_limit || axis_.negative_limit;
     if (axis_.internal_limit || limit_switch) status |= sw::InternalLimit;
     if (limit_switch || (enabled && mech_.torque_limited())) status |= sw::Warning;

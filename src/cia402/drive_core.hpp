@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 
 #include "cia402/cyclic_modes.hpp"
 #include "cia402/drive_io.hpp"
@@ -34,6 +35,7 @@ class DriveCore {
     static constexpr std::uint64_t kPeriodNs = Axis::kPeriodNs;
 
     explicit DriveCore(const MotorParameters& motor);
+    ~DriveCore();
     DriveCore(const DriveCore&) = delete;
     DriveCore& operator=(const DriveCore&) = delete;
 
@@ -46,10 +48,13 @@ class DriveCore {
     // last one's values asks for them in the last. The period's events (faults raised and cleared, probe
     // latches, the TWINsync values) and the state behind the values (the status bits' timers, the
     // temperature) are the same either way, so the last period's values are too.
+    //
+    // A period that finds the core and the DriveIo as a settled period left them is skipped: it would do
+    // the same again (drive_core.cpp, "Settled"). The results are the same bits either way.
     void step(DriveIo& io, bool publish = true);
     // The servo period, the speed control's sampling time (the TWIN sampling time of P0302 on a drive
     // with the TWINsync parameters: 250 us, 125 us at 8 kHz). kPeriodNs until set.
-    void set_period_ns(std::uint64_t ns) { period_ns_ = ns > 0 ? ns : kPeriodNs; }
+    void set_period_ns(std::uint64_t ns);
     std::uint64_t period_ns() const { return period_ns_; }
 
     // Position compensation 0x2111 (TwinCAT NC PTP 2.5): the move ends at its target plus the achievable
@@ -67,11 +72,17 @@ class DriveCore {
     double position_actual() const { return axis_.actual; }
     double velocity_actual() const { return axis_.velocity; }
     std::uint64_t steps() const { return steps_; }
+    // Of those, the periods skipped because the drive had settled (for tests and benchmarks).
+    std::uint64_t skipped_steps() const;
+    // Off: every period runs (a test's twin to compare the skipping with).
+    void skip_settled_periods(bool on);
     std::optional<twinsync::ErrorId> twinsync_error() const { return coupling_.error(); }
     // The drive's state for the TWINsync port (before and after a period).
     twinsync::LocalState twinsync_local(std::uint16_t own_controlword, bool synchronised) const;
 
   private:
+    void catch_up_skipped();  // the hold timers' time of the periods skipped while settled
+    void wake();              // before a public method changes the core: catch up, compare its bytes again
     void update_inputs(DriveIo& io);
     void check_faults(DriveIo& io, double dt);
     void raise(DriveIo& io, const RaisedFault& f);
@@ -86,6 +97,7 @@ class DriveCore {
     void run_mechanics(const DriveIo& io, double dt);
     void run_touch_probe(DriveIo& io, double previous_inc, double machine_inc);
     void write_feedback(DriveIo& io, bool publish = true);
+    void heat(const DriveParameters& p, double dt);  // the drive temperature, one period
     double machine_increments() const;  // motor position in encoder increments (homing does not move it)
     double user_to_rad(double user) const { return axis_.ratios.user_to_radians(user - axis_.home_shift); }
 
@@ -119,9 +131,15 @@ class DriveCore {
     // The actual values are measured: false from an encoder fault (0x7305) until the fault reset.
     bool encoder_valid_ = true;
     std::uint8_t probe_inputs_ = 0;
-    double speed_zero_time_ = 0;
+    HoldTimer speed_zero_;        // standing (0x6070)
     double temperature_ = 350.0;  // 0.1 C
     std::uint16_t active_fault_ = 0;
+
+    // The fixed point of a settled drive and the periods skipped at it (drive_core.cpp).
+    class Settled;
+    std::array<HoldTimer*, 5> timers_{&speed_zero_, &axis_.following_error_time, &pp_.window_timer(),
+                                      &pv_.window_timer(), &csp_.setpoint_timer()};
+    std::unique_ptr<Settled> settled_;
 };
 
 }  // namespace vecat::cia402

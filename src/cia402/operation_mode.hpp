@@ -18,6 +18,49 @@
 
 namespace vecat::cia402 {
 
+// How long a condition has held, advanced by the servo periods: the window times of the statusword (0x6068,
+// 0x606E, 0x6070), the following error timeout (0x6066), the time since the last cyclic set-point. It is
+// read as "at least" or "more than" a time, and once such a read says yes it says yes as the time grows.
+//
+// That is what lets DriveCore skip the periods of a settled drive (drive_core.hpp, "Settled"): a timer that
+// runs does not stop the drive from settling as long as every read of the period said yes. The skipped
+// periods' time is added afterwards (catch_up), period by period as the steps would have added it.
+class HoldTimer {
+  public:
+    // Once per period of the timer's owner, before its reads.
+    void advance(bool held, double dt) {
+        t_ = held ? t_ + dt : 0.0;
+        running_ = held;
+    }
+    // The condition starts to hold anew (an advance follows in the same period).
+    void restart() { t_ = 0.0; }
+    bool at_least(double s) { return noted(t_ >= s); }
+    bool more_than(double s) { return noted(t_ > s); }
+
+    // For DriveCore's settled check: the period starts (no advance, no read yet).
+    void begin_period() { running_ = said_no_ = false; }
+    // The timer does not hold a period back from being a fixed point: it did not change, or it runs and
+    // every read said yes.
+    bool settled(double before) const { return running_ ? !said_no_ : t_ == before; }
+    double seconds() const { return t_; }
+    bool running() const { return running_; }
+    // Add the time of `periods` skipped periods in which it ran (the same sum as those periods' advances;
+    // DriveCore catches up once per advance, so these are a few).
+    void catch_up(std::uint64_t periods, double dt) {
+        for (; periods > 0; --periods)
+            t_ += dt;
+    }
+
+  private:
+    bool noted(bool yes) {
+        said_no_ = said_no_ || !yes;
+        return yes;
+    }
+    double t_ = 0;  // s
+    bool running_ = false;
+    bool said_no_ = false;
+};
+
 class Axis {
   public:
     static constexpr std::uint64_t kPeriodNs = 250'000;  // the servo period
@@ -47,8 +90,8 @@ class Axis {
     double velocity = 0;
     double home_shift = 0;  // user position = machine position (converted) + home_shift
     bool negative_limit = false, positive_limit = false, home_switch = false;
-    double following_error = 0;       // demand - actual (position loop)
-    double following_error_time = 0;  // s outside the window 0x6065
+    double following_error = 0;      // demand - actual (position loop)
+    HoldTimer following_error_time;  // outside the window 0x6065
 
     // The demand the loops follow.
     ProfileGenerator profile;
@@ -116,9 +159,9 @@ struct ModeStatus {
 
 // What the statusword of every mode may use, computed once per period by DriveCore.
 struct StatusInputs {
-    bool standing = false;         // |velocity| at most the threshold 0x606F
-    double speed_zero_time = 0;    // s standing
-    bool following_error = false;  // the following error exceeded 0x6065 for longer than 0x6066
+    bool standing = false;            // |velocity| at most the threshold 0x606F
+    HoldTimer* speed_zero = nullptr;  // standing
+    bool following_error = false;     // the following error exceeded 0x6065 for longer than 0x6066
     double dt = Axis::kPeriod;
 };
 

@@ -159,11 +159,11 @@ void ProfilePositionMode::step(Axis& a, double dt) {
 
 ModeStatus ProfilePositionMode::status(const Axis& a, const StatusInputs& in) {
     const bool in_window = std::abs(target_ - a.actual) <= a.par().position_window;
-    position_window_time_ = (in_window && !moving_ && a.profile.done()) ? position_window_time_ + in.dt : 0.0;
+    position_window_time_.advance(in_window && !moving_ && a.profile.done(), in.dt);
     ModeStatus s;
     s.target_reached = a.halted ? (in.standing && a.profile.done())
                                 : !moving_ && !pending_target_ &&
-                                      position_window_time_ >= a.par().position_window_time * 1e-3;
+                                      position_window_time_.at_least(a.par().position_window_time * 1e-3);
     s.bit12 = setpoint_ack_;       // set-point acknowledge
     s.bit13 = in.following_error;  // following error
     return s;
@@ -204,10 +204,11 @@ void ProfileVelocityMode::step(Axis& a, double dt) {
 ModeStatus ProfileVelocityMode::status(const Axis& a, const StatusInputs& in) {
     const double target = a.cmd().target_velocity;
     const bool in_window = std::abs(target - a.velocity) <= a.par().velocity_window;
-    velocity_window_time_ = in_window ? velocity_window_time_ + in.dt : 0.0;
+    velocity_window_time_.advance(in_window, in.dt);
     ModeStatus s;
-    s.target_reached = a.halted ? in.standing : velocity_window_time_ >= a.par().velocity_window_time * 1e-3;
-    s.bit12 = in.speed_zero_time >= a.par().velocity_threshold_time * 1e-3;  // speed zero
+    s.target_reached =
+        a.halted ? in.standing : velocity_window_time_.at_least(a.par().velocity_window_time * 1e-3);
+    s.bit12 = in.speed_zero && in.speed_zero->at_least(a.par().velocity_threshold_time * 1e-3);  // speed zero
     return s;
 }
 

@@ -19,6 +19,7 @@ class ProfilePositionMode final : public OperationMode {
     void disable() override;
     void step(Axis& a, double dt) override;
     ModeStatus status(const Axis& a, const StatusInputs& in) override;
+    HoldTimer& window_timer() { return position_window_time_; }  // 0x6068
 
     // A move is under way (position compensation 0x2111 then moves its target).
     bool moving() const { return moving_; }
@@ -37,7 +38,7 @@ class ProfilePositionMode final : public OperationMode {
     std::optional<double> pending_target_;  // set of set-points: the buffered next target
     bool moving_ = false;
     double target_ = 0;  // kept across modes: a relative move adds to the last target
-    double position_window_time_ = 0;
+    HoldTimer position_window_time_;
     std::optional<double> velocity_;  // the move's velocity instead of 0x6081 (TX1250 2.4: VNew)
     // TX1250 2.4 case 1: VNew once the axis crosses APos moving in direction activation_dir_.
     std::optional<double> activation_;
@@ -53,11 +54,12 @@ class ProfileVelocityMode final : public OperationMode {
     void disable() override { running_ = false; }
     void step(Axis& a, double dt) override;
     ModeStatus status(const Axis& a, const StatusInputs& in) override;
+    HoldTimer& window_timer() { return velocity_window_time_; }  // 0x606E
 
   private:
     double target_ = 0;
     bool running_ = false;
-    double velocity_window_time_ = 0;
+    HoldTimer velocity_window_time_;
 };
 
 // Profile torque (PT, mode 4): target torque 0x6071 reached at the torque slope 0x6087; bit 10 when the
