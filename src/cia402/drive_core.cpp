@@ -102,8 +102,12 @@ void DriveCore::step(DriveIo& io, bool publish) {
             ++settled.pending;
             ++settled.skipped;
             // The temperature goes on towards its steady value (the only value of a settled period that may
-            // still change).
-            heat(io.parameters, dt);
+            // still change); once a period left it as it was, so do the next.
+            if (!settled.temperature_steady) {
+                const double before = temperature_;
+                heat(io.parameters, dt);
+                settled.temperature_steady = temperature_ == before;
+            }
             if (publish) fb.temperature = sat16(temperature_);
             return;
         }
@@ -111,9 +115,15 @@ void DriveCore::step(DriveIo& io, bool publish) {
         check = same;
     }
     catch_up_skipped();
-    // A period that publishes its feedback may settle (not one that leaves an older feedback in the DriveIo).
-    check = check || (publish && settled.enabled && settled.worth_checking(fb));
-    if (check) settled.take(*this, io);
+    settled.temperature_steady = false;
+    if (check) {
+        settled.begin_timers(*this);  // the bytes are the settled period's: compared again after this one
+    } else if (publish && settled.enabled && settled.worth_checking(fb)) {
+        // A period that publishes its feedback may settle (not one that leaves an older feedback in the
+        // DriveIo).
+        check = true;
+        settled.take(*this, io);
+    }
     ++steps_;
 
     axis_.controlword = coupling_.controlword(io.command.controlword, io.twinsync, sm_.state());

@@ -36,6 +36,10 @@ DriveCore::Settled::Settled(const DriveCore& core) {
 void DriveCore::Settled::take(const DriveCore& core, const DriveIo& io) {
     std::memcpy(core_.data(), bytes(core), core_.size());
     std::memcpy(io_.data(), bytes(io), io_.size());
+    begin_timers(core);
+}
+
+void DriveCore::Settled::begin_timers(const DriveCore& core) {
     for (std::size_t i = 0; i < kTimers; ++i) {
         core.timers_[i]->begin_period();
         timer_before_[i] = core.timers_[i]->seconds();

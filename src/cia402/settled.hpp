@@ -35,8 +35,10 @@ class DriveCore::Settled {
   public:
     explicit Settled(const DriveCore& core);
 
-    // Before a period that may settle: the core and the DriveIo it finds.
+    // Before a period that may settle: the core and the DriveIo it finds, and the hold timers' time
+    // (begin_timers alone: before a period that finds the settled bytes).
     void take(const DriveCore& core, const DriveIo& io);
+    void begin_timers(const DriveCore& core);
     // The core and the DriveIo as the settled period found them (the period's flags reset, DriveCore::step);
     // the DriveIo all but the temperature shown, which a skipped period updates.
     bool same_core(const DriveCore& core) const;
@@ -56,11 +58,12 @@ class DriveCore::Settled {
     }
     void failed() { backoff_ = kBackoff; }
 
-    bool enabled = true;        // skip_settled_periods
-    bool on = false;            // the last period that ran settled
-    bool touched = true;        // a public method ran since the core's bytes were last found the same
-    std::uint64_t pending = 0;  // periods skipped since the hold timers caught up
-    std::uint64_t skipped = 0;  // periods skipped in all
+    bool enabled = true;              // skip_settled_periods
+    bool on = false;                  // the last period that ran settled
+    bool touched = true;              // a public method ran since the core's bytes were last found the same
+    bool temperature_steady = false;  // a skipped period left the temperature as it was
+    std::uint64_t pending = 0;        // periods skipped since the hold timers caught up
+    std::uint64_t skipped = 0;        // periods skipped in all
 
   private:
     static constexpr unsigned kBackoff = 16;
