@@ -17,10 +17,17 @@ namespace {
 namespace cw = protocol::cia402::cw;
 namespace error_register = protocol::error_register;
 
-// std::lround for |v| < 2^52 without the library call (several per servo step): halves away from zero.
-// v - trunc(v) is exact, so the result is the same.
+// std::trunc without the library call: exact through int64 for |v| < 2^52; larger values (and the
+// infinities, NaN) are integral already. A zero result may lose its sign: every caller makes an integer of
+// it.
+double trunc_to_integral(double v) {
+    return std::abs(v) < 0x1p52 ? static_cast<double>(static_cast<std::int64_t>(v)) : v;
+}
+
+// std::lround without the library call (several per servo step): halves away from zero. v - trunc(v) is
+// exact, so the result is the same.
 double round_half_away(double v) {
-    double r = std::trunc(v);
+    double r = trunc_to_integral(v);
     const double frac = v - r;
     if (frac >= 0.5)
         r += 1.0;
@@ -114,7 +121,7 @@ void DriveCore::step(DriveIo& io, bool publish) {
         settled.on = false;
         check = same;
     }
-    catch_up_skipped();
+    if (settled.pending != 0) catch_up_skipped();
     settled.temperature_steady = false;
     if (check) {
         settled.begin_timers(*this);  // the bytes are the settled period's: compared again after this one
@@ -530,7 +537,7 @@ void DriveCore::write_feedback(DriveIo& io, bool publish) {
     fb.position_demand =
         axis_.modulo() ? wrap32(axis_.wrap_position(floor64(round_half_away(d.p)))) : sat32(d.p);
     fb.position_demand_internal = wrap32(
-        axis_.ratios.user_to_increments(static_cast<std::int64_t>(std::llround(d.p - axis_.home_shift))));
+        axis_.ratios.user_to_increments(static_cast<std::int64_t>(round_half_away(d.p - axis_.home_shift))));
     fb.position_internal = wrap32(increments_);
     fb.position_actual = wrap32(axis_.wrap_position(floor64(axis_.actual)));
     fb.following_error = sat32(axis_.following_error);
