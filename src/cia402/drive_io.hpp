@@ -262,7 +262,7 @@ struct DriveIo {
     DriveParameters parameters;
     DriveCommand command;
     TwinsyncInputs twinsync;
-    DriveFeedback feedback;
+    DriveFeedback feedback;  // written by the core only (its settled periods rely on it, settled.hpp)
 };
 
 }  // namespace vecat::cia402

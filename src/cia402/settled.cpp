@@ -12,6 +12,11 @@ const unsigned char* bytes(const T& t) {
     return reinterpret_cast<const unsigned char*>(&t);
 }
 
+// The DriveIo's inputs: everything before the feedback, which only the core writes.
+std::size_t inputs_size(const DriveIo& io) {
+    return static_cast<std::size_t>(bytes(io.feedback) - bytes(io));
+}
+
 }  // namespace
 
 DriveCore::Settled::Settled(const DriveCore& core) {
@@ -35,7 +40,7 @@ DriveCore::Settled::Settled(const DriveCore& core) {
 
 void DriveCore::Settled::take(const DriveCore& core, const DriveIo& io) {
     std::memcpy(core_.data(), bytes(core), core_.size());
-    std::memcpy(io_.data(), bytes(io), io_.size());
+    std::memcpy(io_.data(), bytes(io), inputs_size(io));
     begin_timers(core);
 }
 
@@ -54,27 +59,17 @@ bool DriveCore::Settled::same_core(const DriveCore& core) const {
 }
 
 bool DriveCore::Settled::same_io(const DriveIo& io) const {
-    const unsigned char* d = bytes(io);
-    const auto t = static_cast<std::size_t>(bytes(io.feedback.temperature) - d);
-    const std::size_t after = t + sizeof(io.feedback.temperature);
-    return std::memcmp(d, io_.data(), t) == 0 &&
-           std::memcmp(d + after, io_.data() + after, io_.size() - after) == 0;
+    return std::memcmp(bytes(io), io_.data(), inputs_size(io)) == 0;
 }
 
-bool DriveCore::Settled::settled(const DriveCore& core, DriveIo& io) const {
-    DriveFeedback& fb = io.feedback;
+bool DriveCore::Settled::settled(const DriveCore& core, const DriveIo& io) const {
+    const DriveFeedback& fb = io.feedback;
     if (fb.raised || fb.cleared) return false;
     for (const auto& edges : fb.probe_latched.set)
         if (edges[0] || edges[1]) return false;
     for (std::size_t i = 0; i < kTimers; ++i)
         if (!core.timers_[i]->settled(timer_before_[i])) return false;
-    // The flags every period sets (the probe status, the TWINsync values) are not state.
-    const bool probe = fb.probe, twinsync = fb.twinsync;
-    fb.probe = fb.twinsync = false;
-    const bool same = same_core(core) && same_io(io);
-    fb.probe = probe;
-    fb.twinsync = twinsync;
-    return same;
+    return same_core(core) && same_io(io);
 }
 
 std::uint64_t DriveCore::skipped_steps() const {

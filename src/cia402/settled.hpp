@@ -1,12 +1,12 @@
 // The periods of a settled drive: DriveCore skips the servo periods of a drive at a fixed point.
 //
-// The core is a function of its own bytes and the DriveIo's: it reads no clock and no global. A period that
-// leaves both as it found them is a fixed point, and so is every later period that finds them the same
-// again: a drive holding its position with its motor settled (Mechanics skips those substeps already), a
-// disabled drive at rest. Settled keeps the bytes of such a period, and DriveCore skips the periods that
-// find them. The DriveIo is compared byte for byte at every period; the core's bytes after a public method
-// ran (wake), since nothing else changes them between periods: an SDO hook that called compensate(), a new
-// servo period.
+// The core is a function of its own bytes and the DriveIo's inputs (parameters, command, TWINsync inputs;
+// the feedback is its output): it reads no clock and no global. A period that leaves the core's bytes as it
+// found them is a fixed point, and so is every later period that finds them and the same inputs again: a
+// drive holding its position with its motor settled (Mechanics skips those substeps already), a disabled
+// drive at rest. Settled keeps the bytes of such a period, and DriveCore skips the periods that find them.
+// The inputs are compared byte for byte at every period; the core's bytes after a public method ran (wake),
+// since nothing else changes them between periods: an SDO hook that called compensate(), a new servo period.
 //
 // Three things may still change at a fixed point and are left out of the comparison:
 // - the period count (steps_);
@@ -39,12 +39,12 @@ class DriveCore::Settled {
     // (begin_timers alone: before a period that finds the settled bytes).
     void take(const DriveCore& core, const DriveIo& io);
     void begin_timers(const DriveCore& core);
-    // The core and the DriveIo as the settled period found them (the period's flags reset, DriveCore::step);
-    // the DriveIo all but the temperature shown, which a skipped period updates.
+    // The core and the DriveIo's inputs as the settled period found them. (The feedback is the core's: a
+    // skipped period leaves the settled period's, with the temperature it updates.)
     bool same_core(const DriveCore& core) const;
     bool same_io(const DriveIo& io) const;
     // After the period that take() saw begin: was it a fixed point?
-    bool settled(const DriveCore& core, DriveIo& io) const;
+    bool settled(const DriveCore& core, const DriveIo& io) const;
     // Worth a check, at the end of a batch of periods: the feedback says the drive stands. A check that
     // fails waits a few batches before the next (a motor held by its static friction stands for seconds
     // while the velocity loop's integrator winds, without settling).
