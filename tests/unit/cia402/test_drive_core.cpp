@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "cia402/drive_core.hpp"
+#include "drive_core_test_io.hpp"
 #include "protocol/cia402.hpp"
 #include "twinsync/mapping.hpp"
 #include "twinsync/telegram.hpp"
@@ -19,14 +20,7 @@ struct DriveCoreTest : ::testing::Test {
     DriveIo io;
     DriveCore core{MotorParameters{}};
     void SetUp() override {
-        io.parameters.profile_velocity = 1u << 20;
-        io.parameters.profile_acceleration = 10u << 20;
-        io.parameters.profile_deceleration = 10u << 20;
-        io.parameters.position_window = 100;
-        // 0x607D as the vecat drive has it (0/0: off). Absent, the core clamps positions to 0, as the
-        // adapter always did for a dictionary without the object (drive_io.hpp).
-        io.parameters.software_limit_min = 0;
-        io.parameters.software_limit_max = 0;
+        set_test_profile(io);
         core.configure(io);
         core.start(io);
     }
