@@ -8,6 +8,7 @@
 #include <numbers>
 #include <utility>
 
+#include "common/rounding.hpp"
 #include "protocol/coe.hpp"
 
 namespace vecat::cia402 {
@@ -16,25 +17,6 @@ namespace {
 
 namespace cw = protocol::cia402::cw;
 namespace error_register = protocol::error_register;
-
-// std::trunc without the library call: exact through int64 for |v| < 2^52; larger values (and the
-// infinities, NaN) are integral already. A zero result may lose its sign: every caller makes an integer of
-// it.
-double trunc_to_integral(double v) {
-    return std::abs(v) < 0x1p52 ? static_cast<double>(static_cast<std::int64_t>(v)) : v;
-}
-
-// std::lround without the library call (several per servo step): halves away from zero. v - trunc(v) is
-// exact, so the result is the same.
-double round_half_away(double v) {
-    double r = trunc_to_integral(v);
-    const double frac = v - r;
-    if (frac >= 0.5)
-        r += 1.0;
-    else if (frac <= -0.5)
-        r -= 1.0;
-    return r;
-}
 
 std::int32_t sat32(double v) {
     if (!(v == v)) return 0;

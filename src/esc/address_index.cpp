@@ -40,11 +40,15 @@ void AddressIndex::logical(std::uint64_t first_bit, std::uint64_t last_bit,
     // walk stops where no span before reaches it (max_last_bit), so disjoint spans in order cost one more.
     auto end = std::upper_bound(by_first_bit_.begin(), by_first_bit_.end(), last_bit,
                                 [](std::uint64_t bit, const Span& s) { return bit < s.first_bit; });
+    const std::size_t from = out.size();
     for (auto it = end; it != by_first_bit_.begin();) {
         --it;
         if (it->max_last_bit < first_bit) break;
         if (it->last_bit >= first_bit) out.push_back(it->slave);
     }
+    // In the order of the logical addresses: on a line mapped in its order, the slaves' order (which spares
+    // the caller its sort).
+    std::reverse(out.begin() + static_cast<std::ptrdiff_t>(from), out.end());
 }
 
 }  // namespace vecat::esc

@@ -24,7 +24,8 @@ class AddressIndex {
 
     // Appends the slaves whose station address, or enabled alias, is adp (each once).
     void fixed(std::uint16_t adp, std::vector<std::uint32_t>& out) const;
-    // Appends the slaves whose FMMUs' logical range overlaps [first_bit, last_bit] (each once).
+    // Appends the slaves whose FMMUs' logical range overlaps [first_bit, last_bit] (each once), in the order
+    // of their ranges' first bits.
     void logical(std::uint64_t first_bit, std::uint64_t last_bit, std::vector<std::uint32_t>& out) const;
 
   private:

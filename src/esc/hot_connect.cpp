@@ -94,6 +94,7 @@ bool Segment::move_group(std::size_t head, std::size_t parent, unsigned port, st
     permute(cable_up_);
     permute(halted_);
     permute(last_run_ns_);
+    marks_valid_ = false;  // marked_ names the old places
     permute(deadline_ns_);
     permute(pulse_ns_);
     permute(cycle_ns_);

@@ -155,7 +155,7 @@ bool Segment::process_ring(Bytes frame, std::size_t& len, std::uint64_t now_ns, 
             Esc& esc = slaves_[k]->esc();
             for (std::size_t i = 0; i < pf.count; ++i)
                 esc.process(pf.datagram(frame, i), t);
-            if (esc.take_firmware_work()) last_run_ns_[k] = 0;  // its firmware runs below
+            if (esc.take_firmware_work()) mark_for_run(k);  // its firmware runs below
         }
         if (defer_firmware_) {
             firmware_due_ = true;

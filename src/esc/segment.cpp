@@ -38,6 +38,10 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     pulse_ns_.push_back(0);
     cycle_ns_.push_back(0);
     picked_.push_back(0);
+    picked_list_.reserve(slaves_.size());
+    marked_.reserve(slaves_.size());
+    marks_valid_ = false;
+    earliest_deadline_ns_ = 0;
     latched_.push_back(0);
     // A line: port 0 of the new slave to port 1 of the one before.
     parent_.push_back(static_cast<int>(i) - 1);
@@ -243,6 +247,7 @@ void Segment::set_firmware_halted(std::size_t i, bool halted) {
     if (i >= halted_.size()) return;
     halted_[i] = halted ? 1 : 0;
     deadline_ns_[i] = 0;
+    earliest_deadline_ns_ = 0;
     pulse_ns_[i] = 0;
     cycle_ns_[i] = 0;
 }
@@ -258,6 +263,7 @@ bool Segment::restart_slave(std::size_t i) {
     auto fresh = std::make_unique<Slave>(model, cfg, factory(*model.description));
     slaves_[i] = std::move(fresh);
     deadline_ns_[i] = 0;
+    earliest_deadline_ns_ = 0;
     pulse_ns_[i] = 0;
     cycle_ns_[i] = 0;
     ++slaves_epoch_;

@@ -230,6 +230,9 @@ class Segment {
     FirmwareThreads* threads_ = nullptr;
     std::vector<std::uint8_t> picked_;  // per slave: runs in the batch being made
     std::size_t picked_count_ = 0;
+    // The slaves picked, in the order they were (capacity: one per slave): a batch of a few slaves on a long
+    // line does not look at every slave.
+    std::vector<std::uint32_t> picked_list_;
     std::uint64_t batch_now_ns_ = 0;
     std::uint64_t grouped_epoch_ = ~std::uint64_t{0};  // slaves_epoch_ when the groups were made
     std::vector<std::uint32_t> group_of_;              // per slave
@@ -314,6 +317,18 @@ class Segment {
     // of the slaves it addressed only; the others catch up before a frame reads them (catch_up) or at their
     // deadlines, so a cycle of several frames does not run every slave once per frame.
     std::vector<std::uint64_t> last_run_ns_;
+    // The slaves a frame marked (last_run_ns_ 0) since the last run_due_firmware, so that it and the catch-up
+    // before a frame need not look at every slave; marks_valid_ false: look at every slave (after a move of
+    // the slaves, or more marks than the capacity, one per slave, holds). An entry may have run since.
+    void mark_for_run(std::size_t k);
+    std::vector<std::uint32_t> marked_;
+    bool marks_valid_ = false;
+    // No slave's last run is later than this (a run at an earlier time than a slave's last, as a test's clock
+    // may do, is looked for among every slave).
+    std::uint64_t latest_run_ns_ = 0;
+    // No slave's deadline (deadline_ns_) is earlier than this: until then, the catch-up before a frame has no
+    // deadline to look for.
+    std::uint64_t earliest_deadline_ns_ = 0;
     // Per slave: its earliest deadline as of its last run (Slave::next_event_ns); 0: run it before the next
     // frame. A frame that moves a deadline earlier (a shorter watchdog) addresses the slave, which then runs
     // after the frame and looks again.

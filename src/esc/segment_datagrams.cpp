@@ -2,6 +2,7 @@
 // passes them (Segment::process_datagrams): the addressing table of every ESC, and its index (AddressIndex)
 // for frames of configured-address and logical datagrams only.
 #include <algorithm>
+#include <functional>
 
 #include "esc/segment.hpp"
 #include "protocol/frame.hpp"
@@ -34,6 +35,10 @@ bool Segment::find_candidates(const ParsedFrame& pf, std::size_t intact) {
     // twice the line's length when it is made unique whenever it grows past the length (no allocation once
     // the line had this many slaves).
     const auto in_order = [&] {
+        // (Strictly rising already, the usual case: a line's process image mapped in the line's order.)
+        if (std::adjacent_find(candidates_.begin(), candidates_.end(), std::greater_equal<>()) ==
+            candidates_.end())
+            return;
         std::sort(candidates_.begin(), candidates_.end());
         candidates_.erase(std::unique(candidates_.begin(), candidates_.end()), candidates_.end());
     };
@@ -202,7 +207,7 @@ void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t 
             if (i == latch_pos && took) latched_[k] = 1;
         }
         // Marks the slave for its firmware run (0: run now) if the frame gave it work.
-        if (esc && esc->take_firmware_work()) last_run_ns_[k] = 0;
+        if (esc && esc->take_firmware_work()) mark_for_run(k);
     };
     std::uint16_t position = 0;
     if (indexed) {

@@ -30,10 +30,27 @@ void Segment::deliver_coupled_pulses(std::uint64_t now_ns) {
     }
 }
 
+void Segment::mark_for_run(std::size_t k) {
+    if (last_run_ns_[k] == 0) return;  // marked already (or never run: marks_valid_ is false then)
+    last_run_ns_[k] = 0;
+    if (marked_.size() < slaves_.size())
+        marked_.push_back(static_cast<std::uint32_t>(k));
+    else
+        marks_valid_ = false;
+}
+
 void Segment::run_due_firmware(std::uint64_t now_ns) {
     deliver_coupled_pulses(now_ns);
-    for (std::size_t k = 0; k < slaves_.size(); ++k)
-        if (last_run_ns_[k] == 0 || now_ns < last_run_ns_[k]) pick(k);
+    if (marks_valid_ && now_ns >= latest_run_ns_) {
+        for (const std::uint32_t k : marked_)
+            if (last_run_ns_[k] == 0) pick(k);
+    } else {
+        for (std::size_t k = 0; k < slaves_.size(); ++k)
+            if (last_run_ns_[k] == 0 || now_ns < last_run_ns_[k]) pick(k);
+    }
+    // Every marked slave runs now.
+    marked_.clear();
+    marks_valid_ = true;
     run_picked(now_ns);
 }
 
@@ -94,8 +111,20 @@ void Segment::catch_up(std::uint64_t now_ns) {
 
 void Segment::catch_up_deadlines(std::uint64_t now_ns) {
     deliver_coupled_pulses(now_ns);
-    for (std::size_t k = 0; k < slaves_.size(); ++k)
-        if (deadline_due(k, now_ns)) pick(k);
+    if (marks_valid_ && now_ns >= latest_run_ns_ && now_ns < earliest_deadline_ns_) {
+        // No deadline is due: the marked slaves only.
+        for (const std::uint32_t k : marked_)
+            if (last_run_ns_[k] == 0) pick(k);
+    } else {
+        // The earliest deadline of the slaves that do not run now (those that do fold theirs in as they run).
+        std::uint64_t earliest = DistributedClock::kNever;
+        for (std::size_t k = 0; k < slaves_.size(); ++k)
+            if (deadline_due(k, now_ns))
+                pick(k);
+            else
+                earliest = std::min(earliest, deadline_ns_[k]);
+        earliest_deadline_ns_ = earliest;
+    }
     run_picked(now_ns);
 }
 
@@ -119,32 +148,41 @@ void Segment::pick(std::size_t k) {
     if (picked_[k]) return;
     picked_[k] = 1;
     ++picked_count_;
+    picked_list_.push_back(static_cast<std::uint32_t>(k));  // capacity: one per slave (add)
 }
 
 void Segment::run_picked(std::uint64_t now_ns) {
     if (picked_count_ == 0) return;
+    // In the slaves' order (slaves that share state run in order). Picked in order, mostly.
+    if (!std::is_sorted(picked_list_.begin(), picked_list_.end()))
+        std::sort(picked_list_.begin(), picked_list_.end());
+    latest_run_ns_ = std::max(latest_run_ns_, now_ns == 0 ? 1 : now_ns);
     if (!threads_ || threads_->threads() < 2 || picked_count_ < kMinParallelRuns) {
-        for (std::size_t k = 0; k < slaves_.size(); ++k)
-            if (picked_[k]) {
-                picked_[k] = 0;
-                run(k, now_ns);
-            }
+        for (const std::uint32_t k : picked_list_) {
+            picked_[k] = 0;
+            run(k, now_ns);
+            earliest_deadline_ns_ = std::min(earliest_deadline_ns_, deadline_ns_[k]);
+        }
+        picked_list_.clear();
         picked_count_ = 0;
         return;
     }
     if (grouped_epoch_ != slaves_epoch_) refresh_groups();
     ++batch_serial_;
     batch_groups_.clear();
-    for (std::size_t k = 0; k < slaves_.size(); ++k)
-        if (picked_[k]) {
-            const std::uint32_t g = group_of_[k];
-            if (group_batch_[g] != batch_serial_) {
-                group_batch_[g] = batch_serial_;
-                batch_groups_.push_back(g);  // capacity: one per group (refresh_groups)
-            }
+    for (const std::uint32_t k : picked_list_) {
+        const std::uint32_t g = group_of_[k];
+        if (group_batch_[g] != batch_serial_) {
+            group_batch_[g] = batch_serial_;
+            batch_groups_.push_back(g);  // capacity: one per group (refresh_groups)
         }
+    }
     batch_now_ns_ = now_ns;
     threads_->run(batch_groups_.size(), &Segment::run_group, this);
+    // The deadlines the workers set.
+    for (const std::uint32_t k : picked_list_)
+        earliest_deadline_ns_ = std::min(earliest_deadline_ns_, deadline_ns_[k]);
+    picked_list_.clear();
     counters_.firmware_runs += picked_count_;
     picked_count_ = 0;
 }

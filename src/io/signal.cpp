@@ -13,18 +13,22 @@ namespace vecat::io {
 
 double value_at(const Signal& s, std::uint64_t t_ns) noexcept {
     const std::uint64_t t = t_ns + s.phase_ns;
-    const std::uint64_t period = s.period_ns ? s.period_ns : 1;
-    const double phase = static_cast<double>(t % period) / static_cast<double>(period);  // [0, 1)
+    // Where in its period the signal is, [0, 1) (only the periodic kinds ask: a terminal's every channel
+    // asks at every exchange).
+    const auto phase = [&] {
+        const std::uint64_t period = s.period_ns ? s.period_ns : 1;
+        return static_cast<double>(t % period) / static_cast<double>(period);
+    };
     switch (s.kind) {
         case SignalKind::Constant:
         case SignalKind::Wire:
             return s.value;
         case SignalKind::Square:
-            return phase < 0.5 ? s.low : s.high;
+            return phase() < 0.5 ? s.low : s.high;
         case SignalKind::Sine:
-            return s.offset + s.amplitude * std::sin(2 * std::numbers::pi * phase);
+            return s.offset + s.amplitude * std::sin(2 * std::numbers::pi * phase());
         case SignalKind::Ramp:
-            return s.from + (s.to - s.from) * phase;
+            return s.from + (s.to - s.from) * phase();
         case SignalKind::Table: {
             if (s.table.empty()) return 0;
             const std::uint64_t at = s.period_ns ? t % s.period_ns : t;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "common/bytes.hpp"
+#include "common/rounding.hpp"
 #include "esc/segment.hpp"
 
 namespace vecat::io {
@@ -133,7 +134,7 @@ void InputTerminal::exchange(std::uint64_t now_ns, ConstBytes outputs, bool appl
             img[c / 8] = static_cast<std::uint8_t>(v > 0.5 ? img[c / 8] | bit : img[c / 8] & ~bit);
         } else {
             if (2 * c + 1 >= img.size()) break;
-            const double r = std::isfinite(v) ? std::clamp(std::round(v), -32768.0, 32767.0) : 0.0;
+            const double r = std::isfinite(v) ? round_half_away(std::clamp(v, -32768.0, 32767.0)) : 0.0;
             st_le16(&img[2 * c], static_cast<std::uint16_t>(static_cast<std::int16_t>(r)));
         }
     }

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "device/simple_devices.hpp"
+#include "esc/address_index.hpp"
 #include "esc/segment.hpp"
 #include "protocol/frame.hpp"
 #include "test_support.hpp"
@@ -210,4 +211,25 @@ TEST(DatagramRouting, AnAutoIncrementDatagramLeavesWithTheAddressCountedUpByEver
                      {0, 0}, kNow);
     EXPECT_EQ(r.wkc, 0);
     EXPECT_EQ(r.adp, static_cast<std::uint16_t>(kSlaves - 9));
+}
+
+TEST(DatagramRouting, TheIndexNamesTheSlavesOfALogicalRangeInTheOrderOfTheirRanges) {
+    // Slaves 0..3 mapped at bits 0-7, 8-15, 16-23 and 24-31; slave 4 (no FMMU) not at all; slave 5 overlaps
+    // slave 1 and 2.
+    std::vector<esc::Esc::Addressing> table(6);
+    for (std::uint64_t k = 0; k < 4; ++k) {
+        table[k].log_first_bit = 8 * k;
+        table[k].log_last_bit = 8 * k + 7;
+    }
+    table[5].log_first_bit = 12;
+    table[5].log_last_bit = 19;
+    esc::AddressIndex index;
+    index.rebuild(table);
+    std::vector<std::uint32_t> out{99};  // appends
+    index.logical(8, 31, out);
+    EXPECT_EQ(out, (std::vector<std::uint32_t>{99, 1, 5, 2, 3}));
+    out.clear();
+    index.logical(0, 7, out);
+    index.logical(20, 20, out);
+    EXPECT_EQ(out, (std::vector<std::uint32_t>{0, 2}));
 }
