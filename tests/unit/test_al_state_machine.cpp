@@ -2,6 +2,8 @@
 // configuration checks and their AL status codes, the watchdog.
 #include <gtest/gtest.h>
 
+#include <array>
+
 #include "protocol/cia402_objects.hpp"
 #include "test_support.hpp"
 
@@ -186,6 +188,25 @@ TEST(AlStateMachine, ProcessDataWatchdogDropsToSafeOp) {
     EXPECT_EQ(b.slave().status_code(), AlStatusCode::SyncManagerWatchdog);
     EXPECT_EQ(controlword.get<std::uint16_t>(), 0);  // safe state
     EXPECT_EQ(b.escx().peek(0x0440) & 1, 0);
+    EXPECT_EQ(b.escx().peek(0x0442), 1);
+}
+
+// The watchdog expires at its time, also when no tick ran since and the next frame only writes: the slave
+// catches up with its deadline before that frame retriggers the watchdog (Segment::catch_up_deadlines).
+TEST(AlStateMachine, AWatchdogDueBeforeAWriteOnlyFrameExpiresBeforeTheFrameRetriggersIt) {
+    Bench b(1);
+    reach(b, S::Op);
+    b.master.outputs(0)[0] = 0x0F;
+    b.master.exchange_process_data();
+    ASSERT_EQ(b.slave().state(), S::Op);
+    // 150 ms later (100 ms default watchdog), no tick in between: a frame writes SM2's buffer only.
+    b.now += 150'000'000;
+    b.link.set_time(b.now);
+    const std::uint16_t sm2 = ld_le16(std::array{b.escx().peek(0x0810), b.escx().peek(0x0811)}.data());
+    std::vector<std::uint8_t> outputs(b.master.outputs(0).begin(), b.master.outputs(0).end());
+    ASSERT_EQ(b.master.fpwr(b.master.slaves()[0].station, sm2, outputs).value(), 1);
+    EXPECT_EQ(b.slave().state(), S::SafeOp);
+    EXPECT_EQ(b.slave().status_code(), AlStatusCode::SyncManagerWatchdog);
     EXPECT_EQ(b.escx().peek(0x0442), 1);
 }
 
