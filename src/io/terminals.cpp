@@ -85,12 +85,14 @@ void IoBus::force(std::size_t slot, unsigned channel, double v) {
     in.value.at(channel) = v;
     if (!in.forced.at(channel)) ++forced_channels_;
     in.forced[channel] = 1;
+    ++forcing_changes_;
 }
 
 void IoBus::release(std::size_t slot, unsigned channel) {
     if (slot < inputs_.size() && channel < inputs_[slot].forced.size() && inputs_[slot].forced[channel]) {
         inputs_[slot].forced[channel] = 0;
         --forced_channels_;
+        ++forcing_changes_;
     }
 }
 
@@ -107,36 +109,54 @@ InputTerminal::InputTerminal(unsigned output_bytes, unsigned input_bytes, Channe
       kind_(kind),
       sources_(std::move(sources)),
       bus_(std::move(bus)),
-      slot_(slot) {}
+      slot_(slot) {
+    for (unsigned c = 0; c < sources_.size(); ++c) {
+        const InputSource& s = sources_[c];
+        const bool constant = s.signal.kind == SignalKind::Constant || s.signal.kind == SignalKind::Wire;
+        if (s.wire_slot != IoBus::kNone || !constant) changing_.push_back(c);
+    }
+}
 
 void InputTerminal::shared_state(std::vector<const void*>& keys) const {
     for (const InputSource& s : sources_)
         if (s.wire_slot != IoBus::kNone) keys.push_back(bus_->output_key(s.wire_slot));
 }
 
+void InputTerminal::put(unsigned c, double v, std::vector<std::uint8_t>& img) const {
+    if (kind_ == ChannelKind::Digital) {
+        if (c / 8 >= img.size()) return;
+        const auto bit = static_cast<std::uint8_t>(1u << (c % 8));
+        img[c / 8] = static_cast<std::uint8_t>(v > 0.5 ? img[c / 8] | bit : img[c / 8] & ~bit);
+    } else {
+        if (2 * c + 1 >= img.size()) return;
+        const double r = std::isfinite(v) ? round_half_away(std::clamp(v, -32768.0, 32767.0)) : 0.0;
+        st_le16(&img[2 * c], static_cast<std::uint16_t>(static_cast<std::int16_t>(r)));
+    }
+}
+
 void InputTerminal::exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes in) {
-    if (!started_) {
+    const bool first = !started_;
+    if (first) {
         started_ = true;
         origin_ns_ = now_ns;
     }
     const std::uint64_t t = now_ns >= origin_ns_ ? now_ns - origin_ns_ : 0;
     std::vector<std::uint8_t>& img = inputs();
-    const bool any_forced = bus_->any_forced();
-    for (unsigned c = 0; c < sources_.size(); ++c) {
+    const auto source_value = [&](unsigned c) {
         const InputSource& s = sources_[c];
-        double v = 0;
-        if (!any_forced || !bus_->forced(slot_, c, v))
-            v = s.wire_slot != IoBus::kNone ? bus_->output(s.wire_slot, s.signal.channel)
-                                            : value_at(s.signal, t);
-        if (kind_ == ChannelKind::Digital) {
-            if (c / 8 >= img.size()) break;
-            const auto bit = static_cast<std::uint8_t>(1u << (c % 8));
-            img[c / 8] = static_cast<std::uint8_t>(v > 0.5 ? img[c / 8] | bit : img[c / 8] & ~bit);
-        } else {
-            if (2 * c + 1 >= img.size()) break;
-            const double r = std::isfinite(v) ? round_half_away(std::clamp(v, -32768.0, 32767.0)) : 0.0;
-            st_le16(&img[2 * c], static_cast<std::uint16_t>(static_cast<std::int16_t>(r)));
+        return s.wire_slot != IoBus::kNone ? bus_->output(s.wire_slot, s.signal.channel)
+                                           : value_at(s.signal, t);
+    };
+    if (first || bus_->any_forced() || bus_->forcing_changes() != forcing_seen_) {
+        forcing_seen_ = bus_->forcing_changes();
+        for (unsigned c = 0; c < sources_.size(); ++c) {
+            double v = 0;
+            if (!bus_->forced(slot_, c, v)) v = source_value(c);
+            put(c, v, img);
         }
+    } else {
+        for (const unsigned c : changing_)
+            put(c, source_value(c), img);
     }
     ProcessImageApplication::exchange(now_ns, outputs, apply, in);
 }

@@ -98,6 +98,9 @@ class IoBus {
     bool forced(std::size_t slot, unsigned channel, double& v) const noexcept;
     // Whether any input channel of the bus is forced (a cheap test before looking at each channel).
     bool any_forced() const noexcept { return forced_channels_ != 0; }
+    // Counts every force and release (a terminal that saw the same count needs no look at its channels that
+    // do not change with time).
+    std::uint64_t forcing_changes() const noexcept { return forcing_changes_; }
 
   private:
     struct Output {
@@ -116,6 +119,7 @@ class IoBus {
     std::vector<Output> outputs_;
     std::vector<Input> inputs_;
     std::size_t forced_channels_ = 0;
+    std::uint64_t forcing_changes_ = 0;
 };
 
 // What one input channel reads when it is not forced.
@@ -152,6 +156,11 @@ class InputTerminal final : public esc::ProcessImageApplication, public Forceabl
     std::size_t slot_;
     bool started_ = false;
     std::uint64_t origin_ns_ = 0;
+    // The channels whose value changes with time (a wire, a periodic signal, a table): the others are written
+    // into the image at the first exchange and after a force or release only.
+    std::vector<unsigned> changing_;
+    std::uint64_t forcing_seen_ = 0;
+    void put(unsigned c, double v, std::vector<std::uint8_t>& img) const;
 };
 
 class OutputTerminal final : public esc::ProcessImageApplication {

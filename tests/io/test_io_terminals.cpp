@@ -198,6 +198,19 @@ TEST(IoTerminals, AnInputForcedThroughTheControlSocketUntilTheFaultIsCleared) {
     EXPECT_EQ(l.inj.execute("clear f", l.now).rfind("ok", 0), 0u);
     l.settle();
     EXPECT_EQ(l.digital() & 0x04, 0);
+    EXPECT_EQ(l.analog(0), -32768);
+    // With nothing forced any more, a constant input forced and released: it reads its constant again (the
+    // channels that do not change with time are written again after a release only).
+    EXPECT_EQ(l.inj.execute("clear g", l.now).rfind("ok", 0), 0u);
+    l.settle();
+    EXPECT_NE(l.analog(0), -32768);
+    EXPECT_EQ(l.digital() & 0x08, 0x08);
+    EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=3 value=0 id=h", l.now).rfind("ok", 0), 0u);
+    l.settle();
+    EXPECT_EQ(l.digital() & 0x08, 0);
+    EXPECT_EQ(l.inj.execute("clear h", l.now).rfind("ok", 0), 0u);
+    l.settle();
+    EXPECT_EQ(l.digital() & 0x08, 0x08);
     // Refused: no input terminal, a channel it lacks, no value.
     EXPECT_EQ(l.inj.execute("inject set_input slave=0 channel=0 value=1", l.now).rfind("error", 0), 0u);
     EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=4 value=1", l.now).rfind("error", 0), 0u);
