@@ -351,7 +351,10 @@ class Segment {
     bool stale(std::size_t k, std::uint64_t now_ns) const;
     // Before any run: the SYNC pulses up to now_ns of the slaves whose applications are coupled
     // (Application::coupled), one at a time in time order across them.
-    void deliver_coupled_pulses(std::uint64_t now_ns);
+    void deliver_coupled_pulses(std::uint64_t now_ns) {
+        if (coupled_epoch_ != slaves_epoch_ || !coupled_.empty()) deliver_coupled_pulses_now(now_ns);
+    }
+    void deliver_coupled_pulses_now(std::uint64_t now_ns);
     std::vector<std::size_t> coupled_;  // those slaves, as of coupled_epoch_
     std::uint64_t coupled_epoch_ = ~std::uint64_t{0};
     void run_due_firmware(std::uint64_t now_ns);
@@ -403,5 +406,22 @@ std::unique_ptr<Segment> make_segment(const device::DeviceDescription& d, std::s
 // The same from a model built once (DeviceModel::of): repeated segments of one device share it.
 std::unique_ptr<Segment> make_segment(const DeviceModel& model, std::size_t n, const EscConfig& cfg = {},
                                       const ApplicationFactory& factory = {});
+
+// (Inline: a frame marks and picks each slave it gives work.)
+inline void Segment::mark_for_run(std::size_t k) {
+    if (last_run_ns_[k] == 0) return;  // marked already (or never run: marks_valid_ is false then)
+    last_run_ns_[k] = 0;
+    if (marked_.size() < slaves_.size())
+        marked_.push_back(static_cast<std::uint32_t>(k));
+    else
+        marks_valid_ = false;
+}
+
+inline void Segment::pick(std::size_t k) {
+    if (picked_[k]) return;
+    picked_[k] = 1;
+    ++picked_count_;
+    picked_list_.push_back(static_cast<std::uint32_t>(k));  // capacity: one per slave (add)
+}
 
 }  // namespace vecat::esc

@@ -8,8 +8,7 @@
 
 namespace vecat::esc {
 
-void Segment::deliver_coupled_pulses(std::uint64_t now_ns) {
-    if (coupled_epoch_ == slaves_epoch_ && coupled_.empty()) return;
+void Segment::deliver_coupled_pulses_now(std::uint64_t now_ns) {
     if (coupled_epoch_ != slaves_epoch_) {
         coupled_epoch_ = slaves_epoch_;
         coupled_.clear();
@@ -28,15 +27,6 @@ void Segment::deliver_coupled_pulses(std::uint64_t now_ns) {
         if (first == slaves_.size() || t > now_ns) return;
         slaves_[first]->deliver_sync_pulses(t);
     }
-}
-
-void Segment::mark_for_run(std::size_t k) {
-    if (last_run_ns_[k] == 0) return;  // marked already (or never run: marks_valid_ is false then)
-    last_run_ns_[k] = 0;
-    if (marked_.size() < slaves_.size())
-        marked_.push_back(static_cast<std::uint32_t>(k));
-    else
-        marks_valid_ = false;
 }
 
 void Segment::run_due_firmware(std::uint64_t now_ns) {
@@ -111,7 +101,7 @@ void Segment::catch_up(std::uint64_t now_ns) {
 
 void Segment::catch_up_deadlines(std::uint64_t now_ns) {
     deliver_coupled_pulses(now_ns);
-    if (marks_valid_ && now_ns >= latest_run_ns_ && now_ns < earliest_deadline_ns_) {
+    if (now_ns < earliest_deadline_ns_ && now_ns >= latest_run_ns_ && marks_valid_) {
         // No deadline is due: the marked slaves only.
         for (const std::uint32_t k : marked_)
             if (last_run_ns_[k] == 0) pick(k);
@@ -144,17 +134,10 @@ std::uint64_t Segment::next_firmware_ns() const {
 
 // ---- Batches on several threads
 
-void Segment::pick(std::size_t k) {
-    if (picked_[k]) return;
-    picked_[k] = 1;
-    ++picked_count_;
-    picked_list_.push_back(static_cast<std::uint32_t>(k));  // capacity: one per slave (add)
-}
-
 void Segment::run_picked(std::uint64_t now_ns) {
     if (picked_count_ == 0) return;
     // In the slaves' order (slaves that share state run in order). Picked in order, mostly.
-    if (!std::is_sorted(picked_list_.begin(), picked_list_.end()))
+    if (picked_count_ > 1 && !std::is_sorted(picked_list_.begin(), picked_list_.end()))
         std::sort(picked_list_.begin(), picked_list_.end());
     latest_run_ns_ = std::max(latest_run_ns_, now_ns == 0 ? 1 : now_ns);
     if (!threads_ || threads_->threads() < 2 || picked_count_ < kMinParallelRuns) {
