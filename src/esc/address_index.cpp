@@ -8,14 +8,24 @@ void AddressIndex::rebuild(std::span<const Esc::Addressing> table) {
     by_address_.clear();
     by_first_bit_.clear();
     by_address_.reserve(2 * table.size());
-    by_first_bit_.reserve(table.size());
+    by_first_bit_.reserve(2 * table.size());
     for (std::size_t k = 0; k < table.size(); ++k) {
         const Esc::Addressing& a = table[k];
         const auto slave = static_cast<std::uint32_t>(k);
         by_address_.emplace_back(a.station, slave);
         if (a.alias_enabled && a.alias != a.station) by_address_.emplace_back(a.alias, slave);
-        if (a.log_first_bit <= a.log_last_bit)
-            by_first_bit_.push_back({a.log_first_bit, a.log_last_bit, 0, slave});
+        // One span for the FMMUs that read and one for those that write, or one for both where they overlap
+        // or touch.
+        const bool reads = a.log_read_first_bit <= a.log_read_last_bit;
+        const bool writes = a.log_write_first_bit <= a.log_write_last_bit;
+        if (reads && writes && a.log_read_first_bit <= a.log_write_last_bit + 1 &&
+            a.log_write_first_bit <= a.log_read_last_bit + 1) {
+            by_first_bit_.push_back({std::min(a.log_read_first_bit, a.log_write_first_bit),
+                                     std::max(a.log_read_last_bit, a.log_write_last_bit), 0, slave});
+        } else {
+            if (reads) by_first_bit_.push_back({a.log_read_first_bit, a.log_read_last_bit, 0, slave});
+            if (writes) by_first_bit_.push_back({a.log_write_first_bit, a.log_write_last_bit, 0, slave});
+        }
     }
     std::sort(by_address_.begin(), by_address_.end());
     std::sort(by_first_bit_.begin(), by_first_bit_.end(),

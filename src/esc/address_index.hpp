@@ -24,8 +24,9 @@ class AddressIndex {
 
     // Appends the slaves whose station address, or enabled alias, is adp (each once).
     void fixed(std::uint16_t adp, std::vector<std::uint32_t>& out) const;
-    // Appends the slaves whose FMMUs' logical range overlaps [first_bit, last_bit] (each once), in the order
-    // of their ranges' first bits.
+    // Appends the slaves whose FMMUs' logical ranges (Esc::Addressing: those that read, those that write)
+    // overlap [first_bit, last_bit], in the order of the ranges' first bits; a slave whose two ranges lie
+    // apart and both overlap comes twice.
     void logical(std::uint64_t first_bit, std::uint64_t last_bit, std::vector<std::uint32_t>& out) const;
 
   private:
@@ -35,7 +36,7 @@ class AddressIndex {
         std::uint64_t max_last_bit;  // the largest last_bit of this span and every span before it
         std::uint32_t slave;
     };
-    std::vector<Span> by_first_bit_;  // slaves with a logical range, sorted by its first bit
+    std::vector<Span> by_first_bit_;  // the slaves' logical ranges, sorted by their first bits
 };
 
 }  // namespace vecat::esc

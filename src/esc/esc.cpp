@@ -222,10 +222,10 @@ Esc::Addressing Esc::addressing() const {
     a.station = ld_le16(&mem_[addr(Reg::StationAddress)]);
     a.alias = ld_le16(&mem_[addr(Reg::StationAlias)]);
     a.alias_enabled = (mem_[addr(Reg::DlControl) + 3] & 0x01) != 0;
-    a.log_first_bit = fmmu_log_first_bit_;
-    a.log_last_bit = fmmu_log_last_bit_;
     a.log_read_first_bit = fmmu_log_read_first_bit_;
     a.log_read_last_bit = fmmu_log_read_last_bit_;
+    a.log_write_first_bit = fmmu_log_write_first_bit_;
+    a.log_write_last_bit = fmmu_log_write_last_bit_;
     return a;
 }
 
@@ -643,6 +643,8 @@ void Esc::update_fmmu(unsigned i) {
     fmmu_log_last_bit_ = 0;
     fmmu_log_read_first_bit_ = ~std::uint64_t{0};
     fmmu_log_read_last_bit_ = 0;
+    fmmu_log_write_first_bit_ = ~std::uint64_t{0};
+    fmmu_log_write_last_bit_ = 0;
     for (unsigned k = 0; k < cfg_.fmmu_count; ++k) {
         const FmmuState& g = fmmu_[k];
         if (!g.active) continue;
@@ -651,7 +653,11 @@ void Esc::update_fmmu(unsigned i) {
             fmmu_log_read_first_bit_ = std::min(fmmu_log_read_first_bit_, g.log_first_bit);
             fmmu_log_read_last_bit_ = std::max(fmmu_log_read_last_bit_, g.log_last_bit);
         }
-        if (g.write) fmmu_write_mask_ |= 1u << k;
+        if (g.write) {
+            fmmu_write_mask_ |= 1u << k;
+            fmmu_log_write_first_bit_ = std::min(fmmu_log_write_first_bit_, g.log_first_bit);
+            fmmu_log_write_last_bit_ = std::max(fmmu_log_write_last_bit_, g.log_last_bit);
+        }
         fmmu_log_first_bit_ = std::min(fmmu_log_first_bit_, g.log_first_bit);
         fmmu_log_last_bit_ = std::max(fmmu_log_last_bit_, g.log_last_bit);
     }

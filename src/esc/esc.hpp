@@ -205,18 +205,23 @@ class Esc {
 
     // What decides whether a datagram can concern this ESC at all (ETG.1000.4 5.4): the configured station
     // address 0x0010, the alias 0x0012 with its enable bit (DL control 0x0100 bit 24), and the logical bit
-    // range that the active FMMUs cover together. A segment keeps a copy per ESC, so that a frame visits
-    // only the ESCs that a datagram can address (broadcasts and auto-increment commands aside).
+    // ranges that the active FMMUs cover, those that read and those that write apart (a master that maps
+    // every slave's outputs, then every slave's inputs, as SOEM does, leaves the outputs and the inputs of
+    // one slave far apart). A segment keeps a copy per ESC, so that a frame visits only the ESCs that a
+    // datagram can address (broadcasts and auto-increment commands aside).
     struct Addressing {
         std::uint16_t station = 0;
         std::uint16_t alias = 0;
         bool alias_enabled = false;
-        std::uint64_t log_first_bit = ~std::uint64_t{0}, log_last_bit = 0;  // empty: first > last
-        // The bits of the FMMUs that read (logical reads take data from the ESC's memory there).
+        // The bits of the FMMUs that read (logical reads take data from the ESC's memory there); empty:
+        // first > last.
         std::uint64_t log_read_first_bit = ~std::uint64_t{0}, log_read_last_bit = 0;
+        // The bits of the FMMUs that write.
+        std::uint64_t log_write_first_bit = ~std::uint64_t{0}, log_write_last_bit = 0;
         bool fixed(std::uint16_t adp) const { return adp == station || (alias_enabled && adp == alias); }
         bool logical(std::uint64_t first_bit, std::uint64_t last_bit) const {
-            return first_bit <= log_last_bit && last_bit >= log_first_bit;
+            return logical_read(first_bit, last_bit) ||
+                   (first_bit <= log_write_last_bit && last_bit >= log_write_first_bit);
         }
         bool logical_read(std::uint64_t first_bit, std::uint64_t last_bit) const {
             return first_bit <= log_read_last_bit && last_bit >= log_read_first_bit;
@@ -342,6 +347,7 @@ class Esc {
     bool firmware_work_ = false;  // see take_firmware_work
     std::uint64_t fmmu_log_first_bit_ = ~std::uint64_t{0}, fmmu_log_last_bit_ = 0;
     std::uint64_t fmmu_log_read_first_bit_ = ~std::uint64_t{0}, fmmu_log_read_last_bit_ = 0;
+    std::uint64_t fmmu_log_write_first_bit_ = ~std::uint64_t{0}, fmmu_log_write_last_bit_ = 0;
     std::uint32_t repeat_bits_ = 0;
     std::atomic<std::uint64_t>* port_changes_ = nullptr;
     std::atomic<std::uint64_t>* address_changes_ = nullptr;

@@ -31,9 +31,9 @@ bool Segment::find_candidates(const ParsedFrame& pf, std::size_t intact) {
         address_index_.rebuild(addressing_);
         index_fresh_ = true;
     }
-    // In the frame's order, each once. A datagram adds each slave at most once, so the list stays within
-    // twice the line's length when it is made unique whenever it grows past the length (no allocation once
-    // the line had this many slaves).
+    // In the frame's order, each once. A datagram adds each slave at most twice (AddressIndex::logical), so
+    // the list stays within three times the line's length when it is made unique whenever it grows past the
+    // length (no allocation once the line had this many slaves).
     const auto in_order = [&] {
         // (Strictly rising already, the usual case: a line's process image mapped in the line's order.)
         if (std::adjacent_find(candidates_.begin(), candidates_.end(), std::greater_equal<>()) ==
@@ -43,7 +43,7 @@ bool Segment::find_candidates(const ParsedFrame& pf, std::size_t intact) {
         candidates_.erase(std::unique(candidates_.begin(), candidates_.end()), candidates_.end());
     };
     candidates_.clear();
-    candidates_.reserve(2 * slaves_.size());
+    candidates_.reserve(3 * slaves_.size());
     for (std::size_t i = 0; i < pf.count; ++i) {
         const DatagramReach& r = reach_[i];
         if (r.reach == Reach::Fixed)

@@ -173,7 +173,8 @@ void answers_as_if_every_esc_saw_every_datagram(bool indexed_only) {
                     << "frame " << n << " slave " << k << " " << r;
             const esc::Esc::Addressing x = e.addressing();
             addressed_by_alias += x.alias_enabled && x.alias != x.station;
-            logical_hits += x.log_first_bit <= x.log_last_bit;
+            logical_hits +=
+                x.log_read_first_bit <= x.log_read_last_bit || x.log_write_first_bit <= x.log_write_last_bit;
             stations.insert(x.station);
         }
         distinct_stations += stations.size();
@@ -214,15 +215,21 @@ TEST(DatagramRouting, AnAutoIncrementDatagramLeavesWithTheAddressCountedUpByEver
 }
 
 TEST(DatagramRouting, TheIndexNamesTheSlavesOfALogicalRangeInTheOrderOfTheirRanges) {
-    // Slaves 0..3 mapped at bits 0-7, 8-15, 16-23 and 24-31; slave 4 (no FMMU) not at all; slave 5 overlaps
-    // slave 1 and 2.
-    std::vector<esc::Esc::Addressing> table(6);
+    // Slaves 0..3 read at bits 0-7, 8-15, 16-23 and 24-31; slave 4 (no FMMU) not at all; slave 5 writes
+    // at 12-19, overlapping slaves 1 and 2.
+    std::vector<esc::Esc::Addressing> table(7);
     for (std::uint64_t k = 0; k < 4; ++k) {
-        table[k].log_first_bit = 8 * k;
-        table[k].log_last_bit = 8 * k + 7;
+        table[k].log_read_first_bit = 8 * k;
+        table[k].log_read_last_bit = 8 * k + 7;
     }
-    table[5].log_first_bit = 12;
-    table[5].log_last_bit = 19;
+    table[5].log_write_first_bit = 12;
+    table[5].log_write_last_bit = 19;
+    // Slave 6 as a master that maps all outputs, then all inputs, leaves it: it writes at 40-47 and reads at
+    // 800-807, and is no candidate for what lies between.
+    table[6].log_write_first_bit = 40;
+    table[6].log_write_last_bit = 47;
+    table[6].log_read_first_bit = 800;
+    table[6].log_read_last_bit = 807;
     esc::AddressIndex index;
     index.rebuild(table);
     std::vector<std::uint32_t> out{99};  // appends
@@ -232,4 +239,12 @@ TEST(DatagramRouting, TheIndexNamesTheSlavesOfALogicalRangeInTheOrderOfTheirRang
     index.logical(0, 7, out);
     index.logical(20, 20, out);
     EXPECT_EQ(out, (std::vector<std::uint32_t>{0, 2}));
+    out.clear();
+    index.logical(48, 799, out);
+    EXPECT_TRUE(out.empty());
+    index.logical(0, 1000, out);
+    EXPECT_EQ(out, (std::vector<std::uint32_t>{0, 1, 5, 2, 3, 6, 6}));  // slave 6 by each range
+    EXPECT_FALSE(table[6].logical(48, 799));
+    EXPECT_TRUE(table[6].logical(47, 48));
+    EXPECT_TRUE(table[6].logical(807, 900));
 }
