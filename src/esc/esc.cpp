@@ -327,7 +327,9 @@ void Esc::logical(DatagramView d, bool do_read, bool do_write, const FrameTiming
     std::uint8_t* data = d.data();
     const std::uint64_t dfirst = static_cast<std::uint64_t>(d.logical_address()) * 8;
     const std::uint64_t dlast = dfirst + dlen * 8 - 1;
-    if (dlast < fmmu_log_first_bit_ || dfirst > fmmu_log_last_bit_) return;  // no FMMU maps any of it
+    const bool near_read = dlast >= fmmu_log_read_first_bit_ && dfirst <= fmmu_log_read_last_bit_;
+    const bool near_write = dlast >= fmmu_log_write_first_bit_ && dfirst <= fmmu_log_write_last_bit_;
+    if (!near_read && !near_write) return;  // no FMMU maps any of it
     bool any_read = false, any_write = false;
     // Writes take the incoming frame data, so all writes happen before any read replaces it.
     for (int pass = 0; pass < 2; ++pass) {
@@ -639,8 +641,6 @@ void Esc::update_fmmu(unsigned i) {
     f.active = c.active && (f.read || f.write) && len > 0 && f.log_last_bit >= f.log_first_bit;
     static_assert(kMaxFmmus <= 32);
     fmmu_read_mask_ = fmmu_write_mask_ = 0;
-    fmmu_log_first_bit_ = ~std::uint64_t{0};
-    fmmu_log_last_bit_ = 0;
     fmmu_log_read_first_bit_ = ~std::uint64_t{0};
     fmmu_log_read_last_bit_ = 0;
     fmmu_log_write_first_bit_ = ~std::uint64_t{0};
@@ -658,8 +658,6 @@ void Esc::update_fmmu(unsigned i) {
             fmmu_log_write_first_bit_ = std::min(fmmu_log_write_first_bit_, g.log_first_bit);
             fmmu_log_write_last_bit_ = std::max(fmmu_log_write_last_bit_, g.log_last_bit);
         }
-        fmmu_log_first_bit_ = std::min(fmmu_log_first_bit_, g.log_first_bit);
-        fmmu_log_last_bit_ = std::max(fmmu_log_last_bit_, g.log_last_bit);
     }
 }
 

@@ -345,7 +345,7 @@ class Esc {
     // logical datagram outside it is rejected without looking at each FMMU).
     std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;
     bool firmware_work_ = false;  // see take_firmware_work
-    std::uint64_t fmmu_log_first_bit_ = ~std::uint64_t{0}, fmmu_log_last_bit_ = 0;
+    // The hulls of the logical ranges of the active FMMUs that read and of those that write (addressing()).
     std::uint64_t fmmu_log_read_first_bit_ = ~std::uint64_t{0}, fmmu_log_read_last_bit_ = 0;
     std::uint64_t fmmu_log_write_first_bit_ = ~std::uint64_t{0}, fmmu_log_write_last_bit_ = 0;
     std::uint32_t repeat_bits_ = 0;
