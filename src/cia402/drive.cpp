@@ -323,12 +323,30 @@ void Drive::advance(std::uint64_t now_ns) {
     // periods before it publish their events only). Coupled drives, and a drive whose TWINsync link is on,
     // publish every period: the partner and the option card's telegram read the objects.
     const bool each = partner || twin_->active();
+    // A period after one that ran in this loop finds what that one found: the dictionary, the TWINsync
+    // port (while its link is off) and so the DriveIo's inputs are as they were. A settled core skips it
+    // without a look at them; the adapter's work of the period would write what it wrote already.
+    bool unchanged = false;
     while (now_ns - sim_ns_ >= period_ns_) {
         sim_ns_ += period_ns_;
+        const bool publish = each || now_ns - sim_ns_ < period_ns_;
+        if (unchanged && same_probe_inputs() && core_->skip_unchanged_period(io_, publish)) {
+            if (publish || io_.feedback.twinsync) write_feedback(publish);
+            continue;
+        }
         if (partner && !first) partner->step_to(sim_ns_);
-        servo_step(each || now_ns - sim_ns_ < period_ns_);
+        servo_step(publish);
         if (partner && first) partner->step_to(sim_ns_);
+        unchanged = !partner && !twin_->active() && parameter_writes_ == parameters_read_ &&
+                    command_writes_ == command_read_;
     }
+}
+
+// The touch probe inputs of a wire or signal (wired_probe_inputs) are what the DriveIo holds.
+bool Drive::same_probe_inputs() {
+    const auto wired = wired_probe_inputs(sim_ns_);
+    return !wired ||
+           static_cast<std::uint8_t>(probe_inputs_object_ | (*wired & 3u)) == io_.parameters.probe_inputs;
 }
 
 void Drive::step_to(std::uint64_t t_ns) {

@@ -44,6 +44,8 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     double position_actual() const { return core_->position_actual(); }
     double velocity_actual() const { return core_->velocity_actual(); }
     std::uint64_t servo_steps() const { return core_->steps(); }
+    // Of those, the periods skipped because the drive had settled (for tests and benchmarks).
+    std::uint64_t skipped_servo_steps() const { return core_->skipped_steps(); }
     // The servo period now: kServoPeriodNs, or the TWIN sampling time of P0302 (125 us at 8 kHz).
     std::uint64_t servo_period_ns() const { return period_ns_; }
     std::uint64_t simulated_time_ns() const { return sim_ns_; }
@@ -91,6 +93,7 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     void step_to(std::uint64_t t_ns);
     // publish: the period's feedback values go to the dictionary (DriveCore::step).
     void servo_step(bool publish = true);
+    bool same_probe_inputs();
     template <class F>
     void for_each_parameter(F&& f);
     void read_parameters();

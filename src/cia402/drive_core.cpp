@@ -68,7 +68,7 @@ void DriveCore::configure(const DriveIo& io) {
 
 void DriveCore::start(DriveIo& io) {
     wake();
-    settled_->on = false;
+    settled_->on = settled_->values_current = false;
     axis_.io = &io;
     update_inputs(io);
     write_feedback(io);
@@ -80,27 +80,18 @@ void DriveCore::step(DriveIo& io, bool publish) {
     DriveFeedback& fb = io.feedback;
     fb.raised.reset();
     fb.cleared = fb.probe = fb.twinsync = false;
-    // A settled drive skips the period, unless it works out the TWINsync values (below).
+    // A settled drive skips the period, unless it has to run it (skippable, below).
     Settled& settled = *settled_;
     bool check = false;
     if (settled.on) {
         const bool same = (!settled.touched || settled.same_core(*this)) && settled.same_io(io);
         if (same) settled.touched = false;
-        if (same && !io.twinsync.active && (steps_ + 1) % 16 != 0) {
-            ++steps_;
-            ++settled.pending;
-            ++settled.skipped;
-            // The temperature goes on towards its steady value (the only value of a settled period that may
-            // still change); once a period left it as it was, so do the next.
-            if (!settled.temperature_steady) {
-                const double before = temperature_;
-                heat(io.parameters, dt);
-                settled.temperature_steady = temperature_ == before;
-            }
-            if (publish) fb.temperature = sat16(temperature_);
+        if (same && skippable(io)) {
+            skip(io, publish);
             return;
         }
         settled.on = false;
+        settled.values_current = false;
         check = same;
     }
     if (settled.pending != 0) catch_up_skipped();
@@ -153,7 +144,44 @@ void DriveCore::step(DriveIo& io, bool publish) {
         settled.on = settled.settled(*this, io);
         settled.touched = !settled.on;
         if (!settled.on) settled.failed();
+        // The TWINsync values this period worked out are the fixed point's: the skipped periods show them.
+        settled.values_current = settled.on && fb.twinsync;
     }
+}
+
+// A settled period that need not run: not while the TWINsync link is on (its values every period), not a
+// period that works out the TWINsync values (every 16th) unless a period at this fixed point worked them
+// out already.
+bool DriveCore::skippable(const DriveIo& io) const {
+    return !io.twinsync.active && ((steps_ + 1) % 16 != 0 || settled_->values_current);
+}
+
+void DriveCore::skip(DriveIo& io, bool publish) {
+    Settled& settled = *settled_;
+    DriveFeedback& fb = io.feedback;
+    ++steps_;
+    ++settled.pending;
+    ++settled.skipped;
+    // The TWINsync values of the fixed point, every 16th period as a period that runs shows them.
+    fb.twinsync = steps_ % 16 == 0;
+    // The temperature goes on towards its steady value (the only value of a settled period that may still
+    // change); once a period left it as it was, so do the next.
+    if (!settled.temperature_steady) {
+        const double before = temperature_;
+        heat(io.parameters, static_cast<double>(period_ns_) * 1e-9);
+        settled.temperature_steady = temperature_ == before;
+    }
+    if (publish) fb.temperature = sat16(temperature_);
+}
+
+bool DriveCore::skip_unchanged_period(DriveIo& io, bool publish) {
+    const Settled& settled = *settled_;
+    if (!settled.on || settled.touched || !skippable(io)) return false;
+    DriveFeedback& fb = io.feedback;
+    fb.raised.reset();
+    fb.cleared = fb.probe = false;
+    skip(io, publish);
+    return true;
 }
 
 void DriveCore::compensate(double distance, double length, const CompensationLimits& limits) {

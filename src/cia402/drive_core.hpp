@@ -52,6 +52,10 @@ class DriveCore {
     // A period that finds the core and the DriveIo as a settled period left them is skipped: it would do
     // the same again (drive_core.cpp, "Settled"). The results are the same bits either way.
     void step(DriveIo& io, bool publish = true);
+    // The next period, for a caller that knows nothing wrote the DriveIo's inputs since the last period
+    // (cia402::Drive between the periods of one advance): skipped if the core is settled, without comparing
+    // the inputs; false, and nothing done, if step() has to run it.
+    bool skip_unchanged_period(DriveIo& io, bool publish);
     // The servo period, the speed control's sampling time (the TWIN sampling time of P0302 on a drive
     // with the TWINsync parameters: 250 us, 125 us at 8 kHz). kPeriodNs until set.
     void set_period_ns(std::uint64_t ns);
@@ -83,6 +87,8 @@ class DriveCore {
   private:
     void catch_up_skipped();  // the hold timers' time of the periods skipped while settled
     void wake();              // before a public method changes the core: catch up, compare its bytes again
+    bool skippable(const DriveIo& io) const;  // a settled period that need not run (drive_core.cpp)
+    void skip(DriveIo& io, bool publish);     // ... skipped: the period count, the timers, the temperature
     void update_inputs(DriveIo& io);
     void check_faults(DriveIo& io, double dt);
     void raise(DriveIo& io, const RaisedFault& f);

@@ -78,7 +78,7 @@ std::uint64_t DriveCore::skipped_steps() const {
 
 void DriveCore::skip_settled_periods(bool on) {
     wake();
-    settled_->on = false;
+    settled_->on = settled_->values_current = false;
     settled_->enabled = on;
 }
 

@@ -15,8 +15,9 @@
 // - the drive temperature, which goes on towards its steady value: a skipped period updates it as the
 //   period would, and shows it (0x2001), nothing else reads it.
 // A settled period raised no fault, cleared none and latched no probe; the feedback it published is the one
-// the skipped periods would publish. The TWINsync values (every 16th period) are worked out by a period
-// that runs; while the TWINsync link is on, nothing is skipped.
+// the skipped periods would publish. The TWINsync values (every 16th period) are worked out by the first
+// 16th period at a fixed point, which runs; the later ones show its values. While the TWINsync link is on,
+// nothing is skipped.
 //
 // Included by the drive core's sources only (DriveCore::Settled is private to DriveCore).
 #pragma once
@@ -62,6 +63,7 @@ class DriveCore::Settled {
     bool on = false;                  // the last period that ran settled
     bool touched = true;              // a public method ran since the core's bytes were last found the same
     bool temperature_steady = false;  // a skipped period left the temperature as it was
+    bool values_current = false;      // the feedback's TWINsync values were worked out at this fixed point
     std::uint64_t pending = 0;        // periods skipped since the hold timers caught up
     std::uint64_t skipped = 0;        // periods skipped in all
 

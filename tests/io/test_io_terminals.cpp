@@ -9,6 +9,7 @@
 #include <fstream>
 #include <memory>
 
+#include "cia402/drive.hpp"
 #include "common/bytes.hpp"
 #include "faults/injector.hpp"
 #include "io/signal.hpp"
@@ -250,6 +251,53 @@ TEST(IoTerminals, ADrivesTouchProbeInputForcedThroughTheControlSocket) {
     EXPECT_EQ(probe_inputs(), 0u);
     // The drive has two probe inputs.
     EXPECT_EQ(inj.execute("inject set_input slave=0 channel=2 value=1", now).rfind("error", 0), 0u);
+}
+
+// A vecat drive at rest settles and skips its servo periods (DriveCore, Drive::advance), but a touch probe
+// input wired to a signal is still sampled at every servo period, also between two frames. The ramp
+// -99 + 100 * phase is above 0.5 in the last 0.5 ms of every 100 ms, where a single servo period ends (at
+// 99.75 ms: the periods end every 250 us from the first frame at 1 s), the third of the four periods that
+// the frame at 100 ms brings: the probe latches that pulse.
+TEST(IoTerminals, ASettledDrivesTouchProbeSeesAPulseBetweenTwoFrames) {
+    const char* kFile =
+        "devices:\n  - name: axis\n    device: drive\n    inputs:\n"
+        "      0: {signal: ramp, from: -99, to: 1, period_ms: 100}\n";
+    network::BuiltNetwork built = network::build_network(network::parse_network(kFile, "d.yaml"), "d.yaml");
+    net::InProcessLink link(*built.segment);
+    std::uint64_t now = 1'000'000'000;
+    link.set_time(now);
+    master::Master m(link);
+    std::string why;
+    ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+    const auto* drive = dynamic_cast<const cia402::Drive*>(&built.segment->slave(0).app());
+    ASSERT_NE(drive, nullptr);
+    auto frames_until = [&](std::uint64_t t) {
+        while (now + 1'000'000 <= t) {
+            now += 1'000'000;
+            link.set_time(now);
+            ASSERT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+        }
+    };
+    master::CoeClient c(m, m.slaves()[0].station);
+    auto probe_status = [&] {
+        const auto r = c.upload(protocol::obj::touch_probe_status.index, 0);
+        EXPECT_TRUE(r.ok());
+        return r.ok() && r.data.size() >= 2 ? ld_le16(r.data.data()) & 0x0003u : 99u;
+    };
+    // After the pulse at 1.09975 s, probe 1 on (0x60B8 in the default RxPDO): single trigger, input 1, its
+    // positive edge.
+    frames_until(1'105'000'000);
+    const master::MappedEntry* function =
+        master::find_entry(m.slaves()[0].out_entries, protocol::obj::touch_probe_function.index);
+    ASSERT_NE(function, nullptr);
+    st_le16(m.outputs(0).data() + function->bit_offset / 8, 0x0011);
+    frames_until(1'190'000'000);
+    EXPECT_EQ(probe_status(), 0x0001u) << "on, nothing latched before the pulse";
+    const std::uint64_t skipped = drive->skipped_servo_steps();
+    frames_until(1'199'000'000);
+    EXPECT_GE(drive->skipped_servo_steps() - skipped, 30u) << "the drive skips its periods before the pulse";
+    frames_until(1'202'000'000);
+    EXPECT_EQ(probe_status(), 0x0003u) << "the pulse at 1.19975 s latched";
 }
 
 // The telemetry samples every I/O terminal (IoSample): the output terminals' channels as the master wrote
