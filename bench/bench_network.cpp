@@ -12,6 +12,7 @@
 
 #include "common/bytes.hpp"
 #include "master/master.hpp"
+#include "net/realtime.hpp"
 #include "network/build.hpp"
 #include "serve/in_process_link.hpp"
 
@@ -58,6 +59,8 @@ void BM_Network1000Cycle(benchmark::State& state) {
             if (m.inputs(i).size() >= 8 && (ld_le16(m.inputs(i).data()) & 0x6F) == 0x27) ++enabled;
         state.counters["enabled"] = enabled;
     }
+    // As the serve loop does before it serves (ServeOptions::huge_pages).
+    net::back_heap_with_huge_pages();
     const std::uint64_t runs0 = seg.counters().firmware_runs;
     for (auto _ : state) {
         now += 1'000'000;

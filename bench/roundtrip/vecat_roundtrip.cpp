@@ -240,6 +240,9 @@ int run(const Options& o) {
     } else {
         seg = cia402::make_drive_segment(device::default_drive(), o.slaves);
     }
+    // As vecat run does before it serves.
+    std::string huge_why;
+    if (!net::back_heap_with_huge_pages(&huge_why)) fmt::print("vecat-roundtrip: {}\n", huge_why);
     net::RawSocket refl_sock("rt-r0"), vecat_sock("rt-v1");
     net::RawSocket m_refl_sock("rt-m0"), m_vecat_sock("rt-m1");
     m_refl_sock.set_busy_poll(o.busy);

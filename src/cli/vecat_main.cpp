@@ -370,6 +370,9 @@ int cmd_run(const RunOptions& o, std::atomic<bool>& stop, std::atomic<bool>* rea
         fmt::print(stderr, "vecat: {}\n", why);
         return 1;
     }
+    // The slaves' state on huge pages (a large network's cycle misses the TLB less), before the first
+    // frame can come: collapsing a heap of a hundred MiB takes tens of milliseconds.
+    if (!vecat::net::back_heap_with_huge_pages(&why)) fmt::print(log, "vecat: {} (serving without)\n", why);
     // Socket, files, control socket, DDS and scheduling are set up: from here on the process needs no
     // capability (see net/privileges.hpp).
     std::string cap_why;

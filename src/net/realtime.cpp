@@ -6,7 +6,11 @@
 #include <sys/prctl.h>
 
 #include <cerrno>
+#include <cinttypes>
+#include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
 
 namespace vecat::net {
 
@@ -43,6 +47,32 @@ bool lock_all_memory(std::string* why) {
         return false;
     }
     return true;
+}
+
+bool back_heap_with_huge_pages(std::string* why) {
+#ifdef MADV_COLLAPSE
+    constexpr int kCollapse = MADV_COLLAPSE;
+#else
+    constexpr int kCollapse = 25;  // <sys/mman.h> of an older libc; the kernel's value (Linux 6.1)
+#endif
+    constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
+    std::ifstream maps("/proc/self/maps");
+    std::string line;
+    while (std::getline(maps, line)) {
+        if (line.find("[heap]") == std::string::npos) continue;
+        std::uintptr_t from = 0, to = 0;
+        if (std::sscanf(line.c_str(), "%" SCNxPTR "-%" SCNxPTR, &from, &to) != 2) break;
+        from = (from + kHuge - 1) & ~(kHuge - 1);
+        to &= ~(kHuge - 1);
+        if (to <= from) return true;  // no whole huge page in it: nothing to do
+        void* at = reinterpret_cast<void*>(from);
+        if (::madvise(at, to - from, MADV_HUGEPAGE) != 0 || ::madvise(at, to - from, kCollapse) != 0) {
+            if (why) *why = std::string("huge pages for the heap: ") + std::strerror(errno);
+            return false;
+        }
+        return true;
+    }
+    return true;  // no [heap] (all of it mapped elsewhere, e.g. under a sanitizer)
 }
 
 bool set_current_thread_timer_slack(unsigned long ns, std::string* why) {

@@ -23,6 +23,11 @@ bool lock_all_memory(std::string* why = nullptr);
 // prctl(PR_SET_TIMERSLACK): how late the calling thread's timed sleeps (poll, clock_nanosleep) may end.
 bool set_current_thread_timer_slack(unsigned long ns, std::string* why = nullptr);
 unsigned long current_thread_timer_slack();
+// The heap (where a network's slaves keep their state) on transparent huge pages: madvise MADV_HUGEPAGE
+// and MADV_COLLAPSE (Linux 6.1) over the 2 MiB pages of [heap] that exist now. A serve loop walks the state
+// of every slave each cycle; with 4 KiB pages a network of a thousand slaves misses the TLB on most of them.
+// False with the reason where the kernel refuses (THP off, an older kernel); nothing else changes then.
+bool back_heap_with_huge_pages(std::string* why = nullptr);
 // All of the above that opt asks for, on the calling thread. Each is tried even if another failed; false
 // with the reasons of all that failed.
 bool apply_realtime(const RealtimeOptions& opt, std::string* why = nullptr);
