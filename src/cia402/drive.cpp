@@ -290,7 +290,10 @@ bool Drive::simulates_faults() {
 
 void Drive::simulate_fault(std::uint16_t code) {
     if (o_->simulated_fault.bound()) return CoeApplication::simulate_fault(code);
-    if (!o_->vecat_objects && (code == 0 || fault::injectable(code))) io_.parameters.simulated_fault = code;
+    if (!o_->vecat_objects && (code == 0 || fault::injectable(code))) {
+        io_.parameters.simulated_fault = code;
+        ++parameter_writes_;  // (read_parameters keeps it: there is no object)
+    }
 }
 
 void Drive::tick(std::uint64_t now_ns) {
@@ -317,21 +320,31 @@ void Drive::advance(std::uint64_t now_ns) {
     // receives the other's telegram of the previous control cycle whatever order the line runs them in.
     Drive* partner = twin_partner_;
     const bool first = twin_->end() == 0;
+    if (now_ns - sim_ns_ < period_ns_) return;
     // The dictionary cannot change while the steps run (frames and SDO requests come in between calls).
-    if (now_ns - sim_ns_ >= period_ns_) configure();
+    const bool unread = parameter_writes_ != parameters_read_ || command_writes_ != command_read_;
+    const bool synchronised = io_.parameters.fieldbus_synchronised;
+    configure();
     // Only the last period's feedback values reach the dictionary: nothing reads them in between (the
     // periods before it publish their events only). Coupled drives, and a drive whose TWINsync link is on,
     // publish every period: the partner and the option card's telegram read the objects.
     const bool each = partner || twin_->active();
-    // A period after one that ran in this loop finds what that one found: the dictionary, the TWINsync
-    // port (while its link is off) and so the DriveIo's inputs are as they were. A settled core skips it
-    // without a look at them; the adapter's work of the period would write what it wrote already.
-    bool unchanged = false;
+    // A period that finds the DriveIo's inputs as the last period left them, and the TWINsync link off: the
+    // dictionary had no write the drive has not read (entries, process data outputs that changed a byte),
+    // the synchronisation and the port's state are the same. A settled core skips it without a look at
+    // them; the adapter's work of the period would write what it wrote already. Within this loop that holds
+    // after any period that ran with the link off (nothing writes the dictionary in between); for the
+    // first, the writes since the last advance and the port are looked at.
+    bool unchanged = quiet_ && !unread && parameter_writes_ == parameters_read_ &&
+                     command_writes_ == command_read_ &&
+                     io_.parameters.fieldbus_synchronised == synchronised && !partner && !twin_->active() &&
+                     twin_->changes() == port_changes_seen_ && !read_twinsync();
     while (now_ns - sim_ns_ >= period_ns_) {
         sim_ns_ += period_ns_;
         const bool publish = each || now_ns - sim_ns_ < period_ns_;
         if (unchanged && same_probe_inputs() && core_->skip_unchanged_period(io_, publish)) {
             if (publish || io_.feedback.twinsync) write_feedback(publish);
+            write_digital_outputs();  // (0x60FE is written by SDO without a count)
             continue;
         }
         if (partner && !first) partner->step_to(sim_ns_);
@@ -339,7 +352,9 @@ void Drive::advance(std::uint64_t now_ns) {
         if (partner && first) partner->step_to(sim_ns_);
         unchanged = !partner && !twin_->active() && parameter_writes_ == parameters_read_ &&
                     command_writes_ == command_read_;
+        port_changes_seen_ = twin_->changes();
     }
+    quiet_ = unchanged;
 }
 
 // The touch probe inputs of a wire or signal (wired_probe_inputs) are what the DriveIo holds.
@@ -375,11 +390,15 @@ void Drive::servo_step(bool publish) {
     read_twinsync();
     core_->step(io_, publish);
     write_feedback(publish);
+    write_digital_outputs();
+    twin_->set_error(core_->twinsync_error());
+    twin_->transmit(sim_ns_, twinsync_local());
+}
+
+void Drive::write_digital_outputs() {
     if (!digital_output_image_.empty())
         st_le32(digital_output_image_.data(),
                 o_->digital_outputs.get_or(0) & o_->digital_output_mask.get_or(0));
-    twin_->set_error(core_->twinsync_error());
-    twin_->transmit(sim_ns_, twinsync_local());
 }
 
 // The drive's state for its option card (only while TWINsync is on).
@@ -491,8 +510,8 @@ void Drive::configure() {
             if (v.entry() && pd.is_rx_mapped(*v.entry())) maps_parameters_ = true;
         });
     }
-    if (pd.outputs_copied() != outputs_seen_) {
-        outputs_seen_ = pd.outputs_copied();
+    if (pd.outputs_changed() != outputs_seen_) {
+        outputs_seen_ = pd.outputs_changed();
         ++command_writes_;
         if (maps_parameters_) ++parameter_writes_;
     }
@@ -540,18 +559,23 @@ void Drive::read_command() {
     variant_->read_command(io_.command);
 }
 
-void Drive::read_twinsync() {
+bool Drive::read_twinsync() {
     const Objects& o = *o_;
     const twinsync::Port& port = *twin_;
     TwinsyncInputs& t = io_.twinsync;
-    t.active = port.active();
-    t.follows = port.follows();
-    t.has_data = port.has_data();
-    t.fresh = port.received_fresh();
-    t.controlled_by_twinsync = port.controlled_by_twinsync();
-    t.received_control_word = port.received_control_word();
-    t.pending_error = port.pending_error();
-    if (!t.active) return;  // the rest matters only while the link is on
+    bool changed = false;
+    const auto put = [&changed](auto& field, const auto& value) {
+        changed = changed || field != value;
+        field = value;
+    };
+    put(t.active, port.active());
+    put(t.follows, port.follows());
+    put(t.has_data, port.has_data());
+    put(t.fresh, port.received_fresh());
+    put(t.controlled_by_twinsync, port.controlled_by_twinsync());
+    put(t.received_control_word, port.received_control_word());
+    put(t.pending_error, port.pending_error());
+    if (!t.active) return changed;  // the rest matters only while the link is on
     t.link_ok = port.link_ok();
     t.role = port.role();
     t.partner_role = port.partner().mode;
@@ -576,6 +600,7 @@ void Drive::read_twinsync() {
     t.gear_numerator = o.tw_gear_numerator.get_or(1);
     t.gear_denominator = o.tw_gear_denominator.get_or(1);
     t.master_torque_tf = o.tw_master_torque_tf.get_or(0.0f);
+    return true;
 }
 
 void Drive::write_feedback(bool publish) {

@@ -94,6 +94,7 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     // publish: the period's feedback values go to the dictionary (DriveCore::step).
     void servo_step(bool publish = true);
     bool same_probe_inputs();
+    void write_digital_outputs();  // digital_output_image()
     template <class F>
     void for_each_parameter(F&& f);
     void read_parameters();
@@ -101,7 +102,7 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     template <class F>
     void for_each_command(F&& f);
     void read_command();
-    void read_twinsync();
+    bool read_twinsync();  // true if an input of the DriveIo changed (always while the link is on)
     // The period's events, and its values when `publish`.
     void write_feedback(bool publish = true);
     void write_twinsync_values();
@@ -114,13 +115,17 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     std::uint32_t parameter_writes_ = 0;  // writes to the parameters' entries (EntryHooks::writes)
     std::uint64_t mapping_seen_ = ~std::uint64_t{0};     // the RxPDO mapping last checked for parameters
     bool maps_parameters_ = false;                       // ... maps one of them
-    std::uint64_t outputs_seen_ = 0;                     // outputs copied when last counted
+    std::uint64_t outputs_seen_ = 0;                     // outputs changed when last counted
     std::uint32_t command_writes_ = 0;                   // ... to the command's (and process data outputs)
     std::uint32_t command_read_ = ~std::uint32_t{0};     // command_writes_ when it was last read
     std::uint32_t parameters_read_ = ~std::uint32_t{0};  // parameter_writes_ when they were last read
     std::uint64_t sim_ns_ = 0;
     std::uint64_t period_ns_ = kServoPeriodNs;  // servo_period_ns()
     bool started_ = false;
+    // The DriveIo's inputs are what the dictionary and the TWINsync port gave the last period
+    // (Drive::advance)
+    bool quiet_ = false;
+    std::uint64_t port_changes_seen_ = 0;             // twinsync::Port::changes() at the last period that ran
     std::uint8_t probe_inputs_object_ = 0;            // 0x2100:6 as last read
     std::vector<std::uint8_t> digital_output_image_;  // see digital_output_image()
     // TWINsync: the option card, and the drive at the other end of its cable (they step in lockstep).

@@ -42,7 +42,7 @@ struct EntryHooks {
     // Incremented on every write through Entry::set or Entry::assign (SDO downloads, tools, tests), not by
     // the device's own writes through a coe::Value: the device can tell that none of its parameters changed
     // without reading them (cia402::Drive). Process data outputs are counted by the ProcessDataMap
-    // (outputs_copied()).
+    // (outputs_changed()).
     std::uint32_t* writes = nullptr;
 };
 

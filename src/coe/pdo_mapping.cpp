@@ -247,20 +247,24 @@ ProcessDataMap::Plan ProcessDataMap::make_plan(const std::vector<MappedField>& f
 }
 
 template <bool ToImage>
-void ProcessDataMap::run_plan(const Plan& p, ImagePtr<ToImage> image) {
+bool ProcessDataMap::run_plan(const Plan& p, ImagePtr<ToImage> image) {
+    bool changed = false;
     const auto group = [&]<std::size_t N>(unsigned k) {
         for (std::uint32_t i = p.end[k]; i < p.end[k + 1]; ++i) {
             const FastField& f = p.fields[i];
-            if constexpr (ToImage)
+            if constexpr (ToImage) {
                 std::memcpy(image + f.byte, f.value, N);  // fixed size: one load and one store
-            else
+            } else {
+                changed = changed || std::memcmp(f.value, image + f.byte, N) != 0;
                 std::memcpy(f.value, image + f.byte, N);
+            }
         }
     };
     group.template operator()<1>(0);
     group.template operator()<2>(1);
     group.template operator()<4>(2);
     group.template operator()<8>(3);
+    return changed;
 }
 
 protocol::AlStatusCode ProcessDataMap::validate() const {
@@ -270,11 +274,11 @@ protocol::AlStatusCode ProcessDataMap::validate() const {
 }
 
 void ProcessDataMap::copy_outputs(ConstBytes image) {
-    ++outputs_copied_;
     if (out_plan_.ok && image.size() >= out_bytes_) {
-        run_plan<false>(out_plan_, image.data());
+        if (run_plan<false>(out_plan_, image.data())) ++outputs_changed_;
         return;
     }
+    ++outputs_changed_;
     for (const auto& f : out_) {
         if (!f.entry || f.bit_offset + f.bits > image.size() * 8) continue;
         copy_bits(f.entry->storage().data(), 0, image.data(), f.bit_offset, f.bits);

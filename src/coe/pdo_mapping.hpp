@@ -60,9 +60,10 @@ class ProcessDataMap {
     // Re-reads the objects (called after each change through SDO).
     void rebuild();
     // Counters for a device that caches values of its entries: mapping rebuilds, and copies of the outputs
-    // into the mapped entries (which write them without Entry::set, see EntryHooks::writes).
+    // that changed a mapped entry (which write them without Entry::set, see EntryHooks::writes). A copy
+    // that the fast plan cannot take counts whether or not it changed a byte.
     std::uint64_t mapping_changes() const { return mapping_changes_; }
-    std::uint64_t outputs_copied() const { return outputs_copied_; }
+    std::uint64_t outputs_changed() const { return outputs_changed_; }
 
   private:
     struct Direction {
@@ -96,13 +97,14 @@ class ProcessDataMap {
     };
     template <bool ToImage>
     using ImagePtr = std::conditional_t<ToImage, std::uint8_t*, const std::uint8_t*>;
+    // Copies the fields; to the entries (not ToImage): true if any entry's bytes changed.
     template <bool ToImage>
-    static void run_plan(const Plan& p, ImagePtr<ToImage> image);
+    static bool run_plan(const Plan& p, ImagePtr<ToImage> image);
     static Plan make_plan(const std::vector<MappedField>& fields);
 
     ObjectDictionary& od_;
     std::uint64_t mapping_changes_ = 0;
-    std::uint64_t outputs_copied_ = 0;
+    std::uint64_t outputs_changed_ = 0;
     Direction rx_, tx_;
     std::vector<MappedField> out_, in_;
     Plan out_plan_, in_plan_;
