@@ -331,14 +331,14 @@ void Drive::advance(std::uint64_t now_ns) {
     const bool each = partner || twin_->active();
     // A period that finds the DriveIo's inputs as the last period left them, and the TWINsync link off: the
     // dictionary had no write the drive has not read (entries, process data outputs that changed a byte),
-    // the synchronisation and the port's state are the same. A settled core skips it without a look at
+    // the synchronisation and the port's state are the same (without a TWINsync cable: the port's status,
+    // which its work of a period keeps, has no reader then). A settled core skips it without a look at
     // them; the adapter's work of the period would write what it wrote already. Within this loop that holds
     // after any period that ran with the link off (nothing writes the dictionary in between); for the
     // first, the writes since the last advance and the port are looked at.
-    bool unchanged = quiet_ && !unread && parameter_writes_ == parameters_read_ &&
-                     command_writes_ == command_read_ &&
-                     io_.parameters.fieldbus_synchronised == synchronised && !partner && !twin_->active() &&
-                     twin_->changes() == port_changes_seen_ && !read_twinsync();
+    bool unchanged =
+        quiet_ && !unread && parameter_writes_ == parameters_read_ && command_writes_ == command_read_ &&
+        io_.parameters.fieldbus_synchronised == synchronised && !twin_->channel() && !read_twinsync();
     while (now_ns - sim_ns_ >= period_ns_) {
         sim_ns_ += period_ns_;
         const bool publish = each || now_ns - sim_ns_ < period_ns_;
@@ -352,7 +352,6 @@ void Drive::advance(std::uint64_t now_ns) {
         if (partner && first) partner->step_to(sim_ns_);
         unchanged = !partner && !twin_->active() && parameter_writes_ == parameters_read_ &&
                     command_writes_ == command_read_;
-        port_changes_seen_ = twin_->changes();
     }
     quiet_ = unchanged;
 }

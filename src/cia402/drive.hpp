@@ -125,7 +125,6 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     // The DriveIo's inputs are what the dictionary and the TWINsync port gave the last period
     // (Drive::advance)
     bool quiet_ = false;
-    std::uint64_t port_changes_seen_ = 0;             // twinsync::Port::changes() at the last period that ran
     std::uint8_t probe_inputs_object_ = 0;            // 0x2100:6 as last read
     std::vector<std::uint8_t> digital_output_image_;  // see digital_output_image()
     // TWINsync: the option card, and the drive at the other end of its cable (they step in lockstep).

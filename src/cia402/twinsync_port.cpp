@@ -283,7 +283,6 @@ SdoAbort Port::validate_write(Entry& e, ConstBytes value) {
 }
 
 void Port::reconfigure() {
-    ++changes_;
     if (!c_->complete()) return;
     const Role before = role_;
     role_ = static_cast<Role>(rd<std::uint16_t>(c_->mode));
@@ -325,7 +324,6 @@ void Port::reconfigure() {
 }
 
 void Port::initialise() {
-    ++changes_;
     // The link starts again as after power-on: initialisation mode in the status word (bit 0 clear) until
     // valid data arrive, the slave's synchronisation controller from its initial phase, the monitoring's
     // timers from zero. The last received data stay in their parameters.

@@ -44,9 +44,6 @@ class Port {
     Role role() const { return role_; }
     const ModeInfo* mode() const { return mode_; }
     bool active() const { return channel_ && role_ != Role::Off; }
-    // Counts the port's configurations and initialisations (a drive that skips the port's work while its
-    // link is off sees that none came in between).
-    std::uint64_t changes() const { return changes_; }
     // The slave runs on the master's set-points (P0165 = TWINSYNC) in a mode that follows.
     bool follows() const;
     bool controlled_by_twinsync() const;  // P0159 = TWINSYNC on a slave
@@ -110,7 +107,6 @@ class Port {
 
     SyncController sync_;
     bool has_data_ = false;
-    std::uint64_t changes_ = 0;
     bool fresh_ = false;
     std::uint16_t rx_drivecom_ = 0;
     TwinStatusWord partner_;

@@ -826,6 +826,30 @@ TEST_F(Sdo, DefaultImagesMoveValuesBothWays) {
     EXPECT_EQ(Buf(in.begin(), in.begin() + 8), (Buf{0x37, 0x12, 0x08, 0x00, 0x44, 0x33, 0x22, 0x11}));
 }
 
+// The map counts the copies of the outputs that changed a mapped entry (ProcessDataMap::outputs_changed):
+// a device that caches its entries' values reads them again only then. The same image twice counts once;
+// one changed byte, or an entry written in between that the image writes back, counts again.
+TEST_F(Sdo, OnlyOutputsThatChangeAnEntryCount) {
+    coe::ProcessDataMap& pd = app.process_data();
+    Buf out(pd.output_bytes(), 0);
+    out[0] = 0x06;
+    const auto copy = [&] { pd.copy_outputs(ConstBytes(out.data(), out.size())); };
+    copy();
+    const std::uint64_t first = pd.outputs_changed();
+    copy();
+    EXPECT_EQ(pd.outputs_changed(), first) << "the same outputs again";
+    out[2] = 8;  // modes of operation, a 1-byte entry
+    copy();
+    EXPECT_EQ(pd.outputs_changed(), first + 1);
+    out[7] = 0x40;  // the last byte of the target position
+    copy();
+    EXPECT_EQ(pd.outputs_changed(), first + 2);
+    od().find(obj::controlword)->set(std::uint16_t{0x000F});
+    copy();
+    EXPECT_EQ(pd.outputs_changed(), first + 3) << "the image wrote the controlword back";
+    EXPECT_EQ(od().find(obj::controlword)->get<std::uint16_t>(), 0x0006);
+}
+
 TEST_F(Sdo, NonMappableObjectsAreRefused) {
     ASSERT_EQ(write_u8(0x1600, 0, 0), 0u);
     EXPECT_EQ(send(expedited_req(0x1600, 1, le32(0x10180120))),
