@@ -6,6 +6,10 @@
 
 #include <algorithm>
 #include <cstring>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <tuple>
 
 #include "common/bits.hpp"
 #include "esc/sii_image.hpp"
@@ -53,21 +57,42 @@ void saturating_inc(std::uint8_t& c) {
     if (c != 0xFF) ++c;
 }
 
+// The ECAT write masks of an ESC (protocol::WriteMaskTable, 4.5 KiB) follow from its FMMU and SyncManager
+// counts, its system time unit and whether its PDI has the digital output register (-1: as made, before
+// the EEPROM is read): ESCs alike share one table, made once, which then stays in the cache for a line of
+// a thousand slaves instead of a table of each. The tables live as long as the process.
+const protocol::WriteMaskTable* shared_write_masks(unsigned fmmus, unsigned sms, bool system_time_unit,
+                                                   int digital_io) {
+    using Key = std::tuple<unsigned, unsigned, bool, int>;
+    static std::mutex guard;
+    static auto* tables = new std::map<Key, std::unique_ptr<const protocol::WriteMaskTable>>;
+    const std::lock_guard lock(guard);
+    auto& table = (*tables)[Key{fmmus, sms, system_time_unit, digital_io}];
+    if (!table) {
+        auto t = std::make_unique<protocol::WriteMaskTable>(make_write_mask_table(fmmus, sms));
+        if (!system_time_unit)
+            for (unsigned a = kDcSystemTimeFirst; a < kDcEnd; ++a)
+                t->set(a, 0, false);
+        // The digital output register exists with a digital I/O PDI only (section II 0x0F00).
+        if (digital_io >= 0)
+            for (unsigned k = 0; k < protocol::kDigitalOutputSize; ++k)
+                t->set(addr(Reg::DigitalOutputData) + k, 0xFF, digital_io == 1);
+        table = std::move(t);
+    }
+    return table.get();
+}
+
 }  // namespace
 
 Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
     : cfg_(cfg),
       mem_(kRegisterSpaceSize + std::max<std::uint32_t>(cfg.ram_bytes, kMinRamBytes), 0),
       dc_(mem_.data(), cfg.dc_drift_ppm, cfg.dc_initial_ns),
-      eeprom_(std::move(eeprom)),
-      wmask_(make_write_mask_table(std::min<unsigned>(cfg.fmmu_count, kMaxFmmus),
-                                   std::min<unsigned>(cfg.sm_count, kMaxSms))) {
+      eeprom_(std::move(eeprom)) {
     cfg_.fmmu_count = static_cast<std::uint8_t>(std::min<unsigned>(cfg_.fmmu_count, kMaxFmmus));
     cfg_.sm_count = static_cast<std::uint8_t>(std::min<unsigned>(cfg_.sm_count, kMaxSms));
     cfg_.ram_bytes = static_cast<std::uint32_t>(mem_.size() - kRegisterSpaceSize);
-    if (!cfg_.dc_system_time_unit)
-        for (unsigned a = kDcSystemTimeFirst; a < kDcEnd; ++a)
-            wmask_.set(a, 0, false);
+    wmask_ = shared_write_masks(cfg_.fmmu_count, cfg_.sm_count, cfg_.dc_system_time_unit, -1);
     if (eeprom_.size() % 2) eeprom_.push_back(0xFF);
 
     mem_[addr(Reg::Type)] = cfg_.type;
@@ -126,8 +151,8 @@ void Esc::reload_eeprom() {
     if (crc_ok) {
         st_le16(&mem_[addr(Reg::PdiControl)], word(sii::PdiControl));
         // The digital output register exists with a digital I/O PDI only (section II 0x0F00).
-        for (unsigned k = 0; k < protocol::kDigitalOutputSize; ++k)
-            wmask_.set(addr(Reg::DigitalOutputData) + k, 0xFF, has_digital_io());
+        wmask_ = shared_write_masks(cfg_.fmmu_count, cfg_.sm_count, cfg_.dc_system_time_unit,
+                                    has_digital_io() ? 1 : 0);
         st_le16(&mem_[addr(Reg::PdiConfiguration)], word(sii::PdiConfig));
         st_le16(&mem_[addr(Reg::ExtendedPdiConfiguration)], word(sii::PdiConfig2));
         st_le16(&mem_[addr(Reg::StationAlias)], word(sii::StationAlias));
@@ -453,7 +478,7 @@ bool Esc::plain_register_write(std::uint32_t first, std::uint32_t last) const {
 
 bool Esc::write_registers_masked(std::uint32_t a, const std::uint8_t* src, std::size_t n) {
     std::uint8_t* mem = mem_.data() + a;
-    const std::uint8_t* mask = wmask_.mask.data() + a;
+    const std::uint8_t* mask = wmask_->mask.data() + a;
     std::size_t k = 0;
     for (; k + 8 <= n; k += 8) {  // eight bytes at a time (the system time, a DC start time, an FMMU)
         std::uint64_t m, v, old;
@@ -469,7 +494,7 @@ bool Esc::write_registers_masked(std::uint32_t a, const std::uint8_t* src, std::
     // (reserved bits); read-only and absent registers are not written (ESC datasheet section I 2.4,
     // section II 1).
     for (std::size_t j = 0; j < n; ++j)
-        if (wmask_.writable(static_cast<std::uint16_t>(a + j))) return true;
+        if (wmask_->writable(static_cast<std::uint16_t>(a + j))) return true;
     return false;
 }
 
@@ -480,7 +505,7 @@ bool Esc::write_registers_bytewise(std::uint32_t a, const std::uint8_t* src, std
     for (std::size_t k = 0; k < n; ++k) {
         const std::uint32_t ad = a + static_cast<std::uint32_t>(k);
         if (absent_dc_unit(ad)) continue;  // not there: not written, not counted
-        std::uint8_t m = wmask_.mask[ad];
+        std::uint8_t m = wmask_->mask[ad];
         if (ad - addr(Reg::AlControl) < 2u) {
             if (al_control_refused) continue;  // still unread by the PDI: not written, not counted
             al_control_written = true;
@@ -498,7 +523,7 @@ bool Esc::write_registers_bytewise(std::uint32_t a, const std::uint8_t* src, std
             m = 0;  // SyncManager configuration is locked while the SM is enabled
         mem_[ad] = static_cast<std::uint8_t>((mem_[ad] & ~m) | (src[k] & m));
         // Counted as in write_registers_masked, also when the SM configuration is locked.
-        counted |= wmask_.writable(static_cast<std::uint16_t>(ad));
+        counted |= wmask_->writable(static_cast<std::uint16_t>(ad));
     }
     return counted;
 }

@@ -337,7 +337,7 @@ class Esc {
     std::vector<std::uint8_t> mem_;  // 0x0000 .. 0x1000 + ram_bytes
     DistributedClock dc_;            // works on mem_'s DC registers
     std::vector<std::uint8_t> eeprom_;
-    protocol::WriteMaskTable wmask_;
+    const protocol::WriteMaskTable* wmask_ = nullptr;  // shared by the ESCs alike (esc.cpp)
     std::array<SmState, protocol::kMaxSms> sm_{};
     std::array<FmmuState, protocol::kMaxFmmus> fmmu_{};
     std::uint32_t sm_guard_mask_ = 0;  // active or locked SMs: the ones that control their memory area
