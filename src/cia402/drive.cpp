@@ -2,8 +2,9 @@
 // named objects, and around each servo period of the core copies the dictionary in and the feedback out,
 // runs the TWINsync option card (receive before, transmit after) and raises the core's faults as
 // emergencies. The motion itself is drive_core.cpp and the modes; the segment factories drive_segment.cpp.
-// About 630 lines: the binding of every drive object (Drive::Objects, about 180 lines) and the copies in and
-// out of each servo period, which name the same objects; kept together so that each object is bound once.
+// About 670 lines: the binding of every drive object (Drive::Objects, about 180 lines) and the copies in and
+// out of each servo period, which name the same objects, kept together so that each object is bound once;
+// and which periods an advance may skip without that work (Drive::advance).
 #include "cia402/drive.hpp"
 
 #include "cia402/drive_variant.hpp"

@@ -1,7 +1,7 @@
 // The CoE mailbox protocol of the default drive, driven directly through esc::MailboxProtocol: SDO upload
 // and download (expedited, normal, segmented), abort codes, complete access, the PDO mapping rules of
 // ETG.1020, SDO information and emergencies. Every reply is checked byte for byte.
-// Long (about 1,350 lines): one mailbox fixture for every SDO service, each test a byte-exact exchange.
+// Long (about 1,380 lines): one mailbox fixture for every SDO service, each test a byte-exact exchange.
 #include <gtest/gtest.h>
 
 #include <algorithm>
