@@ -341,8 +341,8 @@ class Esc {
     std::array<SmState, protocol::kMaxSms> sm_{};
     std::array<FmmuState, protocol::kMaxFmmus> fmmu_{};
     std::uint32_t sm_guard_mask_ = 0;  // active or locked SMs: the ones that control their memory area
-    // Active FMMUs that read / write, and the logical bit range all active FMMUs cover together (a
-    // logical datagram outside it is rejected without looking at each FMMU).
+    // Active FMMUs that read / write (a logical datagram outside the ranges below is rejected without
+    // looking at each FMMU).
     std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;
     bool firmware_work_ = false;  // see take_firmware_work
     // The hulls of the logical ranges of the active FMMUs that read and of those that write (addressing()).
