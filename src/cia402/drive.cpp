@@ -332,14 +332,15 @@ void Drive::advance(std::uint64_t now_ns) {
     const bool each = partner || twin_->active();
     // A period that finds the DriveIo's inputs as the last period left them, and the TWINsync link off: the
     // dictionary had no write the drive has not read (entries, process data outputs that changed a byte),
-    // the synchronisation and the port's state are the same (without a TWINsync cable: the port's status,
-    // which its work of a period keeps, has no reader then). A settled core skips it without a look at
+    // the synchronisation and the port's state are the same. A settled core skips it without a look at
     // them; the adapter's work of the period would write what it wrote already. Within this loop that holds
     // after any period that ran with the link off (nothing writes the dictionary in between); for the
-    // first, the writes since the last advance and the port are looked at.
-    bool unchanged =
-        quiet_ && !unread && parameter_writes_ == parameters_read_ && command_writes_ == command_read_ &&
-        io_.parameters.fieldbus_synchronised == synchronised && !twin_->channel() && !read_twinsync();
+    // first, the writes since the last advance are looked at, and the drive must have no TWINsync cable: the
+    // port's state in the DriveIo cannot change then (the link is on only with a cable, and what it received
+    // moves only while it is on), and the port's status, which its work of a period keeps, has no reader.
+    bool unchanged = quiet_ && !unread && parameter_writes_ == parameters_read_ &&
+                     command_writes_ == command_read_ &&
+                     io_.parameters.fieldbus_synchronised == synchronised && !twin_->channel();
     while (now_ns - sim_ns_ >= period_ns_) {
         sim_ns_ += period_ns_;
         const bool publish = each || now_ns - sim_ns_ < period_ns_;
@@ -559,23 +560,18 @@ void Drive::read_command() {
     variant_->read_command(io_.command);
 }
 
-bool Drive::read_twinsync() {
+void Drive::read_twinsync() {
     const Objects& o = *o_;
     const twinsync::Port& port = *twin_;
     TwinsyncInputs& t = io_.twinsync;
-    bool changed = false;
-    const auto put = [&changed](auto& field, const auto& value) {
-        changed = changed || field != value;
-        field = value;
-    };
-    put(t.active, port.active());
-    put(t.follows, port.follows());
-    put(t.has_data, port.has_data());
-    put(t.fresh, port.received_fresh());
-    put(t.controlled_by_twinsync, port.controlled_by_twinsync());
-    put(t.received_control_word, port.received_control_word());
-    put(t.pending_error, port.pending_error());
-    if (!t.active) return changed;  // the rest matters only while the link is on
+    t.active = port.active();
+    t.follows = port.follows();
+    t.has_data = port.has_data();
+    t.fresh = port.received_fresh();
+    t.controlled_by_twinsync = port.controlled_by_twinsync();
+    t.received_control_word = port.received_control_word();
+    t.pending_error = port.pending_error();
+    if (!t.active) return;  // the rest matters only while the link is on
     t.link_ok = port.link_ok();
     t.role = port.role();
     t.partner_role = port.partner().mode;
@@ -600,7 +596,6 @@ bool Drive::read_twinsync() {
     t.gear_numerator = o.tw_gear_numerator.get_or(1);
     t.gear_denominator = o.tw_gear_denominator.get_or(1);
     t.master_torque_tf = o.tw_master_torque_tf.get_or(0.0f);
-    return true;
 }
 
 void Drive::write_feedback(bool publish) {

@@ -102,7 +102,7 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     template <class F>
     void for_each_command(F&& f);
     void read_command();
-    bool read_twinsync();  // true if an input of the DriveIo changed (always while the link is on)
+    void read_twinsync();
     // The period's events, and its values when `publish`.
     void write_feedback(bool publish = true);
     void write_twinsync_values();
