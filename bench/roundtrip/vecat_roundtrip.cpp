@@ -143,25 +143,35 @@ void set_drive_outputs(master::Master& m, std::uint64_t cycle, std::vector<std::
 struct ReflectorFrames {
     std::vector<std::vector<std::uint8_t>> lrw;
     std::array<std::uint8_t, 8> time{};
-    bool frmw = false;
-    explicit ReflectorFrames(const master::Master& m, bool with_dc) : frmw(with_dc) {
+    std::vector<master::DatagramRequest> dgs;
+    std::vector<std::span<master::DatagramRequest>> frames;
+    explicit ReflectorFrames(const master::Master& m, bool with_dc) {
         std::size_t left = m.process_image_size();
         while (left > 0) {
             const std::size_t n = std::min(left, master::Master::kMaxLrwBytes);
             lrw.emplace_back(n, 0);
             left -= n;
         }
-    }
-    bool exchange(master::Master& r) {
+        dgs.reserve(lrw.size() + 1);
         for (std::size_t c = 0; c < lrw.size(); ++c) {
-            master::DatagramRequest dg[2] = {
-                {protocol::Command::LRW, 0x00010000, Bytes(lrw[c].data(), lrw[c].size())},
-                {protocol::Command::FRMW,
-                 0x1001u | (static_cast<std::uint32_t>(protocol::addr(protocol::Reg::DcSystemTime)) << 16),
-                 Bytes(time.data(), time.size())}};
-            const std::size_t k = (c == 0 && frmw) ? 2 : 1;
-            if (!r.transact_frame(std::span<master::DatagramRequest>(dg, k))) return false;
+            const std::size_t first = dgs.size();
+            dgs.push_back({protocol::Command::LRW, 0x00010000, Bytes(lrw[c].data(), lrw[c].size())});
+            if (c == 0 && with_dc)
+                dgs.push_back(
+                    {protocol::Command::FRMW,
+                     0x1001u |
+                         (static_cast<std::uint32_t>(protocol::addr(protocol::Reg::DcSystemTime)) << 16),
+                     Bytes(time.data(), time.size())});
+            frames.emplace_back(dgs.data() + first, dgs.size() - first);
         }
+    }
+    // The same frames as the master's exchange_process_data, sent as it sends them: back to back.
+    bool exchange(master::Master& r) {
+        const std::span<const std::span<master::DatagramRequest>> all(frames);
+        for (std::size_t k = 0; k < all.size(); k += master::Master::kMaxFramesInFlight)
+            if (!r.transact_frames(
+                    all.subspan(k, std::min(master::Master::kMaxFramesInFlight, all.size() - k))))
+                return false;
         return true;
     }
 };

@@ -37,7 +37,7 @@ std::uint16_t ra(Reg r) {
 
 Master::Master(net::Link& link, MasterOptions opt) : link_(link), opt_(opt) {}
 
-std::size_t Master::build_frame(std::span<DatagramRequest> dgs) {
+std::size_t Master::build_frame(std::span<DatagramRequest> dgs, std::uint8_t first_index) {
     kFrameHeader.pack(std::span(tx_).first<protocol::kEthHeaderSize>());
     std::size_t off = protocol::kEthHeaderSize + protocol::kEcatHeaderSize;
     std::size_t total = off;
@@ -47,7 +47,7 @@ std::size_t Master::build_frame(std::span<DatagramRequest> dgs) {
     for (std::size_t i = 0; i < dgs.size(); ++i) {
         auto& d = dgs[i];
         std::uint8_t* p = tx_.data() + off;
-        const DatagramHeader h{d.cmd,     static_cast<std::uint8_t>(index_ + i),
+        const DatagramHeader h{d.cmd,     static_cast<std::uint8_t>(first_index + i),
                                d.address, static_cast<std::uint16_t>(d.data.size()),
                                false,     i + 1 < dgs.size(),
                                0};
@@ -62,46 +62,77 @@ std::size_t Master::build_frame(std::span<DatagramRequest> dgs) {
     return std::max(off, protocol::kMinEthFrame);
 }
 
-bool Master::wait_reply(std::span<DatagramRequest> dgs) {
+// A reply is the frame sent when it has as many datagrams, each with the index, command and length sent.
+bool Master::take_reply(Bytes buf, const protocol::ParsedFrame& pf, std::span<DatagramRequest> dgs,
+                        std::uint8_t first_index) {
+    if (pf.count != dgs.size()) return false;
+    for (std::size_t i = 0; i < dgs.size(); ++i) {
+        auto d = pf.datagram(buf, i);
+        if (d.index() != static_cast<std::uint8_t>(first_index + i) || d.command() != dgs[i].cmd ||
+            d.length() != dgs[i].data.size())
+            return false;
+    }
+    for (std::size_t i = 0; i < dgs.size(); ++i) {
+        auto d = pf.datagram(buf, i);
+        std::memcpy(dgs[i].data.data(), d.data(), dgs[i].data.size());
+        dgs[i].wkc = d.wkc();
+    }
+    return true;
+}
+
+std::uint32_t Master::wait_replies(std::span<const std::span<DatagramRequest>> frames,
+                                   const std::uint8_t* first, std::uint32_t pending) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(opt_.reply_timeout_us);
-    while (true) {
+    while (pending != 0) {
         const auto left =
             std::chrono::duration_cast<std::chrono::microseconds>(deadline - std::chrono::steady_clock::now())
                 .count();
-        if (left <= 0) return false;
+        if (left <= 0) break;
         const long n = link_.receive(Bytes(rx_.data(), rx_.size()), left);
-        if (n < 0) return false;
+        if (n < 0) break;
         if (n == 0) continue;
-        const auto pf = protocol::parse_frame(ConstBytes(rx_.data(), static_cast<std::size_t>(n)));
-        if (pf.error != protocol::FrameError::None || pf.count != dgs.size()) continue;
-        bool match = true;
-        for (std::size_t i = 0; i < dgs.size() && match; ++i) {
-            auto d = pf.datagram(Bytes(rx_.data(), static_cast<std::size_t>(n)), i);
-            match = d.index() == static_cast<std::uint8_t>(index_ + i) && d.command() == dgs[i].cmd &&
-                    d.length() == dgs[i].data.size();
-        }
-        if (!match) continue;  // a late reply to an earlier frame
-        for (std::size_t i = 0; i < dgs.size(); ++i) {
-            auto d = pf.datagram(Bytes(rx_.data(), static_cast<std::size_t>(n)), i);
-            std::memcpy(dgs[i].data.data(), d.data(), dgs[i].data.size());
-            dgs[i].wkc = d.wkc();
-        }
-        return true;
+        const Bytes reply(rx_.data(), static_cast<std::size_t>(n));
+        const auto pf = protocol::parse_frame(reply);
+        if (pf.error != protocol::FrameError::None) continue;
+        // Any frame of the batch; none: a late reply to an earlier one.
+        for (std::size_t k = 0; k < frames.size(); ++k)
+            if (((pending >> k) & 1u) && take_reply(reply, pf, frames[k], first[k])) {
+                pending &= ~(1u << k);
+                break;
+            }
     }
+    return pending;
+}
+
+bool Master::transact_frames(std::span<const std::span<DatagramRequest>> frames) {
+    // The datagrams of all frames take consecutive indexes, so that each reply names its frame.
+    std::array<std::uint8_t, kMaxFramesInFlight> first{};
+    std::array<std::size_t, kMaxFramesInFlight> length{};
+    std::size_t datagrams = 0;
+    bool fits = frames.size() <= kMaxFramesInFlight;
+    for (std::size_t k = 0; fits && k < frames.size(); ++k) {
+        first[k] = static_cast<std::uint8_t>(index_ + datagrams);
+        datagrams += frames[k].size();
+        length[k] = build_frame(frames[k], first[k]);  // (here only to check that it fits)
+        fits = length[k] != 0;
+    }
+    if (!fits || datagrams > 0xFF) return false;
+    std::uint32_t pending = frames.size() == 32 ? ~0u : (1u << frames.size()) - 1u;
+    for (int attempt = 0; attempt <= opt_.retries && pending != 0; ++attempt) {
+        for (std::size_t k = 0; k < frames.size(); ++k)
+            if ((pending >> k) & 1u) {
+                build_frame(frames[k], first[k]);
+                link_.send(ConstBytes(tx_.data(), length[k]));
+            }
+        pending = wait_replies(frames, first.data(), pending);
+    }
+    index_ = static_cast<std::uint8_t>(index_ + datagrams);
+    return pending == 0;
 }
 
 bool Master::transact_frame(std::span<DatagramRequest> dgs) {
-    const std::size_t len = build_frame(dgs);
-    if (len == 0) return false;  // does not fit in one frame
-    for (int attempt = 0; attempt <= opt_.retries; ++attempt) {
-        if (!link_.send(ConstBytes(tx_.data(), len))) continue;
-        if (wait_reply(dgs)) {
-            index_ = static_cast<std::uint8_t>(index_ + dgs.size());
-            return true;
-        }
-    }
-    index_ = static_cast<std::uint8_t>(index_ + dgs.size());
-    return false;
+    const std::span<DatagramRequest> one[1] = {dgs};
+    return transact_frames(one);
 }
 
 std::optional<std::uint16_t> Master::transact(Command cmd, std::uint16_t adp, std::uint16_t ado, Bytes data) {
@@ -455,6 +486,7 @@ bool Master::configure_process_data() {
     image_.assign(off, 0);
     // Frames of at most kMaxLrwBytes, cut only between two slaves' areas: every FMMU lies in one frame.
     chunks_.clear();
+    cyclic_frames_.clear();
     auto add_area = [&](std::size_t o, std::size_t n) {
         if (n == 0) return;
         if (chunks_.empty() || chunks_.back().size + n > kMaxLrwBytes)
@@ -569,27 +601,39 @@ bool Master::request_state(std::uint16_t station, AlState s, std::chrono::millis
 
 std::optional<std::uint16_t> Master::exchange_process_data() {
     if (image_.empty()) return std::nullopt;
-    std::uint16_t wkc = 0;
-    for (std::size_t c = 0; c < chunks_.size(); ++c) {
-        const Bytes part(image_.data() + chunks_[c].offset, chunks_[c].size);
-        const std::uint32_t laddr = opt_.logical_base + static_cast<std::uint32_t>(chunks_[c].offset);
-        if (dc_ref_ == 0 || c > 0) {
-            auto w = transact_logical(Command::LRW, laddr, part);
-            if (!w) return std::nullopt;
-            wkc = static_cast<std::uint16_t>(wkc + *w);
-            continue;
+    // All frames of the cycle go out back to back before the first reply is awaited, as SOEM
+    // (ecx_send_processdata) and IgH (ecrt_master_send) put a cycle's frames on the wire. The requests are
+    // laid out at the first exchange after the image or the reference clock changed (no allocation after it).
+    const bool dc = dc_ref_ != 0;
+    if (cyclic_frames_.empty() || cyclic_image_ != image_.data() || cyclic_dc_ref_ != dc_ref_) {
+        cyclic_image_ = image_.data();
+        cyclic_dc_ref_ = dc_ref_;
+        cyclic_dgs_.resize(chunks_.size() + (dc ? 1 : 0));
+        cyclic_frames_.clear();
+        std::size_t at = 0;
+        for (std::size_t c = 0; c < chunks_.size(); ++c) {
+            const Bytes part(image_.data() + chunks_[c].offset, chunks_[c].size);
+            const std::uint32_t laddr = opt_.logical_base + static_cast<std::uint32_t>(chunks_[c].offset);
+            const std::size_t first = at;
+            cyclic_dgs_[at++] = {Command::LRW, laddr, part};
+            // Reference clock distribution in the cyclic frame, after the LRW (as SOEM does).
+            if (c == 0 && dc)
+                cyclic_dgs_[at++] = {Command::FRMW,
+                                     static_cast<std::uint32_t>(dc_ref_) |
+                                         (static_cast<std::uint32_t>(ra(Reg::DcSystemTime)) << 16),
+                                     Bytes(dc_buf_.data(), dc_buf_.size())};
+            cyclic_frames_.emplace_back(cyclic_dgs_.data() + first, at - first);
         }
-        // Reference clock distribution in the cyclic frame, after the LRW (as SOEM does).
-        dc_buf_.fill(0);
-        DatagramRequest dg[2] = {
-            {Command::LRW, laddr, part},
-            {Command::FRMW,
-             static_cast<std::uint32_t>(dc_ref_) | (static_cast<std::uint32_t>(ra(Reg::DcSystemTime)) << 16),
-             Bytes(dc_buf_.data(), dc_buf_.size())}};
-        if (!transact_frame(dg)) return std::nullopt;
-        if (dg[1].wkc) dc_time_ = ld_le64(dc_buf_.data());
-        wkc = static_cast<std::uint16_t>(wkc + dg[0].wkc);
     }
+    dc_buf_.fill(0);
+    std::uint16_t wkc = 0;
+    const std::span<const std::span<DatagramRequest>> frames(cyclic_frames_);
+    for (std::size_t k = 0; k < frames.size(); k += kMaxFramesInFlight)
+        if (!transact_frames(frames.subspan(k, std::min(kMaxFramesInFlight, frames.size() - k))))
+            return std::nullopt;
+    for (const auto& f : cyclic_frames_)
+        wkc = static_cast<std::uint16_t>(wkc + f[0].wkc);
+    if (dc && cyclic_frames_[0].size() > 1 && cyclic_frames_[0][1].wkc) dc_time_ = ld_le64(dc_buf_.data());
     return wkc;
 }
 

@@ -117,6 +117,11 @@ class Master {
     std::optional<std::uint16_t> transact_logical(protocol::Command cmd, std::uint32_t laddr, Bytes data);
     // Several datagrams in one frame; false when no reply.
     bool transact_frame(std::span<DatagramRequest> dgs);
+    // Several frames sent back to back before any reply is awaited; each reply is matched to its frame by
+    // its datagrams' indexes, in whatever order the replies come. False when a frame got no reply (or the
+    // frames do not fit: at most kMaxFramesInFlight frames of at most 255 datagrams in all).
+    static constexpr std::size_t kMaxFramesInFlight = 32;
+    bool transact_frames(std::span<const std::span<DatagramRequest>> frames);
 
     std::optional<std::uint16_t> brd(std::uint16_t ado, Bytes d) {
         return transact(protocol::Command::BRD, 0, ado, d);
@@ -215,8 +220,13 @@ class Master {
     static std::int64_t cable_delay(const SlaveInfo& up, const SlaveInfo& s);
 
   private:
-    std::size_t build_frame(std::span<DatagramRequest> dgs);
-    bool wait_reply(std::span<DatagramRequest> dgs);
+    std::size_t build_frame(std::span<DatagramRequest> dgs, std::uint8_t first_index);
+    static bool take_reply(Bytes reply, const protocol::ParsedFrame& pf, std::span<DatagramRequest> dgs,
+                           std::uint8_t first_index);
+    // Receives until the frames whose bits are set in `pending` have their replies or the reply timeout
+    // passes; returns the bits of those still without a reply.
+    std::uint32_t wait_replies(std::span<const std::span<DatagramRequest>> frames, const std::uint8_t* first,
+                               std::uint32_t pending);
 
     net::Link& link_;
     MasterOptions opt_;
@@ -229,6 +239,11 @@ class Master {
         std::size_t offset, size;
     };
     std::vector<Chunk> chunks_;  // the image's parts, one LRW frame each
+    // The cyclic frames' requests over chunks_ (exchange_process_data)
+    std::vector<DatagramRequest> cyclic_dgs_;
+    std::vector<std::span<DatagramRequest>> cyclic_frames_;
+    const std::uint8_t* cyclic_image_ = nullptr;  // image_ and dc_ref_ when they were laid out
+    std::uint16_t cyclic_dc_ref_ = 0;
     std::size_t out_total_ = 0;
     std::uint16_t expected_wkc_ = 0;
     std::vector<AlStatusReading> last_states_;

@@ -1,5 +1,6 @@
-// A link straight into a segment in the same process: the frame is processed when sent and the reply
-// is returned by the next receive. For tests without a network.
+// A link straight into a segment in the same process: the frame is processed when sent and its reply is
+// queued for receive, as a wire with a receive ring holds the replies of frames sent back to back (a master
+// may send a cycle's frames before it receives any). For tests without a network.
 #pragma once
 
 #include <array>
@@ -17,23 +18,29 @@ class InProcessLink final : public Link {
   public:
     explicit InProcessLink(esc::Segment& seg) : seg_(seg) {}
     bool send(ConstBytes frame) override {
-        if (frame.size() > buf_.size()) return false;
-        std::memcpy(buf_.data(), frame.data(), frame.size());
-        len_ = frame.size();
-        if (observer_) observer_->on_request(ConstBytes(buf_.data(), len_), now_ns());
-        pending_ = filter_ ? filter_->process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns())
-                           : seg_.process_frame(Bytes(buf_.data(), buf_.size()), len_, now_ns());
+        if (frame.size() > kFrameBytes) return false;
+        if (count_ == kQueued) return true;  // the receive ring is full: the reply is lost on the way back
+        Slot& slot = queue_[(head_ + count_) % kQueued];
+        std::memcpy(slot.bytes.data(), frame.data(), frame.size());
+        slot.len = frame.size();
+        const Bytes buf(slot.bytes.data(), slot.bytes.size());
+        if (observer_) observer_->on_request(ConstBytes(buf.data(), slot.len), now_ns());
+        const bool reply = filter_ ? filter_->process_frame(buf, slot.len, now_ns())
+                                   : seg_.process_frame(buf, slot.len, now_ns());
+        if (reply) ++count_;
         return true;
     }
     long receive(Bytes out, std::int64_t) override {
-        // A held-back reply that is due left earlier than the frame just sent: it arrives first.
+        // A held-back reply that is due left earlier than the frames just sent: it arrives first.
         if (filter_)
             if (const std::size_t late = filter_->take_due(now_ns(), out)) return static_cast<long>(late);
-        if (!pending_) return 0;
-        pending_ = false;
-        const std::size_t n = std::min(len_, out.size());
-        std::memcpy(out.data(), buf_.data(), n);
-        if (observer_) observer_->on_reply(ConstBytes(buf_.data(), len_), now_ns());
+        if (count_ == 0) return 0;
+        const Slot& slot = queue_[head_];
+        head_ = (head_ + 1) % kQueued;
+        --count_;
+        const std::size_t n = std::min(slot.len, out.size());
+        std::memcpy(out.data(), slot.bytes.data(), n);
+        if (observer_) observer_->on_reply(ConstBytes(slot.bytes.data(), slot.len), now_ns());
         return static_cast<long>(n);
     }
     // Time seen by the segment; tests may drive it by hand.
@@ -56,9 +63,14 @@ class InProcessLink final : public Link {
     esc::Segment& seg_;
     FrameFilter* filter_ = nullptr;
     FrameObserver* observer_ = nullptr;
-    std::array<std::uint8_t, 1600> buf_{};
-    std::size_t len_ = 0;
-    bool pending_ = false;
+    static constexpr std::size_t kFrameBytes = 1600;
+    static constexpr std::size_t kQueued = 32;  // replies not yet received (Master::kMaxFramesInFlight)
+    struct Slot {
+        std::array<std::uint8_t, kFrameBytes> bytes{};
+        std::size_t len = 0;
+    };
+    std::array<Slot, kQueued> queue_{};
+    std::size_t head_ = 0, count_ = 0;
     bool manual_time_ = false;
     std::uint64_t manual_now_ = 0;
 };

@@ -292,13 +292,15 @@ class SteppingLink final : public net::Link {
         return inner_.send(f);
     }
     long receive(Bytes b, std::int64_t timeout_us) override {
+        // The replies come in the order of the frames (a cycle's frames go out before the first reply).
         const long n = inner_.receive(b, timeout_us);
-        if (n > 0 && !log.empty()) log.back().reply.assign(b.begin(), b.begin() + n);
+        if (n > 0 && replied_ < log.size()) log[replied_++].reply.assign(b.begin(), b.begin() + n);
         return n;
     }
     std::vector<Exchange> log;
 
   private:
+    std::size_t replied_ = 0;
     net::InProcessLink inner_;
     std::uint64_t now_ = 1'000'000'000;
 };
