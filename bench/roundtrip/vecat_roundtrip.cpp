@@ -500,6 +500,13 @@ int run(const Options& o) {
     stop = true;
     server.join();
     reflector.join();
+    // (After the serve loop stopped: its thread writes these.) All cycles, the warm-up's included.
+    const esc::SegmentCounters& sc = seg->counters();
+    if (sc.frames > 0)
+        fmt::print(
+            "  segment: {} frames, {} firmware runs of a slave, {} frames answered while the firmware of "
+            "frames before them was still to run\n",
+            sc.frames, sc.firmware_runs, sc.past_deferred_firmware);
     return rc;
 }
 

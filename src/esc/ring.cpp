@@ -158,8 +158,7 @@ bool Segment::process_ring(Bytes frame, std::size_t& len, std::uint64_t now_ns, 
             if (esc.take_firmware_work()) mark_for_run(k);  // its firmware runs below
         }
         if (defer_firmware_) {
-            firmware_due_ = true;
-            firmware_due_ns_ = now_ns;
+            defer_frame_firmware(now_ns);
         } else {
             run_due_firmware(now_ns);
         }

@@ -284,7 +284,8 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
 
 bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns, const FrameDamage& damage,
                             MasterPort from) {
-    run_deferred_firmware();  // the previous frame's, if the server has not run it yet
+    // The firmware of the frames before, if the server has not run it yet and this frame may see it.
+    if (deferred_count_ != 0 && !keep_deferred(now_ns, damage)) run_deferred_firmware();
     onward_ = false;
     if (len > frame.size()) len = frame.size();
     ConstBytes in(frame.data(), len);
@@ -338,12 +339,10 @@ bool Segment::process_frame(Bytes frame, std::size_t& len, std::uint64_t now_ns,
             const DatagramView d = pf.datagram(frame, latch_pos);
             pending_latch_ = PendingLatch{true, d.index(), latch_pos, d.wkc(), now_ns};
         }
-        if (defer_firmware_) {
-            firmware_due_ = true;
-            firmware_due_ns_ = now_ns;
-        } else {
+        if (defer_firmware_)
+            defer_frame_firmware(now_ns);
+        else
             run_due_firmware(now_ns);
-        }
     }
     if (hit) {
         if (damage.kind == FrameDamage::Kind::Corrupted) count_corruption(damage, m);

@@ -31,6 +31,8 @@ struct SegmentCounters {
     std::uint64_t onward = 0;         // passed on to the downstream segment (chained segments)
     std::uint64_t returned = 0;       // came back from the downstream segment, forwarded to the master
     std::uint64_t firmware_runs = 0;  // runs of one slave's firmware (Segment::run), for any reason
+    // Frames processed while the firmware of frames before them stayed deferred (set_deferred_firmware)
+    std::uint64_t past_deferred_firmware = 0;
 };
 
 // Damage a frame suffers on one cable of the line (fault injection). Cable k joins the master (k == 0) or
@@ -87,6 +89,15 @@ class Segment {
     void set_deferred_firmware(bool on) { defer_firmware_ = on; }
     bool deferred_firmware() const { return defer_firmware_; }
     void run_deferred_firmware();
+    // A server that finds the next frame already waiting when it has sent a reply may answer it before it
+    // runs the deferred firmware (a cycle's frames come back to back, its firmware runs once they are
+    // answered): the next frame leaves the firmware of the frames before it deferred when it cannot see what
+    // that firmware does, and runs it first otherwise. It cannot see it when its datagrams concern none of
+    // those slaves nor any slave that shares state with one of them, no deadline is due at its time and no
+    // drives are coupled (keep_deferred, Segment::process_datagrams). Each frame's firmware runs at the
+    // frame's time, in the frames' order, as if it had run after each frame: the replies are the same.
+    bool firmware_deferred() const { return deferred_count_ != 0; }
+    static constexpr std::size_t kMaxDeferredFrames = 32;
     // Host time of the next SYNC pulse of any slave (DistributedClock::kNever if none).
     std::uint64_t next_event_ns() const;
 
@@ -394,8 +405,20 @@ class Segment {
     std::array<DatagramReach, protocol::kMaxDatagramsPerFrame> reach_{};
 
     bool defer_firmware_ = false;
-    bool firmware_due_ = false;          // a frame's firmware runs are still to be done
-    std::uint64_t firmware_due_ns_ = 0;  // at the time of that frame
+    // The frames whose firmware runs are still to be done (set_deferred_firmware): each frame's time and the
+    // end of its marks in marked_ (the first frame's begin at 0).
+    struct DeferredFrame {
+        std::uint64_t at_ns = 0;
+        std::size_t marks_end = 0;
+    };
+    std::array<DeferredFrame, kMaxDeferredFrames> deferred_{};
+    std::size_t deferred_count_ = 0;
+    std::size_t deferred_marks_ = 0;             // marked_[0, deferred_marks_) are the deferred frames' marks
+    std::vector<std::uint64_t> group_deferred_;  // per group: deferral_serial_ if one of them is marked
+    std::uint64_t deferral_serial_ = 0;
+    void defer_frame_firmware(std::uint64_t now_ns);
+    bool keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) const;
+    bool candidates_share_deferred_groups();
     SegmentCounters counters_;
 };
 

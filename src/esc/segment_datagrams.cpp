@@ -154,6 +154,9 @@ void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t 
     // concern that slave, and no other: each candidate looks at every datagram with its addressing as it is
     // then (pass), so the candidates found before the frame stay right.
     bool indexed = find_candidates(pf, intact);
+    // The deferred frames' firmware runs first if this frame may see what it does (set_deferred_firmware).
+    if (deferred_count_ != 0 && (!indexed || candidates_share_deferred_groups())) run_deferred_firmware();
+    if (deferred_count_ != 0) ++counters_.past_deferred_firmware;
     if (any_reads) {
         const auto pick_if_read = [&](std::size_t k, std::uint16_t position) {
             const Esc::Addressing& a = addressing_[k];

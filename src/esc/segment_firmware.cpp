@@ -2,6 +2,7 @@
 // several threads (Segment::set_firmware_threads).
 #include <algorithm>
 #include <numeric>
+#include <utility>
 
 #include "esc/firmware_threads.hpp"
 #include "esc/segment.hpp"
@@ -45,9 +46,44 @@ void Segment::run_due_firmware(std::uint64_t now_ns) {
 }
 
 void Segment::run_deferred_firmware() {
-    if (!firmware_due_) return;
-    firmware_due_ = false;
-    run_due_firmware(firmware_due_ns_);
+    if (deferred_count_ == 0) return;
+    const std::size_t count = std::exchange(deferred_count_, 0);
+    deferred_marks_ = 0;
+    // Each frame's marks at its time, in order; the last frame's as run_due_firmware does (it also finds
+    // what a frame that did not keep its marks left: more marks than marked_ holds).
+    std::size_t begin = 0;
+    for (std::size_t f = 0; f + 1 < count; ++f) {
+        for (std::size_t i = begin; i < deferred_[f].marks_end; ++i)
+            if (last_run_ns_[marked_[i]] == 0) pick(marked_[i]);
+        begin = deferred_[f].marks_end;
+        run_picked(deferred_[f].at_ns);
+    }
+    run_due_firmware(deferred_[count - 1].at_ns);
+}
+
+void Segment::defer_frame_firmware(std::uint64_t now_ns) {
+    if (deferred_count_ == kMaxDeferredFrames) run_deferred_firmware();  // (keep_deferred refuses this)
+    if (deferred_count_ == 0) ++deferral_serial_;
+    if (grouped_epoch_ != slaves_epoch_) refresh_groups();
+    for (std::size_t i = deferred_marks_; i < marked_.size(); ++i)
+        group_deferred_[group_of_[marked_[i]]] = deferral_serial_;
+    deferred_[deferred_count_++] = DeferredFrame{now_ns, marked_.size()};
+    deferred_marks_ = marked_.size();
+}
+
+// Before the frame: no slave's deadline or SYNC pulse of a coupled drive is due at its time, so the catch-up
+// before it runs no slave the deferred frames marked (catch_up_deadlines), and the marks are all in marked_.
+// Which slaves the frame concerns is known later (candidates_share_deferred_groups).
+bool Segment::keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) const {
+    return deferred_count_ < kMaxDeferredFrames && marks_valid_ && now_ns >= latest_run_ns_ &&
+           now_ns < earliest_deadline_ns_ && coupled_epoch_ == slaves_epoch_ && coupled_.empty() &&
+           !redundant() && !downstream_ && damage.kind == FrameDamage::Kind::None;
+}
+
+bool Segment::candidates_share_deferred_groups() {
+    if (grouped_epoch_ != slaves_epoch_) refresh_groups();
+    return std::any_of(candidates_.begin(), candidates_.end(),
+                       [&](std::uint32_t k) { return group_deferred_[group_of_[k]] == deferral_serial_; });
 }
 
 void Segment::run_firmware(std::uint64_t now_ns) {
@@ -102,9 +138,9 @@ void Segment::catch_up(std::uint64_t now_ns) {
 void Segment::catch_up_deadlines(std::uint64_t now_ns) {
     deliver_coupled_pulses(now_ns);
     if (now_ns < earliest_deadline_ns_ && now_ns >= latest_run_ns_ && marks_valid_) {
-        // No deadline is due: the marked slaves only.
-        for (const std::uint32_t k : marked_)
-            if (last_run_ns_[k] == 0) pick(k);
+        // No deadline is due: the marked slaves only (not those of deferred frames: they run at their times).
+        for (std::size_t i = deferred_marks_; i < marked_.size(); ++i)
+            if (last_run_ns_[marked_[i]] == 0) pick(marked_[i]);
     } else {
         // The earliest deadline of the slaves that do not run now (those that do fold theirs in as they run).
         std::uint64_t earliest = DistributedClock::kNever;
@@ -225,6 +261,7 @@ void Segment::refresh_groups() {
     for (std::size_t k = 0; k < n; ++k)
         members_[at[group_of_[k]]++] = static_cast<std::uint32_t>(k);
     group_batch_.assign(groups, 0);
+    group_deferred_.assign(groups, 0);
     batch_groups_.reserve(groups);
 }
 

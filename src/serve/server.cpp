@@ -144,26 +144,49 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     const auto bump = [](std::atomic<std::uint64_t>& c) {
         c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     };
+    // A frame waiting in the socket when a reply has gone out is answered before the firmware of the frames
+    // before it runs (the segment runs that firmware first where the frame could see what it does,
+    // Segment::firmware_deferred): a cycle's frames, sent back to back, come back back to back, and their
+    // firmware runs once they are answered. The frames' observer calls wait for it too. Only on the plain
+    // path (one socket, no side channel to wait on).
+    std::array<std::uint64_t, esc::Segment::kMaxDeferredFrames> deferred_at{};
+    std::size_t deferred = 0;
+    const auto run_deferred = [&] {
+        seg.run_deferred_firmware();
+        if (opt.after_frame)
+            for (std::size_t i = 0; i < deferred; ++i)
+                opt.after_frame(opt.after_frame_context, deferred_at[i]);
+        deferred = 0;
+    };
     while (!stop.load(std::memory_order_relaxed)) {
         if (opt.counters) bump(opt.counters->wakeups);
+        const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
+        const bool plain = !other && !(opt.side && !spin);
+        long n = 0;
+        if (deferred != 0) {
+            n = sock.try_receive(Bytes(buf.data(), buf.size()));
+            if (n == 0) run_deferred();
+        }
         // Wake up for the next deadline of the firmware or the faults' timeline, or to catch up.
         std::uint64_t due = std::min(seg.next_firmware_ns(), last_tick + catch_up.period_ns());
         if (opt.filter) due = std::min(due, opt.filter->next_event_ns());
         std::int64_t wait_us = 0;
         if (const std::uint64_t t = monotonic_ns(); due > t)  // rounded up: not awake before it is due
             wait_us = static_cast<std::int64_t>(std::min<std::uint64_t>((due - t + 999) / 1000, 1'000'000));
-        if (opt.filter) send_due_replies(sock, opt, buf, st, wait_us);
-        const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
+        if (opt.filter && n == 0) send_due_replies(sock, opt, buf, st, wait_us);
         bool from_down = false;
-        long n = 0;
-        if (opt.side && (spin || other)) opt.side->service(monotonic_ns());
-        if (other)
+        if (n != 0) {
+            // (a frame that waited: received above)
+        } else if (other) {
+            if (opt.side) opt.side->service(monotonic_ns());
             n = receive_either(sock, *other, Bytes(buf.data(), buf.size()), wait_us, spin, from_down);
-        else if (opt.side && !spin)
+        } else if (opt.side && !spin) {
             n = receive_or_side(sock, *opt.side, side_fds, Bytes(buf.data(), buf.size()), wait_us);
-        else
+        } else {
+            if (opt.side) opt.side->service(monotonic_ns());
             n = spin ? sock.try_receive(Bytes(buf.data(), buf.size()))
                      : sock.receive(Bytes(buf.data(), buf.size()), wait_us);
+        }
         const std::uint64_t now = monotonic_ns();
         if (opt.downstream && now - last_link_check >= kLinkCheckNs) {
             last_link_check = now;
@@ -240,8 +263,12 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             } else if (reply) {
                 send_to_master(sock, opt, ConstBytes(buf.data(), len), st, at);
             }
-            seg.run_deferred_firmware();
-            if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);
+            if (plain && seg.firmware_deferred() && deferred < deferred_at.size()) {
+                deferred_at[deferred++] = at;  // runs when no frame waits (above)
+            } else {
+                run_deferred();  // this frame's firmware, and any before it
+                if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);
+            }
             last_tick = now;
         } else if (n == 0 && now >= due) {
             seg.tick(now);
@@ -253,7 +280,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
         }
         if (opt.counters) opt.counters->catch_up_ns.store(catch_up.period_ns(), std::memory_order_relaxed);
     }
-    seg.run_deferred_firmware();
+    run_deferred();
     seg.set_firmware_threads(nullptr);
     seg.set_deferred_firmware(was_deferred);
     seg.set_local_cycle_ns(was_local_cycle);

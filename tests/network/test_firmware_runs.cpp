@@ -6,14 +6,17 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 
 #include "cia402/drive.hpp"
 #include "common/bytes.hpp"
 #include "esc/segment.hpp"
+#include "net/link.hpp"
 #include "network_support.hpp"
 #include "protocol/cia402_objects.hpp"
 #include "protocol/frame.hpp"
 #include "protocol/registers.hpp"
+#include "serve/in_process_link.hpp"
 
 namespace vecat::network {
 namespace {
@@ -152,6 +155,90 @@ TEST(FirmwareBetweenFrames, TheMasterReadsTheSameAsWithoutIt) {
     ASSERT_NE(drive, nullptr);
     EXPECT_GT(drive->position_actual(), 500'000);
     EXPECT_LT(in_frames[1], in_frames[0]);
+}
+
+// A link into a segment whose clock steps on by 20 us with each frame sent, as frames sent back to back reach
+// a line one after the other.
+class SteppingLink final : public net::Link {
+  public:
+    explicit SteppingLink(esc::Segment& seg) : inner_(seg) {}
+    bool send(ConstBytes f) override {
+        now_ns += 20'000;
+        inner_.set_time(now_ns);
+        return inner_.send(f);
+    }
+    long receive(Bytes b, std::int64_t timeout_us) override { return inner_.receive(b, timeout_us); }
+    std::uint64_t now_ns = 1'000'000'000;
+
+  private:
+    net::InProcessLink inner_;
+};
+
+// Two I/O terminals, one wired to the other, and 70 drives: the process data take several frames.
+std::string many_frames() {
+    std::string text = R"(
+devices:
+  - {name: valves, device: digital-out, channels: 8}
+  - name: sensors
+    device: digital-in
+    channels: 8
+    inputs:
+      0: {wire: valves:0}
+)";
+    for (int i = 1; i <= 70; ++i)
+        text += "  - {name: d" + std::to_string(i) + ", device: drive}\n";
+    return text;
+}
+
+struct Served {
+    Served()
+        : built(build_network(parse_network(many_frames()), "net.yaml")),
+          link(*built.segment),
+          master(link) {}
+    BuiltNetwork built;
+    SteppingLink link;
+    master::Master master;
+};
+
+// The frames of a cycle answered before the firmware of the frames before them ran (as vecat run answers the
+// frames waiting in its socket, Segment::firmware_deferred) read what they read when the firmware runs after
+// each frame: the slaves such a frame concerns are none the deferred firmware runs, or it runs first (the
+// sensors' input is wired to the valves' output, which the first frame writes).
+TEST(FirmwareBetweenFrames, FramesAnsweredBeforeTheFirmwareOfThoseBeforeThemReadTheSame) {
+    Served plain, deferring;
+    for (Served* n : {&plain, &deferring})
+        ASSERT_TRUE(n->master.startup(AlState::Op));
+    ASSERT_EQ(plain.link.now_ns, deferring.link.now_ns) << "both start-ups took the same time";
+    esc::Segment& seg = *deferring.built.segment;
+    seg.set_deferred_firmware(true);
+    ASSERT_GE(plain.master.process_data_frames(), 3u);
+    const test::CspOutputs csp(plain.master.slaves()[2]);
+    ASSERT_TRUE(csp.valid());
+    std::size_t differences = 0;
+    int wired_ones = 0;
+    const std::uint64_t past_before = seg.counters().past_deferred_firmware;
+    for (int i = 0; i < 300; ++i) {
+        const std::uint16_t control = i < 5 ? 0x06 : i < 10 ? 0x07 : 0x0F;
+        for (Served* n : {&plain, &deferring}) {
+            n->master.outputs(0)[0] = static_cast<std::uint8_t>(i);  // the valves
+            for (std::size_t d = 2; d < n->master.slaves().size(); ++d)
+                csp.write(n->master, d, control, i < 20 ? 0 : (i - 20) * 500 * static_cast<std::int32_t>(d));
+            n->link.now_ns += kMs - 20'000 * n->master.process_data_frames();
+            ASSERT_EQ(n->master.exchange_process_data().value_or(0), n->master.expected_wkc());
+        }
+        // No frame waits any more: the server runs what is still deferred.
+        seg.run_deferred_firmware();
+        differences += test::differing_inputs(plain.master, deferring.master);
+        wired_ones += deferring.master.inputs(1)[0] & 1u;
+    }
+    EXPECT_EQ(differences, 0u);
+    // Frames did pass deferred firmware, the wire did carry, the drives did move.
+    EXPECT_GE(seg.counters().past_deferred_firmware - past_before, 300u);  // at least one a cycle
+    EXPECT_GT(wired_ones, 100);
+    EXPECT_LT(wired_ones, 200);
+    auto* drive = dynamic_cast<cia402::Drive*>(&seg.slave(40).app());
+    ASSERT_NE(drive, nullptr);
+    EXPECT_GT(drive->position_actual(), 1'000'000);
 }
 
 }  // namespace
