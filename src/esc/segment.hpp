@@ -418,7 +418,7 @@ class Segment {
     std::uint64_t deferral_serial_ = 0;
     void defer_frame_firmware(std::uint64_t now_ns);
     bool keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) const;
-    bool candidates_share_deferred_groups();
+    bool candidates_share_deferred_groups() const;
     SegmentCounters counters_;
 };
 

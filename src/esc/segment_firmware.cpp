@@ -61,13 +61,19 @@ void Segment::run_deferred_firmware() {
     run_due_firmware(deferred_[count - 1].at_ns);
 }
 
+// (A frame comes here with a place left: keep_deferred let the frames before it stay only then.)
 void Segment::defer_frame_firmware(std::uint64_t now_ns) {
-    if (deferred_count_ == kMaxDeferredFrames) run_deferred_firmware();  // (keep_deferred refuses this)
-    if (deferred_count_ == 0) ++deferral_serial_;
+    deferred_[deferred_count_++] = DeferredFrame{now_ns, marked_.size()};
+    if (deferred_count_ > 1 && grouped_epoch_ != slaves_epoch_) {
+        // The slaves changed during the frame: the groups of the frames before are no longer known.
+        deferred_marks_ = marked_.size();
+        run_deferred_firmware();
+        return;
+    }
+    if (deferred_count_ == 1) ++deferral_serial_;
     if (grouped_epoch_ != slaves_epoch_) refresh_groups();
     for (std::size_t i = deferred_marks_; i < marked_.size(); ++i)
         group_deferred_[group_of_[marked_[i]]] = deferral_serial_;
-    deferred_[deferred_count_++] = DeferredFrame{now_ns, marked_.size()};
     deferred_marks_ = marked_.size();
 }
 
@@ -80,8 +86,8 @@ bool Segment::keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) con
            !redundant() && !downstream_ && damage.kind == FrameDamage::Kind::None;
 }
 
-bool Segment::candidates_share_deferred_groups() {
-    if (grouped_epoch_ != slaves_epoch_) refresh_groups();
+bool Segment::candidates_share_deferred_groups() const {
+    if (grouped_epoch_ != slaves_epoch_) return true;  // (the groups of the deferred frames are not known)
     return std::any_of(candidates_.begin(), candidates_.end(),
                        [&](std::uint32_t k) { return group_deferred_[group_of_[k]] == deferral_serial_; });
 }

@@ -148,7 +148,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     // before it runs (the segment runs that firmware first where the frame could see what it does,
     // Segment::firmware_deferred): a cycle's frames, sent back to back, come back back to back, and their
     // firmware runs once they are answered. The frames' observer calls wait for it too. Only on the plain
-    // path (one socket, no side channel to wait on).
+    // path (one socket, no side channel that could reach the slaves in between).
     std::array<std::uint64_t, esc::Segment::kMaxDeferredFrames> deferred_at{};
     std::size_t deferred = 0;
     const auto run_deferred = [&] {
@@ -161,11 +161,14 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     while (!stop.load(std::memory_order_relaxed)) {
         if (opt.counters) bump(opt.counters->wakeups);
         const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
-        const bool plain = !other && !(opt.side && !spin);
+        const bool plain = !other && !opt.side;
         long n = 0;
         if (deferred != 0) {
             n = sock.try_receive(Bytes(buf.data(), buf.size()));
-            if (n == 0) run_deferred();
+            if (n <= 0) {
+                n = 0;
+                run_deferred();
+            }
         }
         // Wake up for the next deadline of the firmware or the faults' timeline, or to catch up.
         std::uint64_t due = std::min(seg.next_firmware_ns(), last_tick + catch_up.period_ns());
