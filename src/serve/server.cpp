@@ -159,7 +159,6 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
         deferred = 0;
     };
     while (!stop.load(std::memory_order_relaxed)) {
-        if (opt.counters) bump(opt.counters->wakeups);
         const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
         const bool plain = !other && !opt.side;
         long n = 0;
@@ -170,6 +169,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
                 run_deferred();
             }
         }
+        if (opt.counters && n == 0) bump(opt.counters->wakeups);
         // Wake up for the next deadline of the firmware or the faults' timeline, or to catch up.
         std::uint64_t due = std::min(seg.next_firmware_ns(), last_tick + catch_up.period_ns());
         if (opt.filter) due = std::min(due, opt.filter->next_event_ns());

@@ -19,8 +19,9 @@ namespace vecat::net {
 // What the serve loop did so far, readable from another thread while it runs (relaxed counters: figures for
 // a benchmark, not a synchronisation).
 struct ServeCounters {
-    // Loop passes: blocking, one wake-up each (a frame, SYNC pulse, tick or empty wait); busy-polling, one
-    // per poll of the socket.
+    // Loop passes that wait: blocking, one wake-up each (a frame, SYNC pulse, tick or empty wait); busy-
+    // polling, one per poll of the socket. A frame that was already waiting when the last one was answered
+    // takes a pass that does not wait, and does not count.
     std::atomic<std::uint64_t> wakeups{0};
     std::atomic<std::uint64_t> frames{0};  // frames from the master side processed
     std::atomic<std::uint64_t> ticks{0};   // firmware runs without a frame (deadlines, catch-up ticks)
