@@ -1,9 +1,8 @@
 // The project's master (about 830 lines): one start-up sequence in the order of the masters' checklist
 // (scan, SII, topology, mailboxes, PDO sizes and mapped entries by CoE, SoE or SII, FMMUs per SyncManager, DC
 // on a tree, state changes) and the cyclic exchange (its frames back to back, Master::transact_frames), each
-// step a function that builds on the SlaveInfo the
-// steps before filled; one sequence, so one file. The mailbox protocols' clients are beside it
-// (coe_client.cpp, foe_client.cpp, eoe_client.cpp, soe_client.cpp).
+// step a function that builds on the SlaveInfo the steps before filled; one sequence, so one file. The mailbox
+// protocols' clients are beside it (coe_client.cpp, foe_client.cpp, eoe_client.cpp, soe_client.cpp).
 #include "master/master.hpp"
 
 #include <algorithm>
