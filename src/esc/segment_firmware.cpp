@@ -79,11 +79,14 @@ void Segment::defer_frame_firmware(std::uint64_t now_ns) {
 
 // Before the frame: no slave's deadline or SYNC pulse of a coupled drive is due at its time, so the catch-up
 // before it runs no slave the deferred frames marked (catch_up_deadlines), and the marks are all in marked_.
-// Which slaves the frame concerns is known later (candidates_share_deferred_groups).
+// The deferred runs have not set their slaves' next deadlines yet: the frame comes within a local cycle of
+// the first deferred frame, before a deadline a run sets a local cycle ahead (a pending state change's poll)
+// falls due. Which slaves the frame concerns is known later (candidates_share_deferred_groups).
 bool Segment::keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) const {
-    return deferred_count_ < kMaxDeferredFrames && marks_valid_ && now_ns >= latest_run_ns_ &&
-           now_ns < earliest_deadline_ns_ && coupled_epoch_ == slaves_epoch_ && coupled_.empty() &&
-           !redundant() && !downstream_ && damage.kind == FrameDamage::Kind::None;
+    return deferred_count_ < kMaxDeferredFrames && now_ns < deferred_[0].at_ns + local_cycle_ns_ &&
+           marks_valid_ && now_ns >= latest_run_ns_ && now_ns < earliest_deadline_ns_ &&
+           coupled_epoch_ == slaves_epoch_ && coupled_.empty() && !redundant() && !downstream_ &&
+           damage.kind == FrameDamage::Kind::None;
 }
 
 bool Segment::candidates_share_deferred_groups() const {

@@ -1,8 +1,8 @@
 // The project's master (about 830 lines): one start-up sequence in the order of the masters' checklist
 // (scan, SII, topology, mailboxes, PDO sizes and mapped entries by CoE, SoE or SII, FMMUs per SyncManager, DC
 // on a tree, state changes) and the cyclic exchange (its frames back to back, Master::transact_frames), each
-// step a function that builds on the SlaveInfo the steps before filled; one sequence, so one file. The mailbox
-// protocols' clients are beside it (coe_client.cpp, foe_client.cpp, eoe_client.cpp, soe_client.cpp).
+// step a function that builds on the SlaveInfo the steps before filled; one sequence, so one file. The
+// mailbox protocols' clients are beside it (coe_client.cpp, foe_client.cpp, eoe_client.cpp, soe_client.cpp).
 #include "master/master.hpp"
 
 #include <algorithm>
@@ -119,12 +119,14 @@ bool Master::transact_frames(std::span<const std::span<DatagramRequest>> frames)
     if (!fits || datagrams > 0xFF) return false;
     std::uint32_t pending = frames.size() == 32 ? ~0u : (1u << frames.size()) - 1u;
     for (int attempt = 0; attempt <= opt_.retries && pending != 0; ++attempt) {
+        std::uint32_t sent = 0;
         for (std::size_t k = 0; k < frames.size(); ++k)
             if ((pending >> k) & 1u) {
                 build_frame(frames[k], first[k]);
-                link_.send(ConstBytes(tx_.data(), length[k]));
+                if (link_.send(ConstBytes(tx_.data(), length[k]))) sent |= 1u << k;
             }
-        pending = wait_replies(frames, first.data(), pending);
+        // (A frame the link refused is not waited for: the next attempt sends it again at once.)
+        if (sent != 0) pending = wait_replies(frames, first.data(), pending & sent) | (pending & ~sent);
     }
     index_ = static_cast<std::uint8_t>(index_ + datagrams);
     return pending == 0;

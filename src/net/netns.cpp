@@ -7,6 +7,7 @@
 #include <netinet/in.h>
 #include <sched.h>
 #include <spawn.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -153,9 +154,32 @@ bool loopback_up(std::string* why) {
     return run({"ip", "link", "set", "dev", "lo", "up"}, why);
 }
 
+namespace {
+
+// An interface is running once the kernel's link watch has seen its carrier (IFF_RUNNING) and given it its
+// queueing discipline: a frame sent before that is dropped without an error.
+bool running(int fd, const std::string& ifname) {
+    ifreq ifr{};
+    std::strncpy(ifr.ifr_name, ifname.c_str(), IFNAMSIZ - 1);
+    return ::ioctl(fd, SIOCGIFFLAGS, &ifr) == 0 && (ifr.ifr_flags & IFF_RUNNING) != 0;
+}
+
+}  // namespace
+
 bool create_veth_pair(const std::string& a, const std::string& b, std::string* why) {
-    return run({"ip", "link", "add", "name", a, "type", "veth", "peer", "name", b}, why) &&
-           run({"ip", "link", "set", "dev", a, "up"}, why) && run({"ip", "link", "set", "dev", b, "up"}, why);
+    if (!run({"ip", "link", "add", "name", a, "type", "veth", "peer", "name", b}, why) ||
+        !run({"ip", "link", "set", "dev", a, "up"}, why) || !run({"ip", "link", "set", "dev", b, "up"}, why))
+        return false;
+    const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    if (fd < 0) return true;  // (nothing to ask the flags with: as before)
+    bool up = false;
+    for (int ms = 0; ms < 3000 && !up; ++ms) {
+        up = running(fd, a) && running(fd, b);
+        if (!up) ::usleep(1000);
+    }
+    ::close(fd);
+    if (!up && why) *why = "veth pair " + a + "/" + b + ": no carrier 3 s after it was set up";
+    return up;
 }
 
 bool interface_in_use(const std::string& ifname, std::string* why) {

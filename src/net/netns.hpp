@@ -21,7 +21,8 @@ std::string user_namespace_hint();
 // Brings the loopback interface of the current namespace up.
 bool loopback_up(std::string* why = nullptr);
 
-// Creates a veth pair inside the current namespace and brings both ends up. Returns false with a reason.
+// Creates a veth pair inside the current namespace, brings both ends up and waits (up to 3 s) until both
+// have their carrier, so that the first frames are not dropped. Returns false with a reason.
 bool create_veth_pair(const std::string& a, const std::string& b, std::string* why = nullptr);
 
 // True when the interface carries an IPv4 or IPv6 address (link-local IPv6 aside: every interface that is
