@@ -117,6 +117,8 @@ bool Master::transact_frames(std::span<const std::span<DatagramRequest>> frames)
         fits = length[k] != 0;
     }
     if (!fits || datagrams > 0xFF) return false;
+    // One bit per frame (a shift by 32 is undefined: all bits then).
+    static_assert(kMaxFramesInFlight <= 32);
     std::uint32_t pending = frames.size() == 32 ? ~0u : (1u << frames.size()) - 1u;
     for (int attempt = 0; attempt <= opt_.retries && pending != 0; ++attempt) {
         std::uint32_t sent = 0;
