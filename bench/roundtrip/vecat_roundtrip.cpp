@@ -166,14 +166,7 @@ struct ReflectorFrames {
         }
     }
     // The same frames as the master's exchange_process_data, sent as it sends them: back to back.
-    bool exchange(master::Master& r) {
-        const std::span<const std::span<master::DatagramRequest>> all(frames);
-        for (std::size_t k = 0; k < all.size(); k += master::Master::kMaxFramesInFlight)
-            if (!r.transact_frames(
-                    all.subspan(k, std::min(master::Master::kMaxFramesInFlight, all.size() - k))))
-                return false;
-        return true;
-    }
+    bool exchange(master::Master& r) { return r.transact_frames(frames); }
 };
 
 // Time the hypervisor gave this machine's CPUs to others ("steal" of /proc/stat), in ms: a stall of the

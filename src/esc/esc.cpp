@@ -1,4 +1,4 @@
-// The ESC silicon as one unit (about 700 lines): a datagram's way through the register space, the FMMUs
+// The ESC silicon as one unit (about 780 lines): a datagram's way through the register space, the FMMUs
 // and the SII interface is one piece of logic that each part must see whole. The SyncManagers (their
 // state, their ECAT accesses and the PDI side) are in esc_sync_managers.cpp, the DC unit in
 // distributed_clock, the wire layouts in src/protocol. The access rules are listed in README.md.

@@ -105,6 +105,12 @@ std::uint32_t Master::wait_replies(std::span<const std::span<DatagramRequest>> f
 }
 
 bool Master::transact_frames(std::span<const std::span<DatagramRequest>> frames) {
+    for (std::size_t k = 0; k < frames.size(); k += kMaxFramesInFlight)
+        if (!transact_batch(frames.subspan(k, std::min(kMaxFramesInFlight, frames.size() - k)))) return false;
+    return true;
+}
+
+bool Master::transact_batch(std::span<const std::span<DatagramRequest>> frames) {
     // The datagrams of all frames take consecutive indexes, so that each reply names its frame.
     std::array<std::uint8_t, kMaxFramesInFlight> first{};
     std::array<std::size_t, kMaxFramesInFlight> length{};
@@ -136,7 +142,7 @@ bool Master::transact_frames(std::span<const std::span<DatagramRequest>> frames)
 
 bool Master::transact_frame(std::span<DatagramRequest> dgs) {
     const std::span<DatagramRequest> one[1] = {dgs};
-    return transact_frames(one);
+    return transact_batch(one);
 }
 
 std::optional<std::uint16_t> Master::transact(Command cmd, std::uint16_t adp, std::uint16_t ado, Bytes data) {
@@ -631,10 +637,7 @@ std::optional<std::uint16_t> Master::exchange_process_data() {
     }
     dc_buf_.fill(0);
     std::uint16_t wkc = 0;
-    const std::span<const std::span<DatagramRequest>> frames(cyclic_frames_);
-    for (std::size_t k = 0; k < frames.size(); k += kMaxFramesInFlight)
-        if (!transact_frames(frames.subspan(k, std::min(kMaxFramesInFlight, frames.size() - k))))
-            return std::nullopt;
+    if (!transact_frames(cyclic_frames_)) return std::nullopt;
     for (const auto& f : cyclic_frames_)
         wkc = static_cast<std::uint16_t>(wkc + f[0].wkc);
     if (dc && cyclic_frames_[0].size() > 1 && cyclic_frames_[0][1].wkc) dc_time_ = ld_le64(dc_buf_.data());

@@ -117,9 +117,9 @@ class Master {
     std::optional<std::uint16_t> transact_logical(protocol::Command cmd, std::uint32_t laddr, Bytes data);
     // Several datagrams in one frame; false when no reply.
     bool transact_frame(std::span<DatagramRequest> dgs);
-    // Several frames sent back to back before any reply is awaited; each reply is matched to its frame by
-    // its datagrams' indexes, in whatever order the replies come. False when a frame got no reply (or the
-    // frames do not fit: at most kMaxFramesInFlight frames of at most 255 datagrams in all).
+    // Several frames sent back to back before any reply is awaited (kMaxFramesInFlight at a time); each reply
+    // is matched to its frame by its datagrams' indexes, in whatever order the replies come. False when a
+    // frame got no reply (or a batch does not fit: at most 255 datagrams in all).
     static constexpr std::size_t kMaxFramesInFlight = 32;
     bool transact_frames(std::span<const std::span<DatagramRequest>> frames);
 
@@ -221,6 +221,7 @@ class Master {
 
   private:
     std::size_t build_frame(std::span<DatagramRequest> dgs, std::uint8_t first_index);
+    bool transact_batch(std::span<const std::span<DatagramRequest>> frames);  // at most kMaxFramesInFlight
     static bool take_reply(Bytes reply, const protocol::ParsedFrame& pf, std::span<DatagramRequest> dgs,
                            std::uint8_t first_index);
     // Receives until the frames whose bits are set in `pending` have their replies or the reply timeout

@@ -284,12 +284,14 @@ struct Exchange {
 
 class SteppingLink final : public net::Link {
   public:
-    explicit SteppingLink(esc::Segment& seg) : inner_(seg) {}
+    explicit SteppingLink(esc::Segment& seg) : inner_(seg) {
+        inner_.set_time(1'000'000'000);
+        inner_.set_time_step(50'000);
+    }
     bool send(ConstBytes f) override {
-        now_ += 50'000;
-        inner_.set_time(now_);
-        log.push_back({std::vector<std::uint8_t>(f.begin(), f.end()), {}, now_});
-        return inner_.send(f);
+        const bool sent = inner_.send(f);  // (at the time one step on)
+        log.push_back({std::vector<std::uint8_t>(f.begin(), f.end()), {}, inner_.now_ns()});
+        return sent;
     }
     long receive(Bytes b, std::int64_t timeout_us) override {
         // The replies come in the order of the frames (a cycle's frames go out before the first reply).
@@ -302,7 +304,6 @@ class SteppingLink final : public net::Link {
   private:
     std::size_t replied_ = 0;
     net::InProcessLink inner_;
-    std::uint64_t now_ = 1'000'000'000;
 };
 
 // Brings a network to OP with the project master and some cycles of process data; the exchanges.

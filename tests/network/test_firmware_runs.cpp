@@ -11,7 +11,6 @@
 #include "cia402/drive.hpp"
 #include "common/bytes.hpp"
 #include "esc/segment.hpp"
-#include "net/link.hpp"
 #include "network_support.hpp"
 #include "protocol/cia402_objects.hpp"
 #include "protocol/frame.hpp"
@@ -157,23 +156,6 @@ TEST(FirmwareBetweenFrames, TheMasterReadsTheSameAsWithoutIt) {
     EXPECT_LT(in_frames[1], in_frames[0]);
 }
 
-// A link into a segment whose clock steps on by 20 us with each frame sent, as frames sent back to back reach
-// a line one after the other.
-class SteppingLink final : public net::Link {
-  public:
-    explicit SteppingLink(esc::Segment& seg) : inner_(seg) {}
-    bool send(ConstBytes f) override {
-        now_ns += 20'000;
-        inner_.set_time(now_ns);
-        return inner_.send(f);
-    }
-    long receive(Bytes b, std::int64_t timeout_us) override { return inner_.receive(b, timeout_us); }
-    std::uint64_t now_ns = 1'000'000'000;
-
-  private:
-    net::InProcessLink inner_;
-};
-
 // Two I/O terminals, one wired to the other, and 70 drives: the process data take several frames.
 std::string many_frames() {
     std::string text = R"(
@@ -192,11 +174,13 @@ devices:
 
 struct Served {
     Served()
-        : built(build_network(parse_network(many_frames()), "net.yaml")),
-          link(*built.segment),
-          master(link) {}
+        : built(build_network(parse_network(many_frames()), "net.yaml")), link(*built.segment), master(link) {
+        // Frames sent back to back reach the line 20 us apart.
+        link.set_time(1'000'000'000);
+        link.set_time_step(20'000);
+    }
     BuiltNetwork built;
-    SteppingLink link;
+    net::InProcessLink link;
     master::Master master;
 };
 
@@ -208,7 +192,7 @@ TEST(FirmwareBetweenFrames, FramesAnsweredBeforeTheFirmwareOfThoseBeforeThemRead
     Served plain, deferring;
     for (Served* n : {&plain, &deferring})
         ASSERT_TRUE(n->master.startup(AlState::Op));
-    ASSERT_EQ(plain.link.now_ns, deferring.link.now_ns) << "both start-ups took the same time";
+    ASSERT_EQ(plain.link.now_ns(), deferring.link.now_ns()) << "both start-ups took the same time";
     esc::Segment& seg = *deferring.built.segment;
     seg.set_deferred_firmware(true);
     ASSERT_GE(plain.master.process_data_frames(), 3u);
@@ -223,7 +207,7 @@ TEST(FirmwareBetweenFrames, FramesAnsweredBeforeTheFirmwareOfThoseBeforeThemRead
             n->master.outputs(0)[0] = static_cast<std::uint8_t>(i);  // the valves
             for (std::size_t d = 2; d < n->master.slaves().size(); ++d)
                 csp.write(n->master, d, control, i < 20 ? 0 : (i - 20) * 500 * static_cast<std::int32_t>(d));
-            n->link.now_ns += kMs - 20'000 * n->master.process_data_frames();
+            n->link.set_time(n->link.now_ns() + kMs - 20'000 * n->master.process_data_frames());
             ASSERT_EQ(n->master.exchange_process_data().value_or(0), n->master.expected_wkc());
         }
         // No frame waits any more: the server runs what is still deferred.
