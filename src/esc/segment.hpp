@@ -94,7 +94,8 @@ class Segment {
     // answered): the next frame leaves the firmware of the frames before it deferred when it cannot see what
     // that firmware does, and runs it first otherwise. It cannot see it when its datagrams concern none of
     // those slaves nor any slave that shares state with one of them, no deadline is due at its time and no
-    // drives are coupled (keep_deferred, Segment::process_datagrams). Each frame's firmware runs at the
+    // deferred frame marked a drive coupled to another (keep_deferred, Segment::process_datagrams: the
+    // coupled drives' SYNC pulses are handed out before every frame). Each frame's firmware runs at the
     // frame's time, in the frames' order, as if it had run after each frame: the replies are the same.
     bool firmware_deferred() const { return deferred_count_ != 0; }
     static constexpr std::size_t kMaxDeferredFrames = 32;
@@ -419,6 +420,7 @@ class Segment {
     void defer_frame_firmware(std::uint64_t now_ns);
     bool keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) const;
     bool candidates_share_deferred_groups() const;
+    bool coupled_deferred() const;
     SegmentCounters counters_;
 };
 

@@ -77,16 +77,24 @@ void Segment::defer_frame_firmware(std::uint64_t now_ns) {
     deferred_marks_ = marked_.size();
 }
 
-// Before the frame: no slave's deadline or SYNC pulse of a coupled drive is due at its time, so the catch-up
-// before it runs no slave the deferred frames marked (catch_up_deadlines), and the marks are all in marked_.
+// Before the frame: no slave's deadline is due at its time and no deferred frame marked a coupled drive, so
+// the catch-up before it (catch_up_deadlines, and the coupled drives' SYNC pulses up to its time, which step
+// nothing but those drives) runs no slave the deferred frames marked, and the marks are all in marked_.
 // The deferred runs have not set their slaves' next deadlines yet: the frame comes within a local cycle of
 // the first deferred frame, before a deadline a run sets a local cycle ahead (a pending state change's poll)
 // falls due. Which slaves the frame concerns is known later (candidates_share_deferred_groups).
 bool Segment::keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) const {
     return deferred_count_ < kMaxDeferredFrames && now_ns < deferred_[0].at_ns + local_cycle_ns_ &&
            marks_valid_ && now_ns >= latest_run_ns_ && now_ns < earliest_deadline_ns_ &&
-           coupled_epoch_ == slaves_epoch_ && coupled_.empty() && !redundant() && !downstream_ &&
+           coupled_epoch_ == slaves_epoch_ && !coupled_deferred() && !redundant() && !downstream_ &&
            damage.kind == FrameDamage::Kind::None;
+}
+
+bool Segment::coupled_deferred() const {
+    if (coupled_.empty()) return false;
+    if (grouped_epoch_ != slaves_epoch_) return true;  // (the groups of the deferred frames are not known)
+    return std::any_of(coupled_.begin(), coupled_.end(),
+                       [&](std::size_t k) { return group_deferred_[group_of_[k]] == deferral_serial_; });
 }
 
 bool Segment::candidates_share_deferred_groups() const {

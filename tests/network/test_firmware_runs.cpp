@@ -4,12 +4,16 @@
 // SegmentCounters::firmware_runs on a network of one input terminal, one output terminal and one drive.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <utility>
 
 #include "cia402/drive.hpp"
 #include "common/bytes.hpp"
+#include "device/device_description.hpp"
 #include "esc/segment.hpp"
 #include "network_support.hpp"
 #include "protocol/cia402_objects.hpp"
@@ -172,57 +176,116 @@ devices:
     return text;
 }
 
+// A segment served in-process to the project master, whose frames sent back to back reach the line 20 us
+// apart.
 struct Served {
-    Served()
-        : built(build_network(parse_network(many_frames()), "net.yaml")), link(*built.segment), master(link) {
-        // Frames sent back to back reach the line 20 us apart.
+    explicit Served(std::unique_ptr<esc::Segment> s) : seg(std::move(s)), link(*seg), master(link) {
         link.set_time(1'000'000'000);
         link.set_time_step(20'000);
     }
-    BuiltNetwork built;
+    std::unique_ptr<esc::Segment> seg;
     net::InProcessLink link;
     master::Master master;
 };
+
+Served many_frames_network() {
+    return Served(build_network(parse_network(many_frames()), "net.yaml").segment);
+}
+
+// Two copies of one network brought to OP, one of them with its firmware deferred across frames; 300 cycles
+// of several frames each, period_ns apart (cycle i: the drives from first_drive on move in cyclic synchronous
+// position mode, and the callback writes what else it likes), after each of which the deferred firmware runs
+// (no frame waits any more). How many slaves' inputs differed, summed over the cycles, and how many frames
+// passed deferred firmware.
+struct Compared {
+    std::size_t differences = 0;
+    std::uint64_t past_deferred = 0;
+};
+bool to_op(Served& n) {
+    return n.master.startup(AlState::Op);
+}
+template <class EachCycle, class BringUp = decltype(&to_op)>
+Compared compare_deferring(Served& plain, Served& deferring, std::size_t first_drive, EachCycle&& each,
+                           BringUp&& bring_up = to_op, std::uint64_t period_ns = kMs) {
+    Compared c;
+    for (Served* n : {&plain, &deferring})
+        EXPECT_TRUE(bring_up(*n));
+    EXPECT_EQ(plain.link.now_ns(), deferring.link.now_ns()) << "both start-ups took the same time";
+    esc::Segment& seg = *deferring.seg;
+    seg.set_deferred_firmware(true);
+    EXPECT_GE(plain.master.process_data_frames(), 3u);
+    const test::CspOutputs csp(plain.master.slaves()[first_drive]);
+    EXPECT_TRUE(csp.valid());
+    if (!csp.valid()) return c;
+    const std::uint64_t past_before = seg.counters().past_deferred_firmware;
+    for (int i = 0; i < 300; ++i) {
+        const std::uint16_t control = i < 5 ? 0x06 : i < 10 ? 0x07 : 0x0F;
+        for (Served* n : {&plain, &deferring}) {
+            each(*n, i);
+            for (std::size_t d = first_drive; d < n->master.slaves().size(); ++d)
+                csp.write(n->master, d, control,
+                          i < 20 ? 0 : (i - 20) * 500 * static_cast<std::int32_t>(d + 1));
+            n->link.set_time(n->link.now_ns() + period_ns - 20'000 * n->master.process_data_frames());
+            EXPECT_EQ(n->master.exchange_process_data().value_or(0), n->master.expected_wkc());
+        }
+        seg.run_deferred_firmware();
+        c.differences += test::differing_inputs(plain.master, deferring.master);
+    }
+    c.past_deferred = seg.counters().past_deferred_firmware - past_before;
+    return c;
+}
 
 // The frames of a cycle answered before the firmware of the frames before them ran (as vecat run answers the
 // frames waiting in its socket, Segment::firmware_deferred) read what they read when the firmware runs after
 // each frame: the slaves such a frame concerns are none the deferred firmware runs, or it runs first (the
 // sensors' input is wired to the valves' output, which the first frame writes).
 TEST(FirmwareBetweenFrames, FramesAnsweredBeforeTheFirmwareOfThoseBeforeThemReadTheSame) {
-    Served plain, deferring;
-    for (Served* n : {&plain, &deferring})
-        ASSERT_TRUE(n->master.startup(AlState::Op));
-    ASSERT_EQ(plain.link.now_ns(), deferring.link.now_ns()) << "both start-ups took the same time";
-    esc::Segment& seg = *deferring.built.segment;
-    seg.set_deferred_firmware(true);
-    ASSERT_GE(plain.master.process_data_frames(), 3u);
-    const test::CspOutputs csp(plain.master.slaves()[2]);
-    ASSERT_TRUE(csp.valid());
-    std::size_t differences = 0;
+    Served plain = many_frames_network(), deferring = many_frames_network();
     int wired_ones = 0;
-    const std::uint64_t past_before = seg.counters().past_deferred_firmware;
-    for (int i = 0; i < 300; ++i) {
-        const std::uint16_t control = i < 5 ? 0x06 : i < 10 ? 0x07 : 0x0F;
-        for (Served* n : {&plain, &deferring}) {
-            n->master.outputs(0)[0] = static_cast<std::uint8_t>(i);  // the valves
-            for (std::size_t d = 2; d < n->master.slaves().size(); ++d)
-                csp.write(n->master, d, control, i < 20 ? 0 : (i - 20) * 500 * static_cast<std::int32_t>(d));
-            n->link.set_time(n->link.now_ns() + kMs - 20'000 * n->master.process_data_frames());
-            ASSERT_EQ(n->master.exchange_process_data().value_or(0), n->master.expected_wkc());
-        }
-        // No frame waits any more: the server runs what is still deferred.
-        seg.run_deferred_firmware();
-        differences += test::differing_inputs(plain.master, deferring.master);
-        wired_ones += deferring.master.inputs(1)[0] & 1u;
-    }
-    EXPECT_EQ(differences, 0u);
+    const Compared c = compare_deferring(plain, deferring, 2, [&](Served& n, int i) {
+        n.master.outputs(0)[0] = static_cast<std::uint8_t>(i);  // the valves
+        if (&n == &deferring) wired_ones += n.master.inputs(1)[0] & 1u;
+    });
+    EXPECT_EQ(c.differences, 0u);
     // Frames did pass deferred firmware, the wire did carry, the drives did move.
-    EXPECT_GE(seg.counters().past_deferred_firmware - past_before, 300u);  // at least one a cycle
+    EXPECT_GE(c.past_deferred, 300u);  // at least one a cycle
     EXPECT_GT(wired_ones, 100);
     EXPECT_LT(wired_ones, 200);
-    auto* drive = dynamic_cast<cia402::Drive*>(&seg.slave(40).app());
+    auto* drive = dynamic_cast<cia402::Drive*>(&deferring.seg->slave(40).app());
     ASSERT_NE(drive, nullptr);
     EXPECT_GT(drive->position_actual(), 1'000'000);
+}
+
+// The same on a line of 70 vecat drives whose first two are coupled by TWINsync (as vecat run --slaves N
+// makes it): the coupled pair steps each other and takes its SYNC pulses before every frame, so the frames
+// after one that gave the pair work run the deferred firmware first; the other frames still defer.
+TEST(FirmwareBetweenFrames, FramesAnsweredBeforeTheFirmwareOfThoseBeforeThemWithACoupledPairReadTheSame) {
+    const auto line = [] { return Served(cia402::make_drive_segment(device::default_drive(), 70)); };
+    Served plain = line(), deferring = line();
+    ASSERT_TRUE(deferring.seg->slave(0).app().coupled());
+    // SYNC0 every 1 ms on every drive, from the same system time in both copies, before OP: the drives run
+    // DC-synchronous (a servo period at each pulse), and the pair takes its pulses before every frame.
+    const auto start_sync = [](Served& n) {
+        return n.master.startup(AlState::SafeOp) && n.master.configure_dc(1'000'000'000'000) &&
+               n.master.compensate_static_drift(100) &&
+               std::all_of(n.master.slaves().begin(), n.master.slaves().end(),
+                           [&](const master::SlaveInfo& s) {
+                               return n.master.start_sync(s.station, 1'000'000, 0, 5'000'000);
+                           }) &&
+               n.master.request_state(AlState::Op);
+    };
+    // Cycles 3 us longer than SYNC0's: the pulses move through the cycle, between its frames too.
+    const Compared c = compare_deferring(
+        plain, deferring, 0, [](Served&, int) {}, start_sync, kMs + 3'000);
+    EXPECT_EQ(c.differences, 0u);
+    EXPECT_GE(c.past_deferred, 250u);  // the last frame of nearly every cycle (the first carries the FRMW)
+    EXPECT_GE(deferring.seg->slave(1).esc().dc().counters().sync_pulses[0], 250u);
+    for (const std::size_t k : {std::size_t{1}, std::size_t{40}}) {
+        auto* drive = dynamic_cast<cia402::Drive*>(&deferring.seg->slave(k).app());
+        ASSERT_NE(drive, nullptr);
+        EXPECT_GT(drive->position_actual(), 100'000) << "drive " << k;
+        EXPECT_EQ(drive->sync_mode(), coe::SyncMode::DcSync0) << "drive " << k;
+    }
 }
 
 }  // namespace
