@@ -139,7 +139,9 @@ std::vector<Frame> cyclic_frames(Line& line) {
 
 // The cyclic exchange: LRW over the whole image plus the FRMW of the reference clock, in as many frames as
 // the image needs (100 drives: 4 frames). range(1) = 0: time stands still (the ESC engine and the firmware's
-// process data exchange only); 1: 1 ms passes per cycle (also 4 servo periods of every drive).
+// process data exchange only); 1: 1 ms passes per cycle (also 4 servo periods of every drive). 512 drives
+// (16 frames): the state the cycle touches no longer fits a core's L2 cache, and the time per slave grows
+// (see bench/README.md, "Large networks").
 void BM_CyclicLrwFrmw(benchmark::State& state) {
     const auto n = static_cast<std::size_t>(state.range(0));
     const bool advance = state.range(1) != 0;
@@ -154,7 +156,7 @@ void BM_CyclicLrwFrmw(benchmark::State& state) {
     state.SetLabel(std::to_string(frames.size()) + " frame(s)" +
                    (advance ? ", 1 ms per cycle" : ", time frozen"));
 }
-BENCHMARK(BM_CyclicLrwFrmw)->ArgsProduct({{1, 10, 100}, {0, 1}});
+BENCHMARK(BM_CyclicLrwFrmw)->ArgsProduct({{1, 10, 100, 512}, {0, 1}});
 
 // The same cyclic frames (time frozen) as the serve loop handles them: the firmware of the slaves runs after
 // the reply is sent (Segment::set_deferred_firmware). The time reported is the reply path, what the
@@ -192,6 +194,6 @@ void BM_CyclicReplyPath(benchmark::State& state) {
     state.counters["clock_read_ns"] = overhead * 1e9;
     state.SetLabel(std::to_string(frames.size()) + " frame(s), time frozen, firmware after the reply");
 }
-BENCHMARK(BM_CyclicReplyPath)->Arg(1)->Arg(10)->Arg(100)->UseManualTime();
+BENCHMARK(BM_CyclicReplyPath)->Arg(1)->Arg(10)->Arg(100)->Arg(512)->UseManualTime();
 
 }  // namespace
