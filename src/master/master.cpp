@@ -1,4 +1,4 @@
-// The project's master (about 830 lines): one start-up sequence in the order of the masters' checklist
+// The project's master (about 870 lines): one start-up sequence in the order of the masters' checklist
 // (scan, SII, topology, mailboxes, PDO sizes and mapped entries by CoE, SoE or SII, FMMUs per SyncManager, DC
 // on a tree, state changes) and the cyclic exchange (its frames back to back, Master::transact_frames), each
 // step a function that builds on the SlaveInfo the steps before filled; one sequence, so one file. The
@@ -6,7 +6,9 @@
 #include "master/master.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
+#include <string>
 #include <thread>
 
 #include "master/coe_client.hpp"
@@ -797,6 +799,33 @@ bool Master::startup(AlState target, std::string* why) {
         if (why) *why = m;
         return false;
     };
+    // A state the slaves did not all reach: the first that did not, and why (request_state's readings).
+    const auto refused = [&](AlState s) {
+        std::string m = std::string(protocol::to_string(s)) + " refused";
+        std::size_t others = 0;
+        std::string first;
+        for (std::size_t i = 0; i < last_states_.size() && i < slaves_.size(); ++i) {
+            const AlStatusReading& r = last_states_[i];
+            if (r.ok && r.state() == s && !r.error()) continue;
+            if (!first.empty()) {
+                ++others;
+                continue;
+            }
+            char b[200];
+            if (!r.ok)
+                std::snprintf(b, sizeof b, ": slave %zu (station 0x%04X) does not answer", i,
+                              slaves_[i].station);
+            else
+                std::snprintf(
+                    b, sizeof b, ": slave %zu (station 0x%04X) is in %s%s, AL status code 0x%04X (%s)", i,
+                    slaves_[i].station, std::string(protocol::to_string(r.state())).c_str(),
+                    r.error() ? " with the error flag" : "", r.code,
+                    std::string(protocol::describe(static_cast<protocol::AlStatusCode>(r.code))).c_str());
+            first = b;
+        }
+        if (others) first += " (and " + std::to_string(others) + " more)";
+        return fail(m + first);
+    };
     const int n = count_slaves();
     if (n <= 0) return fail("no slaves found");
     if (!reset_slaves()) return fail("bus reset failed");
@@ -804,7 +833,7 @@ bool Master::startup(AlState target, std::string* why) {
     if (!read_slave_information()) return fail("reading ESC information / SII failed");
     if (target == AlState::Init) return true;
     if (!configure_mailboxes()) return fail("mailbox SyncManager configuration failed");
-    if (!request_state(AlState::PreOp)) return fail("PREOP refused");
+    if (!request_state(AlState::PreOp)) return refused(AlState::PreOp);
     if (target == AlState::PreOp) return true;
     if (!configure_process_data()) return fail("process data configuration failed");
     if (opt_.dc.enable) {
@@ -829,10 +858,10 @@ bool Master::startup(AlState target, std::string* why) {
                         return fail("SYNC0 activation failed");
         }
     }
-    if (!request_state(AlState::SafeOp)) return fail("SAFEOP refused");
+    if (!request_state(AlState::SafeOp)) return refused(AlState::SafeOp);
     if (target == AlState::SafeOp) return true;
     exchange_process_data();
-    if (!request_state(AlState::Op)) return fail("OP refused");
+    if (!request_state(AlState::Op)) return refused(AlState::Op);
     return true;
 }
 
