@@ -444,17 +444,39 @@ std::string slot_label(pugi::xml_node slot, int no) {
     return n.empty() ? fmt::format("slot {}", no + 1) : fmt::format("slot {} \"{}\"", no + 1, n);
 }
 
-// The default module of a slot: its ModuleIdent with Default, else its first one.
+// The Module of the file whose Type has this ModuleIdent text (none: no such Module, or no number).
+pugi::xml_node module_with_ident(pugi::xml_node modules, const std::string& ident_text) {
+    const auto want = parse_hexdec(ident_text);
+    for (auto m : modules.children("Module"))
+        if (want && attr_or(m.child("Type"), "ModuleIdent", -1) == *want) return m;
+    return {};
+}
+
+// The default module of a slot (ETG.2000 SlotType): the ModuleIdent of the Slot's Default attribute (a slot
+// of ModuleClass entries names its default so), else its ModuleIdent with Default, else its first one.
 pugi::xml_node default_module(pugi::xml_node slot, pugi::xml_node modules, std::string& ident_text) {
+    if (const auto a = slot.attribute("Default")) {
+        ident_text = trim(a.as_string());
+        return module_with_ident(modules, ident_text);
+    }
     pugi::xml_node ident;
     for (auto mi : slot.children("ModuleIdent"))
         if (bool_attr(mi, "Default")) ident = mi;
     if (!ident) ident = slot.child("ModuleIdent");
     ident_text = txt(ident);
-    const auto want = parse_hexdec(ident_text);
-    for (auto m : modules.children("Module"))
-        if (want && attr_or(m.child("Type"), "ModuleIdent", -1) == *want) return m;
-    return {};
+    return module_with_ident(modules, ident_text);
+}
+
+// ETG.2000 SlotType Fallback: the module "automatically plugged when no other module is plugged to this
+// slot" (none: the slot can stay empty). A Fallback that names no Module of the file refuses the file.
+pugi::xml_node fallback_module(pugi::xml_node slot, pugi::xml_node modules) {
+    const auto a = slot.attribute("Fallback");
+    if (!a) return {};
+    const auto m = module_with_ident(modules, trim(a.as_string()));
+    if (!m)
+        throw EsiError(fmt::format("Slot \"{}\": Fallback {} names no Module of the file", name_of(slot),
+                                   trim(a.as_string())));
+    return m;
 }
 
 // The objects of a module's own dictionary (Module/Profile/Dictionary), their DependOnSlot and
@@ -484,7 +506,9 @@ struct SlotPosition {
     pugi::xml_node slot;    // its Slot element
     pugi::xml_node module;  // none: empty
     bool chosen = false;    // from DeviceSelector::modules, not the Slot's default
-    std::string why_empty;  // a Slot without its default module: what it lacks
+    std::string why_empty;  // a Slot without its default module: what it lacks (with a Fallback: why it
+                            // took that instead)
+    bool fallback = false;  // the Slot's Fallback module, in a slot that would be empty
 };
 
 // A Slot's own increment, else the one of Slots (ETG.2000: the Slot's attribute overrides Slots').
@@ -493,7 +517,8 @@ std::int64_t increment(pugi::xml_node slot, pugi::xml_node slots, const char* na
 }
 
 // The entries of DeviceSelector::modules a Slot element takes, from `entry` on: the modules it takes while it
-// has fewer than MaxInstances; `empty` as its first entry leaves it empty (one empty slot, MinInstances 0).
+// has fewer than MaxInstances; `empty` as its first entry plugs the Slot's Fallback module, or without one
+// leaves it empty (one empty slot, MinInstances 0).
 // Appends its slots to `out` and moves `entry` past the entries taken. full_note: why the previous Slot took
 // no more (it is full), for the message of a refused entry.
 void take_entries(pugi::xml_node slot, pugi::xml_node modules,
@@ -507,6 +532,14 @@ void take_entries(pugi::xml_node slot, pugi::xml_node modules,
         const std::size_t no = out.size();
         if (!list[entry]) {
             if (taken > 0) break;  // the next Slot's entry
+            if (const auto fb = fallback_module(slot, modules)) {
+                // Not empty after all: the Fallback module is plugged (an instance like any other).
+                out.push_back({slot, fb, true, "the list leaves it empty", true});
+                ++entry;
+                ++taken;
+                full_note.clear();
+                continue;
+            }
             if (min != 0)
                 throw ModuleError(entry, fmt::format("{} cannot stay empty (MinInstances {})", label(no),
                                                      trim(slot.attribute("MinInstances").as_string("1"))));
@@ -566,10 +599,11 @@ std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node mod
                             "MinInstances <= MaxInstances, MaxInstances >= 1)",
                             name_of(slot), min, max));
         most += max;
+        fallback_module(slot, modules);  // a Fallback that names no Module refuses the file, used or not
     }
     // The slots: the Slot elements in order, each taking entries of the list; after the list (or without
-    // one) each Slot its default module MinInstances times (at least once; the first ModuleIdent or the
-    // Default one; none: one empty slot).
+    // one) each Slot its default module MinInstances times (at least once; the Slot's Default, else the
+    // first ModuleIdent or the Default one; none: its Fallback module, else one empty slot).
     std::vector<SlotPosition> positions;
     std::size_t entry = 0;
     std::string full_note;
@@ -583,12 +617,15 @@ std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node mod
         const auto n = std::max<std::int64_t>(1, attr_or(slot, "MinInstances", 1));
         for (std::int64_t k = 0; k < n; ++k) {
             if (!module) {
-                positions.push_back({slot,
-                                     {},
-                                     false,
-                                     ident.empty()
-                                         ? fmt::format("no default module (it takes {})", slot_offer(slot))
-                                         : fmt::format("default module {} not found", ident)});
+                const std::string why = ident.empty()
+                                            ? fmt::format("no default module (it takes {})", slot_offer(slot))
+                                            : fmt::format("default module {} not found", ident);
+                if (const auto fb = fallback_module(slot, modules)) {
+                    positions.push_back({slot, fb, false, why, true});
+                    if (positions.size() > protocol::obj::modular_device::max_slots) break;
+                    continue;
+                }
+                positions.push_back({slot, {}, false, why});
                 break;  // one empty slot stands for the Slot
             }
             positions.push_back({slot, module, false, {}});
@@ -635,8 +672,12 @@ std::vector<ObjectDescription> read_slots(pugi::xml_node dev, pugi::xml_node mod
             d.tx_pdos.push_back(read_pdo(p, d, false, shift));
         read_module_objects(pos.module, device_dict, shift, objects, notes);
         d.module_idents.push_back(module_ident(pos.module));
-        notes.push_back(fmt::format("{}: {} module {}", slot_label(pos.slot, no),
-                                    pos.chosen ? "chosen" : "default", module_label(pos.module)));
+        if (pos.fallback)
+            notes.push_back(fmt::format("{}: {}, fallback module {} (Slot Fallback)",
+                                        slot_label(pos.slot, no), pos.why_empty, module_label(pos.module)));
+        else
+            notes.push_back(fmt::format("{}: {} module {}", slot_label(pos.slot, no),
+                                        pos.chosen ? "chosen" : "default", module_label(pos.module)));
     }
     return objects;
 }
