@@ -116,6 +116,12 @@ class Segment {
     std::uint64_t local_cycle_ns() const { return local_cycle_ns_; }
     // Host time of the earliest deadline of any slave's firmware (DistributedClock::kNever if none).
     std::uint64_t next_firmware_ns() const;
+    // Something outside the frames changed what slave k's firmware makes of its own cycle (an input forced
+    // or released on an application whose inputs otherwise do not change with time, which says
+    // Application::next_cycle_ns kNever): the next frame that reads it finds it caught up first.
+    void wake_slave(std::size_t k) {
+        if (k < cycle_ns_.size()) cycle_ns_[k] = 0;
+    }
 
     // ---- Firmware on several threads (vecat run --threads N). The runs of one batch (the catch-up of the
     // slaves a frame reads, before the frame is processed; the runs after a frame; a tick) go to the

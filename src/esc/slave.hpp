@@ -77,7 +77,8 @@ class Application {
     // The host time of the application's next own cycle (a drive's servo period): a frame that reads the
     // slave at or after it finds the slave caught up first, so that it reads every cycle up to its own time.
     // 0: the application does not say; the segment then takes a run a local cycle old as stale
-    // (Segment::set_local_cycle_ns). Asked after each run.
+    // (Segment::set_local_cycle_ns). DistributedClock::kNever: what it makes does not change with time (a
+    // change from outside the frames wakes it, Segment::wake_slave). Asked after each run.
     virtual std::uint64_t next_cycle_ns() const { return 0; }
 };
 

@@ -207,12 +207,14 @@ void InputForcing::start(const faults::FaultSpec& f, std::uint64_t) {
         throw std::invalid_argument("set_input: value " + v->second + " is no number");
     }
     bus_->force(slot, channel, value);
+    seg_.wake_slave(f.slave);
 }
 
 void InputForcing::stop(const faults::FaultSpec& f, std::uint64_t) {
     try {
         const auto [slot, channel] = target(f);
         bus_->release(slot, channel);
+        seg_.wake_slave(f.slave);
     } catch (const std::invalid_argument&) {
         // The terminal went (a restart keeps its slot: the next start of the fault finds it again).
     }

@@ -148,6 +148,11 @@ class InputTerminal final : public esc::ProcessImageApplication, public Forceabl
     unsigned input_channels() const override { return channels(); }
     ChannelKind kind() const { return kind_; }
     void shared_state(std::vector<const void*>& keys) const override;  // the outputs it is wired to
+    // Inputs that are all constant (no wire, no signal that changes with time) need no run of their own:
+    // a frame reads what the last run wrote, and a forced input wakes the terminal (InputForcing).
+    std::uint64_t next_cycle_ns() const override {
+        return changing_.empty() ? esc::DistributedClock::kNever : 0;
+    }
 
   private:
     ChannelKind kind_;

@@ -218,6 +218,52 @@ TEST(IoTerminals, AnInputForcedThroughTheControlSocketUntilTheFaultIsCleared) {
     EXPECT_EQ(l.inj.execute("inject set_input slave=1 channel=0", l.now).rfind("error", 0), 0u);
 }
 
+// An input terminal whose inputs are all constant has no cycle of its own (InputTerminal::next_cycle_ns): a
+// frame reads what its last run wrote, and it runs only within the segment's lag bound (16 local cycles),
+// not before every frame that reads it. An input forced or released wakes it (InputForcing,
+// Segment::wake_slave): the very next frame reads the forced value. (The fault injector's start and stop
+// also reset every slave's schedule; the handler is called here without it, as a timeline could.)
+TEST(IoTerminals, AConstantInputTerminalRunsOnlyWhenWokenAndShowsAForcedInputAtOnce) {
+    network::BuiltNetwork built = network::build_network(
+        network::parse_network(
+            "devices:\n  - {name: ins, device: digital-in, channels: 4, inputs: {3: {signal: "
+            "constant, value: 1}}}\n",
+            "c.yaml"),
+        "c.yaml");
+    net::InProcessLink link(*built.segment);
+    io::InputForcing forcing(*built.segment, built.io);
+    std::uint64_t now = 1'000'000'000;
+    link.set_time(now);
+    master::Master m(link);
+    std::string why;
+    ASSERT_TRUE(m.startup(AlState::Op, &why)) << why;
+    const auto cycle = [&] {
+        now += 1'000'000;
+        link.set_time(now);
+        EXPECT_EQ(m.exchange_process_data().value_or(0), m.expected_wkc());
+        return m.inputs(0)[0] & 0x0F;
+    };
+    cycle();
+    const std::uint64_t before = built.segment->counters().firmware_runs;
+    for (int i = 0; i < 8; ++i)
+        EXPECT_EQ(cycle(), 0x08);
+    EXPECT_LE(built.segment->counters().firmware_runs - before, 2u);  // 8 ms: its lag bound twice at most
+    // Each change just after a lag-bound run of the terminal (the cycle in which the run count moves), so
+    // that only the wake can bring it to the next frame.
+    const auto just_after_its_run = [&] {
+        const std::uint64_t r = built.segment->counters().firmware_runs;
+        for (int i = 0; i < 20 && built.segment->counters().firmware_runs == r; ++i)
+            cycle();
+    };
+    const faults::FaultSpec f = faults::parse_fault("set_input slave=0 channel=1 value=1");
+    just_after_its_run();
+    forcing.start(f, now);
+    EXPECT_EQ(cycle(), 0x0A) << "forced";
+    just_after_its_run();
+    forcing.stop(f, now);
+    EXPECT_EQ(cycle(), 0x08) << "released";
+}
+
 // A vecat drive of a network file has inputs to force too: its touch probe inputs 1 and 2 (0x60FD bits 16
 // and 17), without any inputs: entry in the file.
 TEST(IoTerminals, ADrivesTouchProbeInputForcedThroughTheControlSocket) {
