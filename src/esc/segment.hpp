@@ -427,6 +427,10 @@ class Segment {
     bool keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) const;
     bool candidates_share_deferred_groups() const;
     bool coupled_deferred() const;
+    // Whether one of these slaves shares a group with a slave a deferred frame marked (true while the groups
+    // are not known).
+    template <class Slaves>
+    bool share_deferred_groups(const Slaves& slaves) const;
     SegmentCounters counters_;
 };
 

@@ -90,17 +90,19 @@ bool Segment::keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) con
            damage.kind == FrameDamage::Kind::None;
 }
 
-bool Segment::coupled_deferred() const {
-    if (coupled_.empty()) return false;
+template <class Slaves>
+bool Segment::share_deferred_groups(const Slaves& slaves) const {
     if (grouped_epoch_ != slaves_epoch_) return true;  // (the groups of the deferred frames are not known)
-    return std::any_of(coupled_.begin(), coupled_.end(),
+    return std::any_of(slaves.begin(), slaves.end(),
                        [&](std::size_t k) { return group_deferred_[group_of_[k]] == deferral_serial_; });
 }
 
+bool Segment::coupled_deferred() const {
+    return !coupled_.empty() && share_deferred_groups(coupled_);
+}
+
 bool Segment::candidates_share_deferred_groups() const {
-    if (grouped_epoch_ != slaves_epoch_) return true;  // (the groups of the deferred frames are not known)
-    return std::any_of(candidates_.begin(), candidates_.end(),
-                       [&](std::uint32_t k) { return group_deferred_[group_of_[k]] == deferral_serial_; });
+    return share_deferred_groups(candidates_);
 }
 
 void Segment::run_firmware(std::uint64_t now_ns) {
