@@ -47,36 +47,65 @@ struct Drive::Objects {
 
     coe::ObjectDictionary& od;
     const bool vecat_objects;
-    V<std::uint16_t> controlword = bind(obj::controlword);
+    // The handles a servo period reads and writes first, together: few cache lines per period (a line of
+    // hundreds of drives runs each period out of the caches).
+    V<std::uint32_t> digital_inputs = bind(obj::digital_inputs);
     V<std::uint16_t> statusword = bind(obj::statusword);
+    V<std::int8_t> modes_display = bind(obj::modes_of_operation_display);
+    V<std::int32_t> position_demand = bind(obj::position_demand_value);
+    V<std::int32_t> position_demand_internal = bind(obj::position_demand_internal_value);
+    V<std::int32_t> position_internal = bind(obj::position_actual_internal_value);
+    V<std::int32_t> position_actual = bind(obj::position_actual_value);
+    V<std::int32_t> following_error_actual = bind(obj::following_error_actual_value);
+    V<std::int32_t> velocity_demand = bind(obj::velocity_demand_value);
+    V<std::int32_t> velocity_actual = bind(obj::velocity_actual_value);
+    V<std::int16_t> torque_demand = bind(obj::torque_demand);
+    V<std::int16_t> torque_actual = bind(obj::torque_actual_value);
+    V<std::int16_t> current_actual = bind(obj::current_actual_value);
+    V<std::int16_t> temperature = mfr_bind(mfr::drive_temperature);
+    V<std::int16_t> tw_local_ref_torque = tw<std::int16_t>(twinsync::p::LocalRefTorque);
+    V<std::int16_t> tw_local_act_torque = tw<std::int16_t>(twinsync::p::LocalActTorque);
+    V<std::int16_t> tw_torque_actual_scaled = tw<std::int16_t>(twinsync::p::TorqueActualScaled);
+    V<std::int16_t> tw_local_ref_speed = tw<std::int16_t>(twinsync::p::LocalRefSpeed);
+    V<std::int16_t> tw_local_ff_speed = tw<std::int16_t>(twinsync::p::LocalRefFFSpeed);
+    V<std::int16_t> tw_local_act_speed = tw<std::int16_t>(twinsync::p::LocalActSpeed);
+    V<float> tw_speed_actual_rpm = tw<float>(twinsync::p::SpeedActualRpm);
+    V<float> tw_speed_setpoint_rpm = tw<float>(twinsync::p::SpeedSetpointRpm);
+    V<std::int32_t> tw_local_ref_pos = tw<std::int32_t>(twinsync::p::LocalRefPos);
+    V<std::int32_t> tw_local_act_pos = tw<std::int32_t>(twinsync::p::LocalActPos);
+    V<std::int32_t> tw_position_actual = tw<std::int32_t>(twinsync::p::PositionActual);
+    V<std::uint16_t> tw_local_eps = tw<std::uint16_t>(twinsync::p::LocalActEps);
+    V<std::uint16_t> tw_error_number = tw<std::uint16_t>(twinsync::p::CurrentError, 1);
+    V<std::uint16_t> tw_error_location = tw<std::uint16_t>(twinsync::p::CurrentError, 2);
+    V<std::uint16_t> controlword = bind(obj::controlword);
+    V<std::int8_t> modes = bind(obj::modes_of_operation);
+    V<std::int32_t> target_position = bind(obj::target_position);
+    V<std::int32_t> target_velocity = bind(obj::target_velocity);
+    V<std::int16_t> target_torque = bind(obj::target_torque);
+    V<std::int32_t> position_offset = bind(obj::position_offset);
+    V<std::int32_t> velocity_offset = bind(obj::velocity_offset);
+    V<std::int16_t> torque_offset = bind(obj::torque_offset);
+    V<std::uint16_t> probe_function = bind(obj::touch_probe_function);
+    V<std::uint32_t> digital_outputs = bind(obj::digital_outputs::physical_outputs);
+    V<std::uint32_t> digital_output_mask = bind(obj::digital_outputs::bit_mask);
+    V<std::uint16_t> tw_switching_frequency = tw<std::uint16_t>(twinsync::p::SwitchingFrequency);
+    // The rest.
     V<std::int16_t> quick_stop_option = bind(obj::quick_stop_option_code);
     V<std::int16_t> shutdown_option = bind(obj::shutdown_option_code);
     V<std::int16_t> disable_operation_option = bind(obj::disable_operation_option_code);
     V<std::int16_t> halt_option = bind(obj::halt_option_code);
     V<std::int16_t> fault_reaction_option = bind(obj::fault_reaction_option_code);
-    V<std::int8_t> modes = bind(obj::modes_of_operation);
-    V<std::int8_t> modes_display = bind(obj::modes_of_operation_display);
-    V<std::int32_t> position_demand = bind(obj::position_demand_value);
-    V<std::int32_t> position_internal = bind(obj::position_actual_internal_value);
-    V<std::int32_t> position_actual = bind(obj::position_actual_value);
     V<std::uint32_t> following_error_window = bind(obj::following_error_window);
     V<std::uint16_t> following_error_timeout = bind(obj::following_error_time_out);
     V<std::uint32_t> position_window = bind(obj::position_window);
     V<std::uint16_t> position_window_time = bind(obj::position_window_time);
-    V<std::int32_t> velocity_demand = bind(obj::velocity_demand_value);
-    V<std::int32_t> velocity_actual = bind(obj::velocity_actual_value);
     V<std::uint16_t> velocity_window = bind(obj::velocity_window);
     V<std::uint16_t> velocity_window_time = bind(obj::velocity_window_time);
     V<std::uint16_t> velocity_threshold = bind(obj::velocity_threshold);
     V<std::uint16_t> velocity_threshold_time = bind(obj::velocity_threshold_time);
-    V<std::int16_t> target_torque = bind(obj::target_torque);
     V<std::uint16_t> max_torque = bind(obj::max_torque);
-    V<std::int16_t> torque_demand = bind(obj::torque_demand);
     V<std::uint32_t> rated_current = bind(obj::motor_rated_current);
     V<std::uint32_t> rated_torque = bind(obj::motor_rated_torque);
-    V<std::int16_t> torque_actual = bind(obj::torque_actual_value);
-    V<std::int16_t> current_actual = bind(obj::current_actual_value);
-    V<std::int32_t> target_position = bind(obj::target_position);
     V<std::int32_t> home_offset = bind(obj::home_offset);
     V<std::int32_t> software_limit_min = bind(obj::software_position_limit::min);
     V<std::int32_t> software_limit_max = bind(obj::software_position_limit::max);
@@ -99,10 +128,6 @@ struct Drive::Objects {
     V<std::uint32_t> homing_speed_zero = bind(obj::homing_speeds::search_for_zero);
     V<std::uint32_t> homing_acceleration = bind(obj::homing_acceleration);
     V<std::uint32_t> profile_jerk = bind(obj::profile_jerk::jerk_1);
-    V<std::int32_t> position_offset = bind(obj::position_offset);
-    V<std::int32_t> velocity_offset = bind(obj::velocity_offset);
-    V<std::int16_t> torque_offset = bind(obj::torque_offset);
-    V<std::uint16_t> probe_function = bind(obj::touch_probe_function);
     V<std::uint16_t> probe_status = bind(obj::touch_probe_status);
     V<std::int32_t> probe1_positive = bind(obj::touch_probe_1_positive_value);
     V<std::int32_t> probe1_negative = bind(obj::touch_probe_1_negative_value);
@@ -117,12 +142,7 @@ struct Drive::Objects {
     V<std::uint32_t> max_deceleration = bind(obj::max_deceleration);
     V<std::uint16_t> positive_torque_limit = bind(obj::positive_torque_limit_value);
     V<std::uint16_t> negative_torque_limit = bind(obj::negative_torque_limit_value);
-    V<std::int32_t> following_error_actual = bind(obj::following_error_actual_value);
-    V<std::int32_t> position_demand_internal = bind(obj::position_demand_internal_value);
-    V<std::uint32_t> digital_inputs = bind(obj::digital_inputs);
-    V<std::int32_t> target_velocity = bind(obj::target_velocity);
     // The manufacturer objects of the vecat drive.
-    V<std::int16_t> temperature = mfr_bind(mfr::drive_temperature);
     V<std::uint16_t> simulated_fault = mfr_bind(mfr::simulated_fault);
     V<std::uint32_t> velocity_override = mfr_bind(mfr::velocity_override);
     V<std::int32_t> compensation_distance = mfr_bind(mfr::position_compensation::distance);
@@ -158,8 +178,6 @@ struct Drive::Objects {
     V<std::int32_t> index_pulse_offset = mfr_bind(mfr::machine::index_pulse_offset);
     V<std::int16_t> load_torque = mfr_bind(mfr::machine::load_torque);
     V<std::uint8_t> probe_inputs = mfr_bind(mfr::machine::touch_probe_inputs);
-    V<std::uint32_t> digital_outputs = bind(obj::digital_outputs::physical_outputs);
-    V<std::uint32_t> digital_output_mask = bind(obj::digital_outputs::bit_mask);
     V<std::uint8_t> limit_switch_reaction = mfr_bind(mfr::machine::limit_switch_reaction);
     // TWINsync: the local values the drive provides and the remote values it uses (MSD parameters
     // Pnnnn as objects 0x2000 + nnnn, twinsync/parameters.hpp).
@@ -168,7 +186,6 @@ struct Drive::Objects {
         return coe::bind<T>(od, twinsync::object_index(parameter), sub, coe::Match::Convert);
     }
     V<std::uint16_t> tw_control_mode = tw<std::uint16_t>(twinsync::p::ControlMode);
-    V<std::uint16_t> tw_switching_frequency = tw<std::uint16_t>(twinsync::p::SwitchingFrequency);
     V<std::uint16_t> tw_setpoint_mode = tw<std::uint16_t>(twinsync::p::SetpointMode);
     V<float> tw_master_torque_tf = tw<float>(twinsync::p::MasterTorqueTF);
     V<std::uint32_t> tw_config = tw<std::uint32_t>(twinsync::p::Config);
@@ -176,12 +193,6 @@ struct Drive::Objects {
     V<float> tw_speed_up = tw<float>(twinsync::p::SpeedUp);
     V<float> tw_speed_up_min = tw<float>(twinsync::p::SpeedUpMinimum);
     V<float> tw_act_speed_master = tw<float>(twinsync::p::ActSpeedMaster);
-    V<std::int16_t> tw_local_ref_torque = tw<std::int16_t>(twinsync::p::LocalRefTorque);
-    V<std::int16_t> tw_local_act_torque = tw<std::int16_t>(twinsync::p::LocalActTorque);
-    V<std::int16_t> tw_local_ref_speed = tw<std::int16_t>(twinsync::p::LocalRefSpeed);
-    V<std::int16_t> tw_local_act_speed = tw<std::int16_t>(twinsync::p::LocalActSpeed);
-    V<std::int32_t> tw_local_ref_pos = tw<std::int32_t>(twinsync::p::LocalRefPos);
-    V<std::int32_t> tw_local_act_pos = tw<std::int32_t>(twinsync::p::LocalActPos);
     V<float> tw_local_torque_ref = tw<float>(twinsync::p::LocalScaling, 1);
     V<float> tw_local_speed_ref = tw<float>(twinsync::p::LocalScaling, 2);
     V<std::int16_t> tw_remote_ref_torque = tw<std::int16_t>(twinsync::p::RemoteRefTorque);
@@ -196,14 +207,6 @@ struct Drive::Objects {
     V<std::uint32_t> tw_remote_resolution = tw<std::uint32_t>(twinsync::p::RemoteResolution);
     V<std::int32_t> tw_gear_numerator = tw<std::int32_t>(twinsync::p::GearNumerator);
     V<std::int32_t> tw_gear_denominator = tw<std::int32_t>(twinsync::p::GearDenominator);
-    V<float> tw_speed_actual_rpm = tw<float>(twinsync::p::SpeedActualRpm);
-    V<float> tw_speed_setpoint_rpm = tw<float>(twinsync::p::SpeedSetpointRpm);
-    V<std::int32_t> tw_position_actual = tw<std::int32_t>(twinsync::p::PositionActual);
-    V<std::int16_t> tw_torque_actual_scaled = tw<std::int16_t>(twinsync::p::TorqueActualScaled);
-    V<std::int16_t> tw_local_ff_speed = tw<std::int16_t>(twinsync::p::LocalRefFFSpeed);
-    V<std::uint16_t> tw_local_eps = tw<std::uint16_t>(twinsync::p::LocalActEps);
-    V<std::uint16_t> tw_error_number = tw<std::uint16_t>(twinsync::p::CurrentError, 1);
-    V<std::uint16_t> tw_error_location = tw<std::uint16_t>(twinsync::p::CurrentError, 2);
 };
 
 namespace {

@@ -272,47 +272,45 @@ class Value {
             throw std::invalid_argument("entry of type " + std::string(device::type_name(e->type())) +
                                         " bound as a value of " + std::to_string(8 * sizeof(T)) + " bits" +
                                         (std::is_signed_v<T> ? " (signed)" : ""));
-        convert_ = !binds_as<T>(e->type(), Match::SameWidth);
-        data_ = e->storage().data();
+        // Loads and stores straight into the storage when the value is T's own little-endian bytes.
+        if (binds_as<T>(e->type(), Match::SameWidth) && std::endian::native == std::endian::little)
+            data_ = e->storage().data();
     }
 
-    bool bound() const { return data_ != nullptr; }
+    bool bound() const { return entry_ != nullptr; }
     // Bound with Match::Convert to an entry of another type.
-    bool converts() const { return convert_; }
+    bool converts() const { return entry_ && !binds_as<T>(entry_->type(), Match::SameWidth); }
     Entry* entry() const { return entry_; }
     // The value; the handle must be bound.
     T get() const {
-        if (convert_) [[unlikely]]
+        if (!data_) [[unlikely]]
             return entry_->get<T>();
         if constexpr (std::is_same_v<T, bool>) {
             return (data_[0] & 1u) != 0;
-        } else if constexpr (std::endian::native == std::endian::little) {
+        } else {
             T v;
             std::memcpy(&v, data_, sizeof(T));
             return v;
-        } else {
-            return entry_->get<T>();
         }
     }
-    T get_or(T fallback) const { return data_ ? get() : fallback; }
+    T get_or(T fallback) const { return entry_ ? get() : fallback; }
     // Stores the value without check or hook (the device's own write); nothing when unbound.
     void set(T v) {
-        if (!data_) return;
-        if (convert_) [[unlikely]]
-            return entry_->set(v);
-        if constexpr (std::is_same_v<T, bool>) {
-            data_[0] = v ? 1 : 0;
-        } else if constexpr (std::endian::native == std::endian::little) {
-            std::memcpy(data_, &v, sizeof(T));
-        } else {
+        if (data_) [[likely]] {
+            if constexpr (std::is_same_v<T, bool>)
+                data_[0] = v ? 1 : 0;
+            else
+                std::memcpy(data_, &v, sizeof(T));
+        } else if (entry_) {
             entry_->set(v);
         }
     }
 
   private:
+    // Two pointers, no more: a drive's cycle reads dozens of handles, and each line of them it reads is a
+    // cache miss on a line of hundreds of drives.
     Entry* entry_ = nullptr;
-    std::uint8_t* data_ = nullptr;
-    bool convert_ = false;
+    std::uint8_t* data_ = nullptr;  // the storage, when get() and set() may load and store it as a T
 };
 
 // Binds a handle to a catalogue entry: its C++ type is the catalogue's data type (protocol/objects.hpp).

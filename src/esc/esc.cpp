@@ -85,8 +85,8 @@ const protocol::WriteMaskTable* shared_write_masks(unsigned fmmus, unsigned sms,
 }  // namespace
 
 Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
-    : cfg_(cfg),
-      mem_(kRegisterSpaceSize + std::max<std::uint32_t>(cfg.ram_bytes, kMinRamBytes), 0),
+    : mem_(kRegisterSpaceSize + std::max<std::uint32_t>(cfg.ram_bytes, kMinRamBytes), 0),
+      cfg_(cfg),
       dc_(mem_.data(), cfg.dc_drift_ppm, cfg.dc_initial_ns),
       eeprom_(std::move(eeprom)) {
     cfg_.fmmu_count = static_cast<std::uint8_t>(std::min<unsigned>(cfg_.fmmu_count, kMaxFmmus));
@@ -242,11 +242,18 @@ void Esc::count_processing_unit_error() {
     saturating_inc(mem_[addr(Reg::EcatProcessingUnitErrorCounter)]);
 }
 
+void Esc::address_changed() {
+    station_ = ld_le16(&mem_[addr(Reg::StationAddress)]);
+    alias_ = ld_le16(&mem_[addr(Reg::StationAlias)]);
+    alias_enabled_ = (mem_[addr(Reg::DlControl) + 3] & 0x01) != 0;
+    if (address_changes_) address_changes_->fetch_add(1, std::memory_order_relaxed);
+}
+
 Esc::Addressing Esc::addressing() const {
     Addressing a;
-    a.station = ld_le16(&mem_[addr(Reg::StationAddress)]);
-    a.alias = ld_le16(&mem_[addr(Reg::StationAlias)]);
-    a.alias_enabled = (mem_[addr(Reg::DlControl) + 3] & 0x01) != 0;
+    a.station = station_;
+    a.alias = alias_;
+    a.alias_enabled = alias_enabled_;
     a.log_read_first_bit = fmmu_log_read_first_bit_;
     a.log_read_last_bit = fmmu_log_read_last_bit_;
     a.log_write_first_bit = fmmu_log_write_first_bit_;

@@ -201,7 +201,9 @@ class Esc {
     std::uint16_t station_address() const { return peek16(protocol::addr(protocol::Reg::StationAddress)); }
     // A configured-address command (FPxx, FRMW) with this ADP addresses this ESC: its station address, or
     // its alias when DL control enables alias addressing.
-    bool addressed_fixed(std::uint16_t adp) const { return addressing().fixed(adp); }
+    bool addressed_fixed(std::uint16_t adp) const {
+        return Addressing{.station = station_, .alias = alias_, .alias_enabled = alias_enabled_}.fixed(adp);
+    }
 
     // What decides whether a datagram can concern this ESC at all (ETG.1000.4 5.4): the configured station
     // address 0x0010, the alias 0x0012 with its enable bit (DL control 0x0100 bit 24), and the logical bit
@@ -333,27 +335,33 @@ class Esc {
     }
     void update_dl_status();
 
-    EscConfig cfg_;
+    // What a cyclic datagram touches comes first, together: a frame of a large network visits hundreds of
+    // ESCs, each of them out of the core's caches, and every cache line the visit reads is a miss.
     std::vector<std::uint8_t> mem_;  // 0x0000 .. 0x1000 + ram_bytes
-    DistributedClock dc_;            // works on mem_'s DC registers
-    std::vector<std::uint8_t> eeprom_;
-    const protocol::WriteMaskTable* wmask_ = nullptr;  // shared by the ESCs alike (esc.cpp)
-    std::array<SmState, protocol::kMaxSms> sm_{};
-    std::array<FmmuState, protocol::kMaxFmmus> fmmu_{};
+    EscCounters counters_;
+    std::uint64_t last_host_ns_ = 0;
+    // The configured station address 0x0010, the alias 0x0012 and its enable bit (DL control 0x0100 bit
+    // 24), as address_changed() last found them in mem_ (addressing(), addressed_fixed()).
+    std::uint16_t station_ = 0, alias_ = 0;
+    bool alias_enabled_ = false;
+    bool firmware_work_ = false;       // see take_firmware_work
     std::uint32_t sm_guard_mask_ = 0;  // active or locked SMs: the ones that control their memory area
     // Active FMMUs that read / write (a logical datagram outside the ranges below is rejected without
     // looking at each FMMU).
     std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;
-    bool firmware_work_ = false;  // see take_firmware_work
     // The hulls of the logical ranges of the active FMMUs that read and of those that write (addressing()).
     std::uint64_t fmmu_log_read_first_bit_ = ~std::uint64_t{0}, fmmu_log_read_last_bit_ = 0;
     std::uint64_t fmmu_log_write_first_bit_ = ~std::uint64_t{0}, fmmu_log_write_last_bit_ = 0;
+    std::array<FmmuState, protocol::kMaxFmmus> fmmu_{};
+    std::array<SmState, protocol::kMaxSms> sm_{};
+    EscConfig cfg_;
+    DistributedClock dc_;  // works on mem_'s DC registers
+    std::vector<std::uint8_t> eeprom_;
+    const protocol::WriteMaskTable* wmask_ = nullptr;  // shared by the ESCs alike (esc.cpp)
     std::uint32_t repeat_bits_ = 0;
     std::atomic<std::uint64_t>* port_changes_ = nullptr;
     std::atomic<std::uint64_t>* address_changes_ = nullptr;
-    void address_changed() {
-        if (address_changes_) address_changes_->fetch_add(1, std::memory_order_relaxed);
-    }
+    void address_changed();
     std::uint8_t auto_closed_ = 0;  // ports that "auto close" closed at a link loss, until the master reopens
     std::uint8_t link_mask_ = 0x01;
     // Bit p: port_open(p), as update_dl_status last found it (it runs whenever a link, the loop setting of
@@ -367,9 +375,7 @@ class Esc {
     bool sm_activation_event_ = false;
     bool wd_armed_ = false;
     std::uint64_t wd_last_trigger_ns_ = 0;
-    std::uint64_t last_host_ns_ = 0;
     std::array<std::uint8_t, 2048 + 16> scratch_{};
-    EscCounters counters_;
 };
 
 inline int Esc::sm_covering(std::uint32_t a) const {
