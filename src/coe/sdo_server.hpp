@@ -125,6 +125,14 @@ class SdoServer final : public esc::MailboxProtocol {
                            esc::MailboxReplySink& out);
     bool send_info_fragment(esc::MailboxReplySink& out);
 
+    // What each firmware run asks (has_output, tick) first, together: a line of hundreds of drives asks it
+    // out of the caches.
+    Transfer transfer_ = Idle{};
+    std::size_t emcy_head_ = 0, emcy_count_ = 0;
+    // Since when the transfer has not moved: set by the first tick() after a change (the server has no
+    // clock of its own), so that a transfer is dropped kSdoTimeoutNs after its last request at the latest.
+    static constexpr std::uint64_t kNotYet = ~std::uint64_t{0};
+    std::uint64_t quiet_since_ns_ = kNotYet;
     ObjectDictionary& od_;
     std::function<AlState()> state_;
     std::vector<std::uint8_t> buf_;  // transfer buffer, sized once from the dictionary
@@ -133,14 +141,7 @@ class SdoServer final : public esc::MailboxProtocol {
     bool complete_access_served_ = true;
     bool download_echo_ = false;
 
-    Transfer transfer_ = Idle{};
-    // Since when the transfer has not moved: set by the first tick() after a change (the server has no
-    // clock of its own), so that a transfer is dropped kSdoTimeoutNs after its last request at the latest.
-    static constexpr std::uint64_t kNotYet = ~std::uint64_t{0};
-    std::uint64_t quiet_since_ns_ = kNotYet;
-
     std::array<protocol::Emergency, kEmergencySlots> emcy_{};
-    std::size_t emcy_head_ = 0, emcy_count_ = 0;
     CoeCounters counters_;
 };
 

@@ -143,7 +143,8 @@ Slave::Slave(const device::DeviceDescription& desc, EscConfig esc_cfg, std::uniq
     : Slave(DeviceModel::of(desc), esc_cfg, std::move(app)) {}
 
 Slave::Slave(const DeviceModel& model, EscConfig esc_cfg, std::unique_ptr<Application> app)
-    : model_(model), desc_(*model_.description), esc_(esc_cfg, *model_.sii_image), app_(std::move(app)) {
+    : model_(model), desc_(*model_.description), app_(std::move(app)), esc_(esc_cfg, *model_.sii_image) {
+    coe_ = app_->mailbox_protocol(MailboxType::CoE);
     // A SyncManager past the ESC's 16 does not exist (a description made in code may list more).
     auto idx = [&](device::SmType t) {
         auto i = desc_.sm_index_of_type(t);
@@ -233,7 +234,7 @@ void Slave::enter(AlState to, std::uint64_t now_ns) {
 }
 
 void Slave::reset_mailbox() {
-    if (auto* coe = app_->mailbox_protocol(MailboxType::CoE)) coe->reset();
+    if (coe_) coe_->reset();
     for (auto& p : own_protocols_)
         p->reset();
     q_head_ = q_count_ = 0;
@@ -505,7 +506,7 @@ template <class F>
 void Slave::for_each_sending_protocol(F&& f) const {
     // Outside BOOT: the application's CoE (emergencies, SDO information) and the slave's own protocols.
     if (state_ == AlState::Boot) return;
-    if (auto* coe = app_->mailbox_protocol(MailboxType::CoE); coe && coe->has_output()) f(*coe);
+    if (coe_ && coe_->has_output()) f(*coe_);
     for (const auto& p : own_protocols_)
         if (p->has_output()) f(*p);
 }
@@ -520,10 +521,10 @@ void Slave::post_replies() {
 
 bool Slave::mailbox_output_pending() const {
     if (sm_mbx_out_ < 0 || sm_mbx_in_ < 0 || state_ == AlState::Init) return false;
-    if (esc_.sm_mailbox_full(static_cast<unsigned>(sm_mbx_in_))) return false;  // the master has not read
     bool pending = q_count_ > 0;
     for_each_sending_protocol([&](MailboxProtocol&) { pending = true; });
-    return pending;
+    // (Asked last: mostly nothing is pending, and the SyncManager's state is one more cache line.)
+    return pending && !esc_.sm_mailbox_full(static_cast<unsigned>(sm_mbx_in_));  // the master has not read
 }
 
 void Slave::send_pending_replies() {

@@ -229,18 +229,28 @@ class Slave {
 
     DeviceModel model_;
     const device::DeviceDescription& desc_;  // *model_.description
-    Esc esc_;
+    // What every run and every frame's question for mailbox output read comes first, together (a line of
+    // hundreds of slaves runs each of them out of the caches, and each line read is a miss).
     std::unique_ptr<Application> app_;
+    // The application's CoE (Application::mailbox_protocol, asked once when the slave is made), and the
+    // slave's own protocols.
+    MailboxProtocol* coe_ = nullptr;
+    std::vector<std::unique_ptr<MailboxProtocol>> own_protocols_;
     protocol::AlState state_ = protocol::AlState::Init;
     bool error_ = false;
+    bool op_pending_ = false;
+    bool lost_reply_waiting_ = false;
+    int sm_mbx_out_ = -1, sm_mbx_in_ = -1, sm_out_ = -1, sm_in_ = -1;
+    std::uint64_t now_ns_ = 0;  // of the current run
     std::uint64_t al_control_latency_ns_ =
         0;  // AL status written once at power-up, also under device emulation
+    std::size_t q_head_ = 0, q_count_ = 0;
+    std::vector<std::uint8_t> outputs_, inputs_;
+    Esc esc_;
     protocol::AlStatusCode code_ = protocol::AlStatusCode::NoError;
     bool ident_ = false;
-    bool op_pending_ = false;
     std::uint64_t op_pending_since_ = 0;
     std::uint64_t outputs_at_safeop_ = 0;
-    int sm_mbx_out_ = -1, sm_mbx_in_ = -1, sm_out_ = -1, sm_in_ = -1;
     // The process data SyncManagers as the description declares them (nullptr: none), looked up once, and
     // whether the data of that direction may bypass it: declared virtual, or not enabled (the master may
     // leave it off).
@@ -259,17 +269,12 @@ class Slave {
     std::array<std::size_t, kReplySlots> queue_len_{};
     // Quirk mailbox_delay_ms: when each queued reply may enter the mailbox-in SyncManager.
     std::array<std::uint64_t, kReplySlots> queue_due_{};
-    std::uint64_t now_ns_ = 0;  // of the current run
     // Quirk mailbox_drop_every: replies that left the queue, and a lost one waiting for the repeat request.
     std::uint64_t replies_out_ = 0;
-    bool lost_reply_waiting_ = false;
-    std::size_t q_head_ = 0, q_count_ = 0;
-    std::vector<std::uint8_t> outputs_, inputs_;
     static constexpr unsigned kMaxPulsesPerRun = 16;  // SYNC pulses taken per firmware run; more are missed
     std::array<SyncPulse, kMaxPulsesPerRun> pulses_{};
     SlaveCounters counters_;
     MailboxInterceptor* interceptor_ = nullptr;
-    std::vector<std::unique_ptr<MailboxProtocol>> own_protocols_;
     friend class SlaveReplySink;
 };
 
