@@ -211,22 +211,36 @@ ObjectDictionary::Layout ObjectDictionary::make_layout(const std::vector<device:
     }
     std::stable_sort(l.order.begin(), l.order.end(),
                      [](const auto* a, const auto* b) { return a->index < b->index; });
-    // The values' places: those a TxPDO may map first, then those an RxPDO may map, then the rest, each in
-    // the order of the indexes. What a cycle copies and the feedback an application writes every cycle then
-    // lie in a few cache lines of the dictionary, not one line each among strings and parameters (a line of
-    // hundreds of drives runs each drive's cycle out of the caches).
-    const auto rank = [](const device::EntryDescription& e) {
-        return (e.access & device::access::TxPdoMappable)   ? 0
-               : (e.access & device::access::RxPdoMappable) ? 1
-                                                            : 2;
+    // The values' places: those the PDO mapping objects map by default first (their entries' default values:
+    // index, subindex and length, ETG.1000.6 5.6.7.4.7), then the others a TxPDO may map, those an RxPDO may
+    // map, and the rest, each in the order of the indexes. What a cycle copies and the feedback an
+    // application writes every cycle then lie in a few cache lines of the dictionary, not one line each
+    // among strings and parameters (a line of hundreds of drives runs each drive's cycle out of the caches).
+    std::vector<std::uint32_t> mapped;  // index << 8 | subindex
+    for (const auto* o : l.order) {
+        const bool mapping = (o->index >= protocol::obj::rx_pdo_mapping_first &&
+                              o->index <= protocol::obj::rx_pdo_mapping_last) ||
+                             (o->index >= protocol::obj::tx_pdo_mapping_first &&
+                              o->index <= protocol::obj::tx_pdo_mapping_last);
+        if (!mapping) continue;
+        for (const auto& e : o->entries)
+            if (e.subindex != 0 && e.default_value.size() == 4)
+                mapped.push_back(ld_le32(e.default_value.data()) >> 8);
+    }
+    std::sort(mapped.begin(), mapped.end());
+    const auto rank = [&](const device::ObjectDescription& o, const device::EntryDescription& e) {
+        const auto key = static_cast<std::uint32_t>(o.index) << 8 | e.subindex;
+        if (std::binary_search(mapped.begin(), mapped.end(), key)) return 0;
+        if (e.access & device::access::TxPdoMappable) return 1;
+        return (e.access & device::access::RxPdoMappable) ? 2 : 3;
     };
     l.places.assign(n_entries, 0);
     std::size_t at = 0;
-    for (int pass = 0; pass < 3; ++pass) {
+    for (int pass = 0; pass < 4; ++pass) {
         std::size_t i = 0;
         for (const auto* o : l.order)
             for (const auto& e : o->entries) {
-                if (rank(e) == pass) {
+                if (rank(*o, e) == pass) {
                     l.places[i] = at;
                     at += value_slot(e);
                 }

@@ -3,6 +3,7 @@
 // Long (about 620 lines): one dictionary fixture for every access rule.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 #include <stdexcept>
 #include <type_traits>
@@ -210,6 +211,37 @@ TEST_F(DefaultDictionary, PdoMappingObjectsHoldTheDescribedEntries) {
     EXPECT_EQ(od.find(0x1600, 1)->get<std::uint32_t>(), 0x60400010u);
     EXPECT_EQ(od.find(0x1600, 3)->get<std::uint32_t>(), 0x00000008u);  // the 8-bit gap
     EXPECT_EQ(od.find(0x1A00, 1)->get<std::uint32_t>(), 0x60410010u);
+}
+
+// The values a cycle copies lie together in the value storage (ObjectDictionary::make_layout): those the PDO
+// mappings map by default first, then the other PDO-mappable ones, then the rest; strings and parameters
+// never lie between two of them.
+TEST_F(DefaultDictionary, DefaultMappedValuesLieBeforeEveryOtherValue) {
+    std::vector<const std::uint8_t*> mapped, tx_mappable, others;
+    std::vector<std::pair<std::uint16_t, std::uint8_t>> by_default;
+    for (const auto* list : {&desc.rx_pdos, &desc.tx_pdos})
+        for (const auto& p : *list)
+            for (const auto& e : p.entries)
+                if (e.index != 0) by_default.emplace_back(e.index, e.subindex);
+    ASSERT_GE(by_default.size(), 4u);
+    for (const Object& o : od.objects())
+        for (const Entry& e : o.entries()) {
+            const std::uint8_t* at = e.value().data();  // (its storage)
+            if (std::find(by_default.begin(), by_default.end(), std::pair{o.index(), e.subindex()}) !=
+                by_default.end())
+                mapped.push_back(at);
+            else if (e.tx_mappable())
+                tx_mappable.push_back(at);
+            else if (!e.rx_mappable())
+                others.push_back(at);
+        }
+    ASSERT_FALSE(tx_mappable.empty());
+    const auto last_mapped = *std::max_element(mapped.begin(), mapped.end());
+    EXPECT_LT(last_mapped, *std::min_element(tx_mappable.begin(), tx_mappable.end()));
+    EXPECT_LT(*std::max_element(tx_mappable.begin(), tx_mappable.end()),
+              *std::min_element(others.begin(), others.end()));
+    // Within a few cache lines (the default drive maps about ten entries of at most 4 bytes).
+    EXPECT_LT(last_mapped - *std::min_element(mapped.begin(), mapped.end()), 64);
 }
 
 TEST_F(DefaultDictionary, IdentityAndDeviceNameComeFromTheDescription) {
