@@ -43,6 +43,8 @@ class Application {
     virtual void exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply_outputs, Bytes inputs) = 0;
     // The outputs must go to their safe state (watchdog expired, left OP).
     virtual void outputs_safe_state() {}
+    // The protocol of the application serving a type (nullptr: none). The slave asks for its CoE once, when
+    // it is made: that protocol stays the same object for the application's life.
     virtual MailboxProtocol* mailbox_protocol(protocol::MailboxType) { return nullptr; }
     // Called regularly, also without frames (time-driven behaviour).
     virtual void tick(std::uint64_t /*now_ns*/) {}
