@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "bench/drive_line.hpp"
 #include "cia402/drive.hpp"
 #include "master/master.hpp"
 #include "protocol/registers.hpp"
@@ -17,31 +18,7 @@ namespace {
 
 using namespace vecat;
 
-// N default drives brought to OP by the project's master over an in-process link, enabled in CSP.
-struct Line {
-    std::unique_ptr<esc::Segment> seg;
-    std::unique_ptr<net::InProcessLink> link;
-    std::unique_ptr<master::Master> m;
-    std::uint64_t now = 1'000'000'000;
-    explicit Line(std::size_t n) {
-        seg = cia402::make_drive_segment(device::default_drive(), n);
-        link = std::make_unique<net::InProcessLink>(*seg);
-        link->set_time(now);
-        m = std::make_unique<master::Master>(*link);
-        if (!m->startup(protocol::AlState::Op)) throw std::runtime_error("start-up failed");
-        for (const std::uint16_t cw :
-             {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}, std::uint16_t{0x0F}}) {
-            for (std::size_t i = 0; i < n; ++i) {
-                auto o = m->outputs(i);
-                st_le16(o.data(), cw);
-                o[2] = 8;
-            }
-            m->exchange_process_data();
-            now += 1'000'000;
-            link->set_time(now);
-        }
-    }
-};
+using Line = bench::DriveLine;
 
 // A frame of datagrams (command, address, length), data zero unless copied in afterwards.
 struct Frame {

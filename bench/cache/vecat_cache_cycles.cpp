@@ -10,16 +10,13 @@
 // The totals' DLmr + DLmw are the lines a cycle misses in a 512 KB L2 cache (this machine's), times cycles.
 #include <chrono>
 #include <cstdint>
+#include <exception>
 #include <memory>
-#include <string>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
-#include "cia402/drive.hpp"
-#include "common/bytes.hpp"
-#include "master/master.hpp"
-#include "serve/in_process_link.hpp"
+#include "bench/drive_line.hpp"
 
 #if __has_include(<valgrind/callgrind.h>)
 #include <valgrind/callgrind.h>
@@ -43,37 +40,23 @@ int main(int argc, char** argv) {
         "Run the firmware within each frame (default: after the cycle's replies, as vecat run does)");
     CLI11_PARSE(app, argc, argv);
 
-    auto seg = cia402::make_drive_segment(device::default_drive(), slaves);
-    net::InProcessLink link(*seg);
-    std::uint64_t now = 1'000'000'000;
-    link.set_time(now);
-    master::Master m(link);
-    if (std::string why; !m.startup(protocol::AlState::Op, &why)) {
-        fmt::print(stderr, "start-up failed: {}\n", why);
+    std::unique_ptr<bench::DriveLine> line;
+    try {
+        line = std::make_unique<bench::DriveLine>(slaves);
+    } catch (const std::exception& e) {
+        fmt::print(stderr, "{}\n", e.what());
         return 1;
     }
-    // Enabled in CSP (6, 7, 15), holding their positions: every servo period runs the whole drive model.
-    for (const std::uint16_t cw :
-         {std::uint16_t{0x06}, std::uint16_t{0x07}, std::uint16_t{0x0F}, std::uint16_t{0x0F}}) {
-        for (std::size_t i = 0; i < slaves; ++i) {
-            auto o = m.outputs(i);
-            st_le16(o.data(), cw);
-            o[2] = 8;
-        }
-        m.exchange_process_data();
-        now += 1'000'000;
-        link.set_time(now);
-    }
-    seg->set_deferred_firmware(!inline_firmware);
+    esc::Segment& seg = *line->seg;
+    seg.set_deferred_firmware(!inline_firmware);
     const auto cycle = [&] {
-        now += 1'000'000;  // 1 ms a cycle: four servo periods of every drive
-        link.set_time(now);
-        m.exchange_process_data();
-        seg->run_deferred_firmware();
+        line->advance(1'000'000);  // 1 ms a cycle: four servo periods of every drive
+        line->m->exchange_process_data();
+        seg.run_deferred_firmware();
     };
     for (int c = 0; c < 5; ++c)
         cycle();
-    const std::uint64_t runs_before = seg->counters().firmware_runs;
+    const std::uint64_t runs_before = seg.counters().firmware_runs;
     const auto t0 = std::chrono::steady_clock::now();
     CALLGRIND_START_INSTRUMENTATION;
     for (unsigned c = 0; c < cycles; ++c)
@@ -81,7 +64,7 @@ int main(int argc, char** argv) {
     CALLGRIND_STOP_INSTRUMENTATION;
     const auto t1 = std::chrono::steady_clock::now();
     fmt::print("{} drives, {} cycles: {:.2f} firmware runs a cycle, {:.1f} us a cycle\n", slaves, cycles,
-               static_cast<double>(seg->counters().firmware_runs - runs_before) / cycles,
+               static_cast<double>(seg.counters().firmware_runs - runs_before) / cycles,
                std::chrono::duration<double, std::micro>(t1 - t0).count() / cycles);
     return 0;
 }

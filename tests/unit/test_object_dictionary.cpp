@@ -1,6 +1,6 @@
 // The runtime object dictionary (src/coe/object_dictionary): built from the device description, typed
 // values, length and range checks, SDO access per AL state, complete access layout and its undo.
-// Long (about 620 lines): one dictionary fixture for every access rule.
+// Long (about 660 lines): one dictionary fixture for every access rule.
 #include <gtest/gtest.h>
 
 #include <algorithm>
