@@ -4,11 +4,11 @@
 // so nothing else ever runs beside a slave's firmware.
 //
 // The hand-off is wait-free for the caller and takes no lock: a batch is published with one atomic store;
-// the caller and the workers claim items with compare-and-swap on one word holding the batch number and the
-// next item (so a worker that looks late can never claim an item of a newer batch); the caller then works
-// through items itself and waits only for items a worker has claimed and not finished. A worker that is
-// slow to wake up costs the caller nothing: the caller takes the items it left. Results do not depend on
-// which thread runs an item (the items share no state), only the time does.
+// the caller and the workers claim items, a chunk at a time, with compare-and-swap on one word holding the
+// batch number and the next item (so a worker that looks late can never claim an item of a newer batch); the
+// caller then works through items itself and waits only for items a worker has claimed and not finished. A
+// worker that is slow to wake up costs the caller nothing: the caller takes the items it left. Results do not
+// depend on which thread runs an item (the items share no state), only the time does.
 //
 // A worker spins (with a pause instruction) while batches keep coming, and sleeps in the kernel (std::atomic
 // wait, a futex) after kSpinNs without one; the caller then wakes it with the next batch (a futex wake: a
@@ -47,6 +47,8 @@ class FirmwareThreads {
 
     // A worker that has had no batch for this long sleeps until the next one (by default).
     static constexpr std::uint64_t kSpinNs = 100'000;
+    // A batch is claimed in about this many chunks per thread (see run()).
+    static constexpr std::size_t kChunksPerThread = 8;
 
     // Items run by the workers so far (the rest ran on the caller's thread): a figure for tests and the
     // benchmark.
@@ -67,6 +69,7 @@ class FirmwareThreads {
     // The current batch's work (written before claim_ publishes it; read by a claimer before it claims: a
     // successful claim proves the batch it read is still the current one).
     alignas(64) std::atomic<std::size_t> count_{0};
+    std::atomic<std::size_t> chunk_{1};  // items per claim (see run())
     std::atomic<Work> work_{nullptr};
     std::atomic<void*> context_{nullptr};
     // Sleeping workers, and the word they sleep on (counted up to wake them).

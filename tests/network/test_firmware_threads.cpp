@@ -49,9 +49,11 @@ TEST(FirmwareThreads, EveryItemOfEveryBatchRunsOnceAndTheWorkersTakePart) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
     // Batches of every size, back to back, so that a worker late for one batch meets the next (it must not
     // run an item of the next batch as one of the last). At least 20,000, and until the workers ran some.
+    // Every other batch has up to 300 items: those are claimed several at a time (kChunksPerThread), with
+    // a last chunk that is shorter.
     while (batches < 20'000 ||
            (threads.items_on_workers() == 0 && std::chrono::steady_clock::now() < until)) {
-        const std::size_t count = batches % 41;
+        const std::size_t count = batches % 2 == 0 ? batches % 41 : (batches * 37) % 301;
         b.runs.assign(count, 0);
         threads.run(count, &count_item, &b);
         for (std::size_t i = 0; i < count; ++i)
