@@ -334,7 +334,9 @@ int run(const Options& o) {
         const pthread_t srv_handle = server.native_handle();
         const std::uint64_t cpu0 = thread_cpu_ns(srv_handle), wall0 = now_ns();
         const std::uint64_t wakeups0 = serve_count.wakeups.load(), frames0 = serve_count.frames.load(),
-                            ticks0 = serve_count.ticks.load();
+                            ticks0 = serve_count.ticks.load(),
+                            behind0 = serve_count.frames_behind_tick.load(),
+                            behind_ns0 = serve_count.behind_tick_ns.load();
         rusage ru0{};
         getrusage(RUSAGE_SELF, &ru0);
         const std::uint64_t steal0 = host_steal_ms();
@@ -416,7 +418,9 @@ int run(const Options& o) {
         const std::uint64_t wall = now_ns() - wall0, cpu_srv = thread_cpu_ns(srv_handle) - cpu0;
         const std::uint64_t wakeups = serve_count.wakeups.load() - wakeups0,
                             frames = serve_count.frames.load() - frames0,
-                            ticks = serve_count.ticks.load() - ticks0;
+                            ticks = serve_count.ticks.load() - ticks0,
+                            behind = serve_count.frames_behind_tick.load() - behind0,
+                            behind_ns = serve_count.behind_tick_ns.load() - behind_ns0;
         rusage ru1{};
         getrusage(RUSAGE_SELF, &ru1);
         const std::uint64_t steal = host_steal_ms() - steal0;
@@ -488,6 +492,11 @@ int run(const Options& o) {
                 static_cast<double>(frames) / static_cast<double>(c_vecat),
                 static_cast<double>(ticks) / static_cast<double>(c_vecat),
                 serve_count.catch_up_ns.load() / 1000);
+        if (c_vecat > 0)
+            fmt::print(
+                "  frames that arrived while a tick ran: {:.2f} per cycle, waiting {:.1f} us on average\n",
+                static_cast<double>(behind) / static_cast<double>(c_vecat),
+                behind ? static_cast<double>(behind_ns) / static_cast<double>(behind) / 1000.0 : 0.0);
         if (misses) rc = 1;
     }
     stop = true;

@@ -79,6 +79,12 @@ class Segment {
     MasterPort reply_port() const { return reply_port_; }
     // Runs the slaves' firmware and watchdogs without a frame.
     void tick(std::uint64_t now_ns);
+    // A part of a tick, for a server that must not keep a frame waiting behind a long one (on a large line a
+    // tick of every slave takes hundreds of microseconds): the firmware of deferred frames, the slaves whose
+    // deadlines are due, and `count` slaves from slave `first` on (wrapping around). A tick only saves the
+    // catch-up of the slaves' own cycles before a later frame (see set_local_cycle_ns), so a server may stop
+    // between parts when a frame comes; the slaves it did not reach catch up before a frame reads them.
+    void tick_part(std::uint64_t now_ns, std::size_t first, std::size_t count);
 
     // Firmware after the reply. By default process_frame() runs the firmware of the slaves the frame
     // addressed before it returns. A server that sends the reply first sets this and calls

@@ -137,6 +137,14 @@ void Segment::tick(std::uint64_t now_ns) {
     run_firmware(now_ns);
 }
 
+void Segment::tick_part(std::uint64_t now_ns, std::size_t first, std::size_t count) {
+    run_deferred_firmware();
+    const std::size_t n = slaves_.size();
+    for (std::size_t i = 0; i < std::min(count, n); ++i)
+        pick((first + i) % n);
+    catch_up_deadlines(now_ns);  // the deadlines due, and runs the batch
+}
+
 bool Segment::deadline_due(std::size_t k, std::uint64_t now_ns) const {
     const std::uint64_t last = last_run_ns_[k];
     return last == 0 || now_ns < last || deadline_ns_[k] <= now_ns;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <utility>
 #include <vector>
 
 namespace vecat::net {
@@ -79,6 +80,9 @@ std::uint64_t frame_time(const RawSocket& sock, std::uint64_t now) {
     return now;
 }
 
+// Slaves per part of a tick on a line longer than this (Segment::tick_part): a few tens of microseconds.
+constexpr std::size_t kTickPart = 32;
+
 // How often the serve loop looks at the link of the downstream interface.
 constexpr std::uint64_t kLinkCheckNs = 10'000'000;
 
@@ -151,6 +155,9 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     // path (one socket, no side channel that could reach the slaves in between).
     std::array<std::uint64_t, esc::Segment::kMaxDeferredFrames> deferred_at{};
     std::size_t deferred = 0;
+    std::uint64_t tick_end = 0;  // when the last tick ended (ServeCounters::frames_behind_tick)
+    long held = 0;               // a frame received while a tick ran in parts: handled next
+    std::size_t tick_from = 0;   // the slave the next tick in parts starts with
     const auto run_deferred = [&] {
         seg.run_deferred_firmware();
         if (opt.after_frame)
@@ -161,8 +168,8 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     while (!stop.load(std::memory_order_relaxed)) {
         const bool spin = opt.busy_poll && !(opt.park && opt.park->load(std::memory_order_relaxed));
         const bool plain = !other && !opt.side;
-        long n = 0;
-        if (deferred != 0) {
+        long n = std::exchange(held, 0);
+        if (deferred != 0 && n == 0) {
             n = sock.try_receive(Bytes(buf.data(), buf.size()));
             if (n <= 0) {
                 n = 0;
@@ -247,6 +254,12 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             const std::uint64_t real = realtime_ns();
             const std::uint64_t rx_real = sock.last_receive_realtime_ns();
             std::uint64_t at = frame_time(sock, now);
+            if (opt.counters && at < tick_end) {
+                bump(opt.counters->frames_behind_tick);
+                opt.counters->behind_tick_ns.store(
+                    opt.counters->behind_tick_ns.load(std::memory_order_relaxed) + (tick_end - at),
+                    std::memory_order_relaxed);
+            }
             at = std::max(at, last_time);
             last_time = at;
             if (opt.pcap)
@@ -274,7 +287,20 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             }
             last_tick = now;
         } else if (n == 0 && now >= due) {
-            seg.tick(now);
+            if (plain && seg.size() > kTickPart) {
+                // In parts, each followed by a look at the socket: a frame that comes is not kept waiting
+                // behind the tick (it would be for hundreds of microseconds on a large line). Parts at this
+                // tick's time; the next tick starts where this one stopped.
+                for (std::size_t ran = 0; ran < seg.size(); ran += kTickPart) {
+                    seg.tick_part(now, tick_from, kTickPart);
+                    tick_from = (tick_from + kTickPart) % seg.size();
+                    if (ran + kTickPart >= seg.size()) break;
+                    if ((held = std::max(sock.try_receive(Bytes(buf.data(), buf.size())), 0L)) > 0) break;
+                }
+            } else {
+                seg.tick(now);
+            }
+            tick_end = monotonic_ns();
             if (opt.counters) bump(opt.counters->ticks);
             if (opt.filter) opt.filter->tick(now);
             catch_up.learn(now - std::min(now, last_tick), monotonic_ns() - now, 0);

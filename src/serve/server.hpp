@@ -25,6 +25,10 @@ struct ServeCounters {
     std::atomic<std::uint64_t> wakeups{0};
     std::atomic<std::uint64_t> frames{0};  // frames from the master side processed
     std::atomic<std::uint64_t> ticks{0};   // firmware runs without a frame (deadlines, catch-up ticks)
+    // Frames that arrived (kernel receive time) while a tick ran, and how long they waited for its end, ns:
+    // the latency that ticks add to the reply path.
+    std::atomic<std::uint64_t> frames_behind_tick{0};
+    std::atomic<std::uint64_t> behind_tick_ns{0};
     // The time between firmware runs without a frame that the loop works with now (see
     // ServeOptions::catch_up_budget_us), ns.
     std::atomic<std::uint64_t> catch_up_ns{0};

@@ -191,8 +191,11 @@ TEST(NoAllocation, DriveMovingInEveryMode) {
 // data needs two frames per cycle.
 // threads > 1: the firmware on that many threads (esc::FirmwareThreads), whose worker spins through the test
 // (its sleep, a futex, comes only after a pause in the batches: see firmware_threads.hpp).
+// gap_us > 0: the master pauses that long after every 20th cycle, longer than the loop's longest catch-up
+// period (ServeOptions::kMaxCatchUpUs), so that it ticks between cycles (in parts on a line of 40: see
+// kTickPart in server.cpp), and a frame may come while it does.
 void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if, bool ring = false,
-                                  unsigned threads = 1) {
+                                  unsigned threads = 1, unsigned gap_us = 0) {
     std::string why;
     ASSERT_TRUE(net::create_veth_pair(m_if, s_if, &why)) << why;
     auto seg = cia402::make_drive_segment(device::default_drive(), 40);
@@ -236,7 +239,8 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
         m.exchange_process_data();
     const auto before = test::allocations();
     const auto locks_before = test::lock_calls();
-    const std::uint64_t frames_before = count.frames.load(), wakeups_before = count.wakeups.load();
+    const std::uint64_t frames_before = count.frames.load(), wakeups_before = count.wakeups.load(),
+                        ticks_before = count.ticks.load();
     const std::uint64_t on_workers_before = firmware.items_on_workers();
     int ok = 0;
     int cycles = 0;
@@ -247,6 +251,7 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
                              std::chrono::steady_clock::now() < until)) {
         ok += m.exchange_process_data().value_or(0) == m.expected_wkc();
         ++cycles;
+        if (gap_us && cycles % 20 == 0) std::this_thread::sleep_for(std::chrono::microseconds(gap_us));
     }
     const auto allocs = test::allocations() - before;
     const auto locks = test::lock_calls() - locks_before;
@@ -264,6 +269,9 @@ void serve_loop_allocates_nothing(bool busy, const char* m_if, const char* s_if,
     if (threads > 1) {
         EXPECT_GT(firmware.items_on_workers(), on_workers_before);
     }
+    if (gap_us) {
+        EXPECT_GT(count.ticks.load(), ticks_before);
+    }
 }
 
 TEST(NoAllocation, RawSocketServeLoop) {
@@ -274,6 +282,12 @@ TEST(NoAllocation, RawSocketServeLoop) {
 TEST(NoAllocation, RawSocketServeLoopWithFirmwareThreads) {
     if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
     serve_loop_allocates_nothing(false, "na-m4", "na-s4", false, 2);
+}
+
+// Ticks between the cycles: the loop runs them in parts and looks at its socket between parts.
+TEST(NoAllocation, RawSocketServeLoopTickingBetweenCycles) {
+    if (!g_netns) GTEST_SKIP() << "needs root for a private network namespace";
+    serve_loop_allocates_nothing(false, "nt-m", "nt-s", false, 2, 12'000);
 }
 
 TEST(NoAllocation, RawSocketServeLoopBusyPoll) {

@@ -5,7 +5,7 @@
 // frames publish only the last one's feedback, Drive::advance), in DC-synchronous mode and in free run,
 // through start-up, enabling, motion, SDO traffic, a drive fault with its emergency, and the master falling
 // silent (the SyncManager watchdog in free run, the sync error in DC mode). Time is driven by hand, so each
-// run is repeatable.
+// run is repeatable. The same for ticks that reach one slave each (Segment::tick_part).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -31,7 +31,9 @@ constexpr std::size_t kDrives = 3;
 constexpr std::int32_t kSync0Shift = 330'000;
 const std::uint16_t kSm1Status = static_cast<std::uint16_t>(protocol::sm_addr(1) + protocol::sm::Status);
 
-enum class Schedule { EveryServoPeriod, WhenNeeded };
+// PartsOfTicks: a tick at every servo period and every deadline that reaches one slave only
+// (Segment::tick_part, as the serve loop's tick in parts stopped by a frame), the next one the next time.
+enum class Schedule { EveryServoPeriod, WhenNeeded, PartsOfTicks };
 
 struct Line {
     Line(Schedule s, bool dc)
@@ -53,6 +55,17 @@ struct Line {
                 link.set_time(now);
                 seg->tick(now);
                 ++ticks;
+            }
+        } else if (schedule == Schedule::PartsOfTicks) {
+            for (std::uint64_t d = std::min(now + kServoPeriod, seg->next_firmware_ns()); d <= t;
+                 d = std::min(now + kServoPeriod, seg->next_firmware_ns())) {
+                now = std::max(now, d);
+                link.set_time(now);
+                seg->tick_part(now, ticks % kDrives, 1);
+                if (++ticks > 1'000'000) {
+                    ADD_FAILURE() << "the deadlines do not move on";
+                    return;
+                }
             }
         } else {
             for (std::uint64_t d = seg->next_firmware_ns(); d <= t; d = seg->next_firmware_ns()) {
@@ -208,6 +221,28 @@ TEST_P(FirmwareSchedule, RunningOnlyWhenNeededGivesTheMasterTheSameBytesAsEveryS
     }
     // And the firmware ran far less often between frames.
     EXPECT_LT(needed.ticks * 20, every.ticks) << needed.ticks << " against " << every.ticks;
+}
+
+TEST_P(FirmwareSchedule, TicksThatReachOneSlaveEachGiveTheMasterTheSameBytesAsEveryServoPeriod) {
+    Line every(Schedule::EveryServoPeriod, GetParam());
+    Line parts(Schedule::PartsOfTicks, GetParam());
+    scenario(every);
+    scenario(parts);
+    for (const Line* l : {&every, &parts}) {
+        EXPECT_GT(l->travelled, 10'000);
+        EXPECT_TRUE(l->faulted);
+        EXPECT_TRUE(l->watchdog);
+    }
+    ASSERT_EQ(every.log.size(), parts.log.size());
+    const auto diff = std::mismatch(every.log.begin(), every.log.end(), parts.log.begin());
+    if (diff.first != every.log.end()) {
+        const auto at = static_cast<std::size_t>(diff.first - every.log.begin());
+        const auto c = std::upper_bound(every.marks.begin(), every.marks.end(), at) - every.marks.begin() - 1;
+        ADD_FAILURE() << "first difference in cycle " << c << ", byte " << at - every.marks[c] << " of it";
+    }
+    // Every period had its tick, and each reached one slave.
+    EXPECT_GE(parts.ticks, every.ticks);
+    EXPECT_LT(parts.seg->counters().firmware_runs, every.seg->counters().firmware_runs);
 }
 
 INSTANTIATE_TEST_SUITE_P(DcAndFreeRun, FirmwareSchedule, ::testing::Values(true, false),
