@@ -522,17 +522,24 @@ void Drive::configure() {
     const bool dc = sync_mode() == coe::SyncMode::DcSync0 || sync_mode() == coe::SyncMode::DcSync1;
     // A device that takes its interpolation period from SYNC0 (HIWIN 9.1.2) writes it now.
     if (variant_->synchronised(dc ? static_cast<std::uint32_t>(cycle_time_ns()) : 0)) ++parameter_writes_;
-    // The parameters only when one was written since they were read.
-    if (parameter_writes_ != parameters_read_) read_parameters();
     io_.parameters.fieldbus_synchronised = dc;
-    core_->configure(io_);
+    // The parameters only when one was written since they were read, and the core's settings that follow
+    // from them (DriveCore::configure reads nothing else).
+    if (parameter_writes_ != parameters_read_) {
+        read_parameters();
+        core_->configure(io_);
+    }
     // The servo period is the speed control's sampling time, the TWIN sampling time of the switching
     // frequency P0302 (TWINsync specification chapter 2: 250 us, 125 us at 8 kHz); the option card
-    // exchanges its telegram in the same cycle. A device without P0302 keeps 250 us.
+    // exchanges its telegram in the same cycle. A device without P0302 keeps 250 us. Worked out again
+    // when P0302 changed.
+    const std::uint32_t switching =
+        o_->tw_switching_frequency.bound() ? o_->tw_switching_frequency.get() : kNoSwitchingFrequency;
+    if (switching == switching_seen_) return;
+    switching_seen_ = switching;
     const auto period =
-        o_->tw_switching_frequency.bound()
-            ? twinsync::sampling_time_ns(static_cast<std::uint8_t>(o_->tw_switching_frequency.get()))
-                  .value_or(kServoPeriodNs)
+        switching != kNoSwitchingFrequency
+            ? twinsync::sampling_time_ns(static_cast<std::uint8_t>(switching)).value_or(kServoPeriodNs)
             : kServoPeriodNs;
     if (period != period_ns_) {
         period_ns_ = period;

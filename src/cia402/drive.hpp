@@ -121,6 +121,9 @@ class Drive : public coe::CoeApplication, public twinsync::StatusSource {
     std::uint32_t parameters_read_ = ~std::uint32_t{0};  // parameter_writes_ when they were last read
     std::uint64_t sim_ns_ = 0;
     std::uint64_t period_ns_ = kServoPeriodNs;  // servo_period_ns()
+    // P0302 (TWINsync switching frequency) when period_ns_ was last worked out from it (configure()).
+    static constexpr std::uint32_t kNoSwitchingFrequency = 0x10000;  // the device has no P0302
+    std::uint32_t switching_seen_ = ~std::uint32_t{0};
     bool started_ = false;
     // The DriveIo's inputs are what the dictionary and the TWINsync port gave the last period
     // (Drive::advance)
