@@ -197,6 +197,17 @@ void scenario(Line& l) {
     l.watchdog = al.error() && al.code == (l.use_dc ? 0x002C : 0x001B);
 }
 
+// The master read the same bytes from both lines, cycle by cycle.
+void expect_same_bytes(const Line& a, const Line& b) {
+    ASSERT_EQ(a.log.size(), b.log.size());
+    const auto diff = std::mismatch(a.log.begin(), a.log.end(), b.log.begin());
+    if (diff.first != a.log.end()) {
+        const auto at = static_cast<std::size_t>(diff.first - a.log.begin());
+        const auto c = std::upper_bound(a.marks.begin(), a.marks.end(), at) - a.marks.begin() - 1;
+        ADD_FAILURE() << "first difference in cycle " << c << ", byte " << at - a.marks[c] << " of it";
+    }
+}
+
 class FirmwareSchedule : public ::testing::TestWithParam<bool> {};
 
 TEST_P(FirmwareSchedule, RunningOnlyWhenNeededGivesTheMasterTheSameBytesAsEveryServoPeriod) {
@@ -212,13 +223,7 @@ TEST_P(FirmwareSchedule, RunningOnlyWhenNeededGivesTheMasterTheSameBytesAsEveryS
         EXPECT_TRUE(l->emergency);
         EXPECT_TRUE(l->watchdog);
     }
-    ASSERT_EQ(every.log.size(), needed.log.size());
-    const auto diff = std::mismatch(every.log.begin(), every.log.end(), needed.log.begin());
-    if (diff.first != every.log.end()) {
-        const auto at = static_cast<std::size_t>(diff.first - every.log.begin());
-        const auto c = std::upper_bound(every.marks.begin(), every.marks.end(), at) - every.marks.begin() - 1;
-        ADD_FAILURE() << "first difference in cycle " << c << ", byte " << at - every.marks[c] << " of it";
-    }
+    expect_same_bytes(every, needed);
     // And the firmware ran far less often between frames.
     EXPECT_LT(needed.ticks * 20, every.ticks) << needed.ticks << " against " << every.ticks;
 }
@@ -233,13 +238,7 @@ TEST_P(FirmwareSchedule, TicksThatReachOneSlaveEachGiveTheMasterTheSameBytesAsEv
         EXPECT_TRUE(l->faulted);
         EXPECT_TRUE(l->watchdog);
     }
-    ASSERT_EQ(every.log.size(), parts.log.size());
-    const auto diff = std::mismatch(every.log.begin(), every.log.end(), parts.log.begin());
-    if (diff.first != every.log.end()) {
-        const auto at = static_cast<std::size_t>(diff.first - every.log.begin());
-        const auto c = std::upper_bound(every.marks.begin(), every.marks.end(), at) - every.marks.begin() - 1;
-        ADD_FAILURE() << "first difference in cycle " << c << ", byte " << at - every.marks[c] << " of it";
-    }
+    expect_same_bytes(every, parts);
     // Every period had its tick, and each reached one slave.
     EXPECT_GE(parts.ticks, every.ticks);
     EXPECT_LT(parts.seg->counters().firmware_runs, every.seg->counters().firmware_runs);
