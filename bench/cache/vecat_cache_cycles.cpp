@@ -17,6 +17,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench/drive_line.hpp"
+#include "esc/firmware_threads.hpp"
 
 #if __has_include(<valgrind/callgrind.h>)
 #include <valgrind/callgrind.h>
@@ -32,12 +33,21 @@ int main(int argc, char** argv) {
     std::size_t slaves = 512;
     unsigned cycles = 10;
     bool inline_firmware = false;
+    unsigned threads = 1;
+    unsigned frame_gap_us = 0;
     app.add_option("--slaves", slaves, "Virtual drives on the line")->check(CLI::Range(1, 4096));
     app.add_option("--cycles", cycles, "Measured cycles (after 5 unmeasured ones)")
         ->check(CLI::Range(1, 100000));
     app.add_flag(
         "--inline-firmware", inline_firmware,
         "Run the firmware within each frame (default: after the cycle's replies, as vecat run does)");
+    app.add_option("--threads", threads, "Threads that run the firmware (as vecat run --threads)")
+        ->check(CLI::Range(1, 64));
+    app.add_option("--frame-gap-us", frame_gap_us,
+                   "Time between the frames of a cycle, as they reach a line over a wire (default 0: all "
+                   "at the cycle's time); with a gap, a frame that reads inputs finds drives whose local "
+                   "cycle passed since their run, as in the soak of vecat-roundtrip")
+        ->check(CLI::Range(0, 60));
     CLI11_PARSE(app, argc, argv);
 
     std::unique_ptr<bench::DriveLine> line;
@@ -49,22 +59,34 @@ int main(int argc, char** argv) {
     }
     esc::Segment& seg = *line->seg;
     seg.set_deferred_firmware(!inline_firmware);
+    esc::FirmwareThreads workers(threads);
+    if (threads > 1) seg.set_firmware_threads(&workers);
+    line->link->set_time_step(std::uint64_t{frame_gap_us} * 1'000);
+    using Clock = std::chrono::steady_clock;
+    Clock::duration after{};  // the firmware run after the exchange, in all measured cycles
     const auto cycle = [&] {
-        line->advance(1'000'000);  // 1 ms a cycle: four servo periods of every drive
+        line->advance(1'000'000);  // 1 ms a cycle: four servo periods of every drive (the frames after)
         line->m->exchange_process_data();
+        const auto t = Clock::now();
         seg.run_deferred_firmware();
+        after += Clock::now() - t;
     };
     for (int c = 0; c < 5; ++c)
         cycle();
     const std::uint64_t runs_before = seg.counters().firmware_runs;
-    const auto t0 = std::chrono::steady_clock::now();
+    after = {};
+    const auto t0 = Clock::now();
     CALLGRIND_START_INSTRUMENTATION;
     for (unsigned c = 0; c < cycles; ++c)
         cycle();
     CALLGRIND_STOP_INSTRUMENTATION;
-    const auto t1 = std::chrono::steady_clock::now();
-    fmt::print("{} drives, {} cycles: {:.2f} firmware runs a cycle, {:.1f} us a cycle\n", slaves, cycles,
-               static_cast<double>(seg.counters().firmware_runs - runs_before) / cycles,
-               std::chrono::duration<double, std::micro>(t1 - t0).count() / cycles);
+    const auto t1 = Clock::now();
+    fmt::print(
+        "{} drives, {} cycles, {} thread(s), frames {} us apart: {:.2f} firmware runs a cycle, "
+        "{:.1f} us a cycle, of which {:.1f} us the firmware after the frames\n",
+        slaves, cycles, threads, frame_gap_us,
+        static_cast<double>(seg.counters().firmware_runs - runs_before) / cycles,
+        std::chrono::duration<double, std::micro>(t1 - t0).count() / cycles,
+        std::chrono::duration<double, std::micro>(after).count() / cycles);
     return 0;
 }
