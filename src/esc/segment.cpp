@@ -244,7 +244,9 @@ std::size_t Segment::reachable() const {
 }
 
 void Segment::set_firmware_halted(std::size_t i, bool halted) {
-    if (i >= halted_.size()) return;
+    // (Unchanged: the slave keeps its schedule. The fault injector states every slave's halt whenever a
+    // fault starts or ends.)
+    if (i >= halted_.size() || halted_[i] == (halted ? 1 : 0)) return;
     halted_[i] = halted ? 1 : 0;
     deadline_ns_[i] = 0;
     earliest_deadline_ns_ = 0;

@@ -133,7 +133,9 @@ class Segment {
     // slaves a frame reads, before the frame is processed; the runs after a frame; a tick) go to the
     // threads by group: slaves whose applications share state (Application::shared_state: drives coupled
     // by TWINsync, I/O wired to each other) form one group, which runs on one thread in the slaves'
-    // order; groups share nothing, so they run in any order on any thread with the same results. The
+    // order; groups share nothing, so they run in any order on any thread with the same results. Each group
+    // has a home thread by its place in the line (FirmwareThreads' lanes): a slave runs on the same core from
+    // batch to batch while the threads keep up, and its state stays in that core's cache. The
     // serve loop's thread takes part and returns when the batch is done (FirmwareThreads::run): nothing runs
     // beside the firmware, and the frame's datagrams are processed on the serve loop's thread as before.
     // Batches of fewer than kMinParallelRuns runs stay on the calling thread. nullptr: one thread.

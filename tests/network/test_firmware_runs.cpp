@@ -102,6 +102,26 @@ TEST_F(Cycling, ASlaveThatNoFrameReadsStillRunsWithinItsLagBound) {
     EXPECT_GT(seg().next_firmware_ns(), now);
 }
 
+TEST_F(Cycling, AHaltWithoutChangeLeavesTheSlavesSchedulesAlone) {
+    // The fault injector states every slave's halt each time a fault starts or ends: a slave whose halt
+    // does not change keeps its deadlines (a reset would run every slave of a large line at the next frame).
+    const std::uint64_t now = s.link.now_ns() + kMs;
+    s.link.set_time(now);
+    seg().tick(now);
+    const std::uint64_t next = seg().next_firmware_ns();
+    ASSERT_GT(next, now);
+    for (std::size_t k = 0; k < seg().size(); ++k)
+        seg().set_firmware_halted(k, false);
+    EXPECT_EQ(seg().next_firmware_ns(), next);
+    // A halt that changes starts the slave's schedule anew: it runs (only its ESC) at once.
+    seg().set_firmware_halted(1, true);
+    EXPECT_LE(seg().next_firmware_ns(), now);
+    seg().tick(now);
+    seg().set_firmware_halted(1, false);
+    EXPECT_LE(seg().next_firmware_ns(), now);
+    cycle();
+}
+
 TEST_F(Cycling, AFrameReadsEveryServoPeriodUpToItsOwnTime) {
     // The drive says when its next servo period is due (Application::next_cycle_ns). A frame at that time,
     // even less than a local cycle after the drive's last run, finds the period stepped.
