@@ -13,7 +13,7 @@ namespace vecat::esc {
 
 namespace {
 
-// The lower half of a lane's claim while a batch is being published: no item can be claimed.
+// The lower half of claim_ while a batch is being published: no item can be claimed.
 constexpr std::uint32_t kNotReady = ~std::uint32_t{0};
 
 void pause() noexcept {
@@ -32,12 +32,11 @@ std::uint64_t steady_ns() noexcept {
 
 }  // namespace
 
-FirmwareThreads::FirmwareThreads(unsigned threads, std::uint64_t spin_ns)
-    : lanes_(std::max(threads, 1u)), spin_ns_(spin_ns) {
+FirmwareThreads::FirmwareThreads(unsigned threads, std::uint64_t spin_ns) : spin_ns_(spin_ns) {
     const unsigned n = threads > 1 ? threads - 1 : 0;
     workers_.reserve(n);
     for (unsigned i = 0; i < n; ++i) {
-        workers_.emplace_back([this, i] { worker(i + 1); });
+        workers_.emplace_back([this] { worker(); });
         // Named for perf and top: vecat-fw-1, vecat-fw-2...
         const std::string name = "vecat-fw-" + std::to_string(i + 1);
         pthread_setname_np(workers_.back().native_handle(), name.c_str());
@@ -64,85 +63,66 @@ FirmwareThreads::~FirmwareThreads() {
         t.join();
 }
 
-std::size_t FirmwareThreads::drain(std::uint32_t batch, unsigned lane) {
-    Lane& l = lanes_[lane];
+std::size_t FirmwareThreads::work_through(std::uint32_t batch) {
     std::size_t ran = 0;
     for (;;) {
-        std::uint64_t c = l.claim.load();
+        std::uint64_t c = claim_.load();
         if (static_cast<std::uint32_t>(c >> 32) != batch) break;
         const auto next = static_cast<std::uint32_t>(c);
         // Read before the claim: a claim that succeeds proves that this batch was still the current one,
-        // and the caller writes a new batch's work only after invalidating every lane (see run()).
-        const std::size_t end = l.end.load();
-        const std::size_t chunk = l.chunk.load();
+        // and the caller writes a new batch's work only after invalidating claim_ (see run()).
+        const std::size_t count = count_.load();
+        const std::size_t chunk = chunk_.load();
         const Work work = work_.load();
         void* const context = context_.load();
-        if (next >= end) break;
-        const auto stop = static_cast<std::uint32_t>(std::min<std::size_t>(end, next + chunk));
-        if (!l.claim.compare_exchange_weak(c, pack(batch, stop))) continue;
-        for (std::uint32_t i = next; i < stop; ++i)
+        if (next >= count) break;
+        const auto end = static_cast<std::uint32_t>(std::min<std::size_t>(count, next + chunk));
+        if (!claim_.compare_exchange_weak(c, pack(batch, end))) continue;
+        for (std::uint32_t i = next; i < end; ++i)
             work(context, i);
-        ran += stop - next;
-        done_.fetch_add(stop - next, std::memory_order_release);
+        ran += end - next;
+        done_.fetch_add(end - next, std::memory_order_release);
     }
     return ran;
 }
 
-std::size_t FirmwareThreads::work_through(std::uint32_t batch, unsigned self) {
-    std::size_t ran = 0;
-    const auto n = static_cast<unsigned>(lanes_.size());
-    for (unsigned k = 0; k < n; ++k)
-        ran += drain(batch, (self + k) % n);
-    return ran;
-}
-
-void FirmwareThreads::run(std::size_t count, Work work, void* context, std::span<const std::size_t> lanes) {
+void FirmwareThreads::run(std::size_t count, Work work, void* context) {
     if (count == 0) return;
     if (workers_.empty() || count == 1) {
         for (std::size_t i = 0; i < count; ++i)
             work(context, i);
         return;
     }
-    const auto n = static_cast<unsigned>(lanes_.size());
-    const bool named = lanes.size() == n + 1 && lanes.front() == 0 && lanes.back() == count &&
-                       std::is_sorted(lanes.begin(), lanes.end());
     ++batch_;
-    for (Lane& l : lanes_)
-        l.claim.store(pack(batch_, kNotReady));  // late claimers of the last batch fail from here on
+    claim_.store(pack(batch_, kNotReady));  // late claimers of the last batch fail from here on
     done_.store(0, std::memory_order_relaxed);
+    count_.store(count);
+    // Items are claimed a chunk at a time: each claim and each count of finished items moves a cache line
+    // between the cores, which costs more than a small item (one slave's run). Eight chunks per thread
+    // still share out items of unequal cost.
+    chunk_.store(std::max<std::size_t>(1, count / (threads() * kChunksPerThread)));
     work_.store(work);
     context_.store(context);
-    for (unsigned t = 0; t < n; ++t) {
-        const std::size_t begin = named ? lanes[t] : count * t / n;
-        const std::size_t end = named ? lanes[t + 1] : count * (t + 1) / n;
-        lanes_[t].end.store(end);
-        // Items are claimed a chunk at a time: each claim and each count of finished items moves a cache
-        // line between the cores, which costs more than a small item (one slave's run). Eight chunks per
-        // thread still share out items of unequal cost.
-        lanes_[t].chunk.store(std::max<std::size_t>(1, (end - begin) / kChunksPerThread));
-        lanes_[t].claim.store(pack(batch_, static_cast<std::uint32_t>(begin)));
-    }
+    claim_.store(pack(batch_, 0));
     if (sleepers_.load() > 0) {
         wake_.fetch_add(1);
         wake_.notify_all();
     }
-    work_through(batch_, 0);
+    work_through(batch_);
     while (done_.load(std::memory_order_acquire) < count)
         pause();
 }
 
-void FirmwareThreads::worker(unsigned self) {
+void FirmwareThreads::worker() {
     std::uint32_t last = 0;
     std::uint64_t idle_since = steady_ns();
     unsigned spins = 0;
-    // (The last lane is published last: once it shows a new batch, every lane does.)
-    const std::atomic<std::uint64_t>& published = lanes_.back().claim;
     while (!stop_.load(std::memory_order_relaxed)) {
-        const std::uint64_t c = published.load();
+        const std::uint64_t c = claim_.load();
         const auto batch = static_cast<std::uint32_t>(c >> 32);
         if (batch != last && static_cast<std::uint32_t>(c) != kNotReady) {
             last = batch;
-            if (const std::size_t ran = work_through(batch, self))
+            if (const std::size_t ran = work_through(batch))
                 on_workers_.fetch_add(ran, std::memory_order_relaxed);
             idle_since = steady_ns();
             continue;
@@ -152,7 +132,7 @@ void FirmwareThreads::worker(unsigned self) {
         // Idle for a while: sleep until the caller publishes a batch (it wakes sleepers only).
         const std::uint32_t w = wake_.load();
         sleepers_.fetch_add(1);
-        if (published.load() == c && !stop_.load()) wake_.wait(w);
+        if (claim_.load() == c && !stop_.load()) wake_.wait(w);
         sleepers_.fetch_sub(1);
         idle_since = steady_ns();
     }

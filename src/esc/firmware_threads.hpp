@@ -3,16 +3,12 @@
 // calls run() and to N - 1 workers, and run() returns when all are done: a fork and a join around each batch,
 // so nothing else ever runs beside a slave's firmware.
 //
-// The hand-off is wait-free for the caller and takes no lock. A batch is split into one lane per thread (the
-// caller's, then each worker's): consecutive items, by default equal shares, or the shares the caller names
-// (run()'s `lanes`). Each thread claims items of its own lane first, a chunk at a time, with compare-and-swap
-// on the lane's word holding the batch number and the next item (so a worker that looks late can never claim
-// an item of a newer batch); then it takes what is left in the other lanes. The caller waits only for items
-// a worker has claimed and not finished. A worker that is slow to wake up costs the caller nothing: the
-// caller takes the items it left. Results do not depend on which thread runs an item (the items share no
-// state), only the time does. Lanes keep an item on the same thread from batch to batch while all threads
-// keep up: a slave's state then stays in one core's cache instead of moving to the core that happened to
-// claim it.
+// The hand-off is wait-free for the caller and takes no lock: a batch is published with one atomic store;
+// the caller and the workers claim items, a chunk at a time, with compare-and-swap on one word holding the
+// batch number and the next item (so a worker that looks late can never claim an item of a newer batch); the
+// caller then works through items itself and waits only for items a worker has claimed and not finished. A
+// worker that is slow to wake up costs the caller nothing: the caller takes the items it left. Results do not
+// depend on which thread runs an item (the items share no state), only the time does.
 //
 // A worker spins (with a pause instruction) while batches keep coming, and sleeps in the kernel (std::atomic
 // wait, a futex) after kSpinNs without one; the caller then wakes it with the next batch (a futex wake: a
@@ -24,7 +20,6 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -46,11 +41,9 @@ class FirmwareThreads {
     bool set_fifo_priority(int priority, std::string* why = nullptr);
 
     // Calls work(context, i) for every i in [0, count), each once, on this thread and the workers; returns
-    // when all calls have returned. Only one thread may call it (the serve loop's). lanes: empty, or
-    // threads() + 1 ascending bounds from 0 to count: thread t (0 the caller, t the worker vecat-fw-t) first
-    // runs the items [lanes[t], lanes[t + 1]) (empty: equal shares).
+    // when all calls have returned. Only one thread may call it (the serve loop's).
     using Work = void (*)(void* context, std::size_t item);
-    void run(std::size_t count, Work work, void* context, std::span<const std::size_t> lanes = {});
+    void run(std::size_t count, Work work, void* context);
 
     // A worker that has had no batch for this long sleeps until the next one (by default).
     static constexpr std::uint64_t kSpinNs = 100'000;
@@ -62,30 +55,22 @@ class FirmwareThreads {
     std::uint64_t items_on_workers() const { return on_workers_.load(std::memory_order_relaxed); }
 
   private:
-    void worker(unsigned self);
-    // Claims and runs items of batch `batch`, of lane `self` first, until none is left; returns how many it
-    // ran.
-    std::size_t work_through(std::uint32_t batch, unsigned self);
-    // Claims and runs items of one lane of batch `batch` until it has none left.
-    std::size_t drain(std::uint32_t batch, unsigned lane);
+    void worker();
+    // Claims and runs items of batch `batch` until none is left; returns how many it ran.
+    std::size_t work_through(std::uint32_t batch);
     static std::uint64_t pack(std::uint32_t batch, std::uint32_t next) {
         return (static_cast<std::uint64_t>(batch) << 32) | next;
     }
 
-    // One thread's share of a batch: the batch's number (upper half of claim) and the lane's next item to
-    // claim (lower half), and the end of the lane and its items per claim (written before claim publishes
-    // the batch; read by a claimer before it claims: a successful claim proves the batch it read is still
-    // the current one). One cache line each: the lanes are claimed from on different cores.
-    struct alignas(64) Lane {
-        std::atomic<std::uint64_t> claim{0};
-        std::atomic<std::size_t> end{0};
-        std::atomic<std::size_t> chunk{1};
-    };
-    std::vector<Lane> lanes_;
+    // The batch being run: its number (upper half) and the next item to claim (lower half).
+    alignas(64) std::atomic<std::uint64_t> claim_{0};
     // Items of the current batch finished so far.
     alignas(64) std::atomic<std::size_t> done_{0};
-    // The current batch's work (written and read as the lanes' ends are).
-    alignas(64) std::atomic<Work> work_{nullptr};
+    // The current batch's work (written before claim_ publishes it; read by a claimer before it claims: a
+    // successful claim proves the batch it read is still the current one).
+    alignas(64) std::atomic<std::size_t> count_{0};
+    std::atomic<std::size_t> chunk_{1};  // items per claim (see run())
+    std::atomic<Work> work_{nullptr};
     std::atomic<void*> context_{nullptr};
     // Sleeping workers, and the word they sleep on (counted up to wake them).
     alignas(64) std::atomic<unsigned> sleepers_{0};

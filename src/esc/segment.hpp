@@ -133,13 +133,11 @@ class Segment {
     // slaves a frame reads, before the frame is processed; the runs after a frame; a tick) go to the
     // threads by group: slaves whose applications share state (Application::shared_state: drives coupled
     // by TWINsync, I/O wired to each other) form one group, which runs on one thread in the slaves'
-    // order; groups share nothing, so they run in any order on any thread with the same results. Each group
-    // has a home thread by its place in the line (FirmwareThreads' lanes): a slave runs on the same core from
-    // batch to batch while the threads keep up, and its state stays in that core's cache. The
+    // order; groups share nothing, so they run in any order on any thread with the same results. The
     // serve loop's thread takes part and returns when the batch is done (FirmwareThreads::run): nothing runs
     // beside the firmware, and the frame's datagrams are processed on the serve loop's thread as before.
     // Batches of fewer than kMinParallelRuns runs stay on the calling thread. nullptr: one thread.
-    void set_firmware_threads(FirmwareThreads* threads);
+    void set_firmware_threads(FirmwareThreads* threads) { threads_ = threads; }
     static constexpr std::size_t kMinParallelRuns = 4;
     // The groups the slaves form now (a figure for tests).
     std::size_t firmware_groups();
@@ -268,7 +266,6 @@ class Segment {
     std::vector<std::uint64_t> group_batch_;  // per group: the batch it was last put in
     std::uint64_t batch_serial_ = 0;
     std::vector<std::uint32_t> batch_groups_;  // the groups of the batch being run
-    std::vector<std::size_t> lane_bounds_;     // FirmwareThreads::run's lanes for batch_groups_
     void count_corruption(const FrameDamage& d, std::size_t reached);
     void update_links(std::size_t i);
     void return_receive_times(const protocol::ParsedFrame& pf, Bytes frame);

@@ -197,11 +197,6 @@ std::uint64_t Segment::next_firmware_ns() const {
 
 // ---- Batches on several threads
 
-void Segment::set_firmware_threads(FirmwareThreads* threads) {
-    threads_ = threads;
-    if (threads_) lane_bounds_.reserve(threads_->threads() + 1);
-}
-
 void Segment::run_picked(std::uint64_t now_ns) {
     if (picked_count_ == 0) return;
     // In the slaves' order (slaves that share state run in order). Picked in order, mostly.
@@ -229,19 +224,7 @@ void Segment::run_picked(std::uint64_t now_ns) {
         }
     }
     batch_now_ns_ = now_ns;
-    // Each group's home thread: the threads share the groups in the slaves' order, the same way in every
-    // batch, so that a slave runs on the same core from batch to batch while the threads keep up.
-    const unsigned threads = threads_->threads();
-    const std::size_t groups = group_begin_.size() - 1;
-    lane_bounds_.resize(threads + 1);  // (capacity: set_firmware_threads)
-    std::size_t i = 0;
-    for (unsigned t = 0; t < threads; ++t) {
-        while (i < batch_groups_.size() && std::size_t{batch_groups_[i]} * threads < t * groups)
-            ++i;
-        lane_bounds_[t] = i;
-    }
-    lane_bounds_[threads] = batch_groups_.size();
-    threads_->run(batch_groups_.size(), &Segment::run_group, this, lane_bounds_);
+    threads_->run(batch_groups_.size(), &Segment::run_group, this);
     // The deadlines the workers set.
     for (const std::uint32_t k : picked_list_)
         earliest_deadline_ns_ = std::min(earliest_deadline_ns_, deadline_ns_[k]);

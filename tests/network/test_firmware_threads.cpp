@@ -63,56 +63,6 @@ TEST(FirmwareThreads, EveryItemOfEveryBatchRunsOnceAndTheWorkersTakePart) {
     EXPECT_GT(threads.items_on_workers(), 0u);
 }
 
-TEST(FirmwareThreads, NamedLanesStillRunEveryItemOnce) {
-    esc::FirmwareThreads threads(3);
-    Batch b;
-    // Uneven lanes, empty ones, and lanes that do not fit the batch (ignored: equal shares then).
-    const std::vector<std::vector<std::size_t>> lanes = {{0, 0, 0, 40},   {0, 40, 40, 40}, {0, 1, 39, 40},
-                                                         {0, 13, 14, 40}, {0, 20, 40},     {0, 30, 10, 40},
-                                                         {0, 5, 9, 41}};
-    for (int round = 0; round < 2'000; ++round)
-        for (const auto& l : lanes) {
-            b.runs.assign(40, 0);
-            threads.run(40, &count_item, &b, l);
-            ASSERT_EQ(std::count(b.runs.begin(), b.runs.end(), 1), 40) << "round " << round;
-        }
-}
-
-// A thread claims items of its own lane first: the worker's first item is its lane's, though the caller's
-// lane has items left that a single queue would have handed out first.
-struct Ordered {
-    std::atomic<bool> last_ran{false};
-    std::atomic<int> first_on_worker{-1};
-    std::atomic<bool> waited_too_long{false};
-    std::thread::id caller = std::this_thread::get_id();
-};
-
-void ordered_item(void* context, std::size_t item) {
-    auto& o = *static_cast<Ordered*>(context);
-    if (std::this_thread::get_id() != o.caller) {
-        int none = -1;
-        o.first_on_worker.compare_exchange_strong(none, static_cast<int>(item));
-    }
-    if (item == 8) o.last_ran = true;
-    if (item == 0) {  // the caller's first item: it waits for the worker's lane (item 8) to have run
-        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-        while (!o.last_ran && std::chrono::steady_clock::now() < until)
-            std::this_thread::yield();
-        if (!o.last_ran) o.waited_too_long = true;
-    }
-}
-
-TEST(FirmwareThreads, AWorkerTakesItsOwnLaneFirst) {
-    esc::FirmwareThreads threads(2);
-    for (int round = 0; round < 20; ++round) {
-        Ordered o;
-        const std::size_t lanes[] = {0, 8, 9};  // the caller: items 0-7; the worker: item 8
-        threads.run(9, &ordered_item, &o, lanes);
-        ASSERT_FALSE(o.waited_too_long) << "round " << round;
-        EXPECT_EQ(o.first_on_worker, 8) << "round " << round;
-    }
-}
-
 TEST(FirmwareThreads, ASleepingWorkerWakesUpForTheNextBatch) {
     esc::FirmwareThreads threads(2, 1'000'000);  // sleeps after 1 ms without a batch
     Batch b;
