@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <exception>
 #include <memory>
+#include <vector>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
@@ -35,6 +36,7 @@ int main(int argc, char** argv) {
     bool inline_firmware = false;
     unsigned threads = 1;
     unsigned frame_gap_us = 0;
+    unsigned evict_mb = 0;
     app.add_option("--slaves", slaves, "Virtual drives on the line")->check(CLI::Range(1, 4096));
     app.add_option("--cycles", cycles, "Measured cycles (after 5 unmeasured ones)")
         ->check(CLI::Range(1, 100000));
@@ -48,6 +50,11 @@ int main(int argc, char** argv) {
                    "at the cycle's time); with a gap, a frame that reads inputs finds drives whose local "
                    "cycle passed since their run, as in the soak of vecat-roundtrip")
         ->check(CLI::Range(0, 60));
+    app.add_option("--evict-mb", evict_mb,
+                   "Between cycles, write this many MB elsewhere (not timed), as the master, the kernel and "
+                   "other programs do between the cycles of a soak: each cycle then starts with the caches "
+                   "cold")
+        ->check(CLI::Range(0, 1024));
     CLI11_PARSE(app, argc, argv);
 
     std::unique_ptr<bench::DriveLine> line;
@@ -77,18 +84,27 @@ int main(int argc, char** argv) {
     };
     for (int c = 0; c < 5; ++c)
         cycle();
+    std::vector<std::uint8_t> elsewhere(std::size_t{evict_mb} << 20);
     const std::uint64_t runs_before = seg.counters().firmware_runs;
-    const auto t0 = Clock::now();
+    Clock::duration timed{};
     CALLGRIND_START_INSTRUMENTATION;
-    for (unsigned c = 0; c < cycles; ++c)
+    for (unsigned c = 0; c < cycles; ++c) {
+        if (!elsewhere.empty()) {
+            CALLGRIND_STOP_INSTRUMENTATION;
+            for (std::size_t i = 0; i < elsewhere.size(); i += 64)
+                elsewhere[i] = static_cast<std::uint8_t>(elsewhere[i] + c);
+            CALLGRIND_START_INSTRUMENTATION;
+        }
+        const auto t0 = Clock::now();
         cycle();
+        timed += Clock::now() - t0;
+    }
     CALLGRIND_STOP_INSTRUMENTATION;
-    const auto t1 = Clock::now();
     fmt::print(
         "{} drives, {} cycles, {} thread(s), frames {} us apart: {:.2f} firmware runs a cycle, "
         "{:.1f} us a cycle\n",
         slaves, cycles, threads, frame_gap_us,
         static_cast<double>(seg.counters().firmware_runs - runs_before) / cycles,
-        std::chrono::duration<double, std::micro>(t1 - t0).count() / cycles);
+        std::chrono::duration<double, std::micro>(timed).count() / cycles);
     return 0;
 }
