@@ -145,8 +145,8 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
     seg.set_deferred_firmware(true);
     seg.set_firmware_threads(opt.firmware_threads);
     // Only this thread writes the counters: a relaxed load and store each, no locked instruction.
-    const auto bump = [](std::atomic<std::uint64_t>& c) {
-        c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    const auto bump = [](std::atomic<std::uint64_t>& c, std::uint64_t by = 1) {
+        c.store(c.load(std::memory_order_relaxed) + by, std::memory_order_relaxed);
     };
     // A frame waiting in the socket when a reply has gone out is answered before the firmware of the frames
     // before it runs (the segment runs that firmware first where the frame could see what it does,
@@ -256,9 +256,7 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             std::uint64_t at = frame_time(sock, now);
             if (opt.counters && at < tick_end) {
                 bump(opt.counters->frames_behind_tick);
-                opt.counters->behind_tick_ns.store(
-                    opt.counters->behind_tick_ns.load(std::memory_order_relaxed) + (tick_end - at),
-                    std::memory_order_relaxed);
+                bump(opt.counters->behind_tick_ns, tick_end - at);
             }
             at = std::max(at, last_time);
             last_time = at;
