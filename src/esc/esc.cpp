@@ -1,4 +1,4 @@
-// The ESC silicon as one unit (about 780 lines): a datagram's way through the register space, the FMMUs
+// The ESC silicon as one unit (about 800 lines): a datagram's way through the register space, the FMMUs
 // and the SII interface is one piece of logic that each part must see whole. The SyncManagers (their
 // state, their ECAT accesses and the PDI side) are in esc_sync_managers.cpp, the DC unit in
 // distributed_clock, the wire layouts in src/protocol. The access rules are listed in README.md.
@@ -765,6 +765,23 @@ std::uint64_t Esc::watchdog_deadline_ns() const {
     if (wd_time == 0 || !wd_armed_) return DistributedClock::kNever;
     const std::uint64_t divider = ld_le16(&mem_[addr(Reg::WatchdogDivider)]);
     return wd_last_trigger_ns_ + (divider + 2) * 40 * wd_time + 1;
+}
+
+void Esc::prefetch_for_frame() const {
+    // This object's cyclic part (it comes first, see esc.hpp), the AL event request and the SyncManagers'
+    // registers that a buffer access updates, and the three buffers of each process data SyncManager.
+    const auto* self = reinterpret_cast<const char*>(this);
+    for (std::size_t b = 0; b < 4 * 64; b += 64)
+        __builtin_prefetch(self + b);
+    const std::uint8_t* m = mem_.data();
+    __builtin_prefetch(m + addr(Reg::AlEventRequest));
+    __builtin_prefetch(m + protocol::sm_addr(0));
+    for (unsigned i = 0; i < cfg_.sm_count && i < sm_.size(); ++i) {
+        const SmState& sm = sm_[i];
+        if (!sm.active || sm.mailbox) continue;
+        for (std::size_t b = 0; b < std::size_t{sm.length} * 3 && sm.start + b < mem_.size(); b += 64)
+            __builtin_prefetch(m + sm.start + b);
+    }
 }
 
 void Esc::tick(std::uint64_t now_ns) {

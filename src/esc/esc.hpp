@@ -189,6 +189,9 @@ class Esc {
 
     // ---- Raw access for tests, tools and the application's own registers
     std::uint8_t peek(std::uint16_t a) const { return a < mem_.size() ? mem_[a] : 0; }
+    // Asks the caches for what a process data datagram reads and writes here (its FMMUs and SyncManagers,
+    // their buffers), so that a frame's slaves are fetched together rather than one after the other.
+    void prefetch_for_frame() const;
     std::uint16_t peek16(std::uint16_t a) const {
         return static_cast<std::uint16_t>(peek(a) | (peek(a + 1) << 8));
     }

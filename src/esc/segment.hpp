@@ -139,6 +139,11 @@ class Segment {
     // Batches of fewer than kMinParallelRuns runs stay on the calling thread. nullptr: one thread.
     void set_firmware_threads(FirmwareThreads* threads) { threads_ = threads; }
     static constexpr std::size_t kMinParallelRuns = 4;
+    // From this many slaves on, a frame asks the caches for its slaves' ESC state before it passes them
+    // (Slave::prefetch_for_frame): BM_CyclicReplyPath/512 140 us against 153 us without (medians of 4
+    // alternating runs), BM_Network1000Cycle/1 198 against 213 us. A line of 100 slaves, whose state stays
+    // in a core's cache, gains nothing and pays the requests.
+    static constexpr std::size_t kPrefetchSlaves = 256;
     // The groups the slaves form now (a figure for tests).
     std::size_t firmware_groups();
     std::uint32_t firmware_group(std::size_t i) {

@@ -154,6 +154,11 @@ void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t 
     // concern that slave, and no other: each candidate looks at every datagram with its addressing as it is
     // then (pass), so the candidates found before the frame stay right.
     bool indexed = find_candidates(pf, intact);
+    // On a line too large for a core's cache the frame's slaves are asked for all at once, not found cold
+    // one after the other (Slave::prefetch_for_frame; on a small line that is only overhead).
+    if (indexed && slaves_.size() >= kPrefetchSlaves)
+        for (const std::uint32_t k : candidates_)
+            slaves_[k]->prefetch_for_frame();
     // The deferred frames' firmware runs first if this frame may see what it does (set_deferred_firmware).
     if (deferred_count_ != 0 && (!indexed || candidates_share_deferred_groups())) run_deferred_firmware();
     if (deferred_count_ != 0) ++counters_.past_deferred_firmware;

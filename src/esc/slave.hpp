@@ -164,6 +164,13 @@ class Slave {
     // Whether the firmware has a mailbox message for the master (a queued reply, an emergency, an EoE frame
     // from the host) and SM1 is free to take it: a run would post it.
     bool mailbox_output_pending() const;
+    // Asks the caches for what a process data frame reads and writes of this slave (Esc::prefetch_for_frame,
+    // and what mailbox_output_pending() asks).
+    void prefetch_for_frame() const {
+        __builtin_prefetch(this);
+        __builtin_prefetch(reinterpret_cast<const char*>(this) + 64);
+        esc_.prefetch_for_frame();
+    }
     // The host time by which run() must be called again without a frame (after a run; see
     // Segment::next_firmware_ns): the process data watchdog's expiry, SYNC pulses about to pile up beyond
     // what one run takes, the AL control read after its latency, the application's deadlines; poll_ns
