@@ -164,8 +164,8 @@ class Slave {
     // Whether the firmware has a mailbox message for the master (a queued reply, an emergency, an EoE frame
     // from the host) and SM1 is free to take it: a run would post it.
     bool mailbox_output_pending() const;
-    // Asks the caches for what a process data frame reads and writes of this slave (Esc::prefetch_for_frame,
-    // and what mailbox_output_pending() asks).
+    // Asks the caches for what a process data frame reads and writes of this slave: its ESC's state
+    // (Esc::prefetch_for_frame) and the first lines of this object.
     void prefetch_for_frame() const {
         __builtin_prefetch(this);
         __builtin_prefetch(reinterpret_cast<const char*>(this) + 64);
