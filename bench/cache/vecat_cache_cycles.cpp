@@ -69,8 +69,7 @@ int main(int argc, char** argv) {
     esc::FirmwareThreads workers(threads);
     if (threads > 1) seg.set_firmware_threads(&workers);
     // (The frames of a cycle must fit into it: time does not go back at the next cycle's start.)
-    const std::size_t frames =
-        (line->m->process_image_size() + master::Master::kMaxLrwBytes - 1) / master::Master::kMaxLrwBytes;
+    const std::size_t frames = line->m->process_data_frames();
     if (frames * frame_gap_us >= 1'000) {
         fmt::print(stderr, "{} frames {} us apart do not fit into a cycle of 1 ms\n", frames, frame_gap_us);
         return 2;
