@@ -478,11 +478,17 @@ int run(const Options& o) {
             100.0 * static_cast<double>(cpu_srv) / static_cast<double>(wall),
             latency ? " (includes the reflector phases, parked)" : "",
             100.0 * tv / (static_cast<double>(wall) / 1e9));
-        if (firmware)
+        if (firmware) {
             fmt::print(
                 "  firmware on {} threads: {} groups of slaves run by the workers (the rest by the serve "
                 "thread); the whole process's figure includes the workers\n",
                 firmware->threads(), firmware->items_on_workers());
+            fmt::print(
+                "  the serve thread waited {} times {} us or more for items a worker had claimed; "
+                "longest wait {:.1f} us\n",
+                firmware->long_waits(), esc::FirmwareThreads::kLongWaitNs / 1000,
+                static_cast<double>(firmware->longest_wait_ns()) / 1e3);
+        }
         // Busy-polling, a loop pass is a poll, not a wake-up: the figure means something only when blocking.
         if (c_vecat > 0 && !o.busy)
             fmt::print(

@@ -109,8 +109,15 @@ void FirmwareThreads::run(std::size_t count, Work work, void* context) {
         wake_.notify_all();
     }
     work_through(batch_);
+    if (done_.load(std::memory_order_acquire) >= count) return;
+    // Items a worker claimed and still runs. (Sleeping here instead, after a while, was tried: the soaks
+    // missed no fewer cycles and answered later; bench/README.md.)
+    const std::uint64_t since = steady_ns();
     while (done_.load(std::memory_order_acquire) < count)
         pause();
+    const std::uint64_t waited = steady_ns() - since;
+    if (waited >= kLongWaitNs) ++long_waits_;
+    longest_wait_ns_ = std::max(longest_wait_ns_, waited);
 }
 
 void FirmwareThreads::worker() {

@@ -53,6 +53,12 @@ class FirmwareThreads {
     // Items run by the workers so far (the rest ran on the caller's thread): a figure for tests and the
     // benchmark.
     std::uint64_t items_on_workers() const { return on_workers_.load(std::memory_order_relaxed); }
+    // Batches whose caller, its own share done, waited kLongWaitNs or more for items a worker had claimed
+    // (a worker preempted in the middle of its chunk, or the machine stalled), and the caller's longest such
+    // wait: figures for the soak and the tests.
+    static constexpr std::uint64_t kLongWaitNs = 50'000;
+    std::uint64_t long_waits() const { return long_waits_; }
+    std::uint64_t longest_wait_ns() const { return longest_wait_ns_; }
 
   private:
     void worker();
@@ -77,6 +83,7 @@ class FirmwareThreads {
     std::atomic<std::uint32_t> wake_{0};
     std::atomic<bool> stop_{false};
     std::atomic<std::uint64_t> on_workers_{0};
+    std::uint64_t long_waits_ = 0, longest_wait_ns_ = 0;  // the caller's (run())
     const std::uint64_t spin_ns_;
     std::uint32_t batch_ = 0;  // the caller's last batch number
     std::vector<std::thread> workers_;

@@ -79,6 +79,38 @@ TEST(FirmwareThreads, ASleepingWorkerWakesUpForTheNextBatch) {
     EXPECT_GT(threads.items_on_workers(), before);
 }
 
+// A worker that stalls in the middle of its chunk (as when the scheduler preempts it) keeps the caller
+// waiting for its items: run() returns with every item done, and the wait shows in the figures the soak
+// reports (FirmwareThreads::long_waits, longest_wait_ns).
+struct StallingBatch {
+    std::thread::id caller;
+    std::atomic<int> done{0};
+    std::atomic<bool> stalled{false};
+};
+
+void stall_on_a_worker(void* context, std::size_t) {
+    auto& b = *static_cast<StallingBatch*>(context);
+    if (std::this_thread::get_id() != b.caller && !b.stalled.exchange(true))
+        std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    b.done.fetch_add(1);
+}
+
+TEST(FirmwareThreads, AWorkerThatStallsKeepsTheCallerWaitingAndTheWaitIsCounted) {
+    esc::FirmwareThreads threads(2, 1'000'000'000);  // the worker keeps spinning between batches
+    StallingBatch b;
+    b.caller = std::this_thread::get_id();
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    // Batches until the worker claimed an item (and so stalled in one of them).
+    while (!b.stalled && std::chrono::steady_clock::now() < until) {
+        b.done = 0;
+        threads.run(64, &stall_on_a_worker, &b);
+        ASSERT_EQ(b.done.load(), 64);  // run() returned with every item done
+    }
+    ASSERT_TRUE(b.stalled) << "the worker never took an item";
+    EXPECT_GE(threads.long_waits(), 1u);
+    EXPECT_GE(threads.longest_wait_ns(), 20'000'000u);  // (the caller ran its own items first)
+}
+
 TEST(FirmwareThreads, OneThreadRunsEverythingOnTheCaller) {
     esc::FirmwareThreads threads(1);
     Batch b;
