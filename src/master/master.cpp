@@ -228,43 +228,74 @@ bool Master::assign_station_addresses(std::uint16_t first) {
     return true;
 }
 
-std::optional<std::uint32_t> Master::read_sii_dword(std::uint16_t station, std::uint32_t word) {
-    auto wait_idle = [&]() -> std::optional<std::uint16_t> {
-        for (int i = 0; i < 100; ++i) {
-            auto st = read16(station, ra(Reg::SiiControl));
-            if (!st) return std::nullopt;
-            if (!(*st & (protocol::sii_ctrl::Busy | protocol::sii_ctrl::CmdMask))) return st;
-            std::this_thread::sleep_for(std::chrono::microseconds(50));
-        }
-        return std::nullopt;
+std::optional<Master::SiiBlock> Master::read_sii_block(std::uint16_t station, std::uint32_t word) {
+    namespace ctl = protocol::sii_ctrl;
+    const auto busy = [](std::uint16_t st) { return (st & (ctl::Busy | ctl::CmdMask)) != 0; };
+    // Control/status (0x0502), address (0x0504) and data (0x0508) in one read: the ESC datasheet's
+    // registers 0x0502-0x050F, 14 bytes.
+    std::array<std::uint8_t, 14> regs{};
+    const auto read_regs = [&]() -> std::optional<std::uint16_t> {
+        const auto w = fprd(station, ra(Reg::SiiControl), regs);
+        if (!w || *w != 1) return std::nullopt;
+        return ld_le16(regs.data());
     };
     for (int attempt = 0; attempt < 3; ++attempt) {
-        auto st = wait_idle();
-        if (!st) return std::nullopt;
-        if (*st & (protocol::sii_ctrl::ErrorAck | protocol::sii_ctrl::ErrorWriteEnable))
-            write16(station, ra(Reg::SiiControl), 0);
+        if (attempt > 0) {
+            // The command before was refused or not taken: wait until the interface is idle, clear its error
+            // bits, then command again.
+            std::optional<std::uint16_t> st;
+            for (int i = 0; i < 100 && (st = read_regs()) && busy(*st); ++i)
+                std::this_thread::sleep_for(std::chrono::microseconds(50));
+            if (!st || busy(*st)) return std::nullopt;
+            if (*st & (ctl::ErrorAck | ctl::ErrorWriteEnable)) write16(station, ra(Reg::SiiControl), 0);
+        }
+        // The command at once (a new command clears the error bits of the one before), then its result: one
+        // frame each while the ESC is quick; a busy interface is polled every 50 us.
         std::uint8_t cmd[6];
-        st_le16(cmd, protocol::sii_ctrl::CmdRead);
+        st_le16(cmd, ctl::CmdRead);
         st_le32(cmd + 2, word);
-        auto w = fpwr(station, ra(Reg::SiiControl), cmd);
+        const auto w = fpwr(station, ra(Reg::SiiControl), cmd);
         if (!w || *w != 1) return std::nullopt;
-        st = wait_idle();
-        if (!st) return std::nullopt;
-        if (*st & protocol::sii_ctrl::ErrorAck) continue;  // NACK: retry
-        return read32(station, ra(Reg::SiiData));
+        std::optional<std::uint16_t> st;
+        for (int i = 0; i < 100 && (st = read_regs()) && busy(*st); ++i)
+            std::this_thread::sleep_for(std::chrono::microseconds(50));
+        if (!st || busy(*st)) return std::nullopt;
+        if (*st & ctl::ErrorAck) continue;  // NACK: again
+        // An interface busy with something else when the command came did not take it: its address tells.
+        if (ld_le32(regs.data() + 2) != word) continue;
+        SiiBlock b;
+        b.size = (*st & ctl::Read8Bytes) ? 8 : 4;
+        std::copy_n(regs.begin() + 6, b.size, b.bytes.begin());
+        return b;
     }
     return std::nullopt;
 }
 
+std::optional<std::uint32_t> Master::read_sii_dword(std::uint16_t station, std::uint32_t word) {
+    const auto b = read_sii_block(station, word);
+    if (!b) return std::nullopt;
+    return ld_le32(b->bytes.data());
+}
+
 std::optional<std::vector<std::uint8_t>> Master::read_sii_image(std::uint16_t station) {
     std::vector<std::uint8_t> img;
+    // The image in double words; an ESC that reads 8 bytes a command gives two of them (the category
+    // header and the first double word of its data, or two of the data).
+    SiiBlock last;
+    std::uint32_t last_word = 0;
     auto read_words = [&](std::uint32_t word, std::size_t nwords) -> bool {
         for (std::size_t k = 0; k < nwords; k += 2) {
-            auto v = read_sii_dword(station, static_cast<std::uint32_t>(word + k));
-            if (!v) return false;
-            const std::size_t pos = 2 * (word + k);
+            const auto w = static_cast<std::uint32_t>(word + k);
+            if (!(last.size != 0 && w >= last_word && 2 * (w - last_word) + 4 <= last.size)) {
+                const auto b = read_sii_block(station, w);
+                if (!b) return false;
+                last = *b;
+                last_word = w;
+            }
+            const std::size_t pos = 2 * static_cast<std::size_t>(w);
             if (img.size() < pos + 4) img.resize(pos + 4, 0xFF);
-            st_le32(img.data() + pos, *v);
+            std::copy_n(last.bytes.begin() + 2 * (w - last_word), 4,
+                        img.begin() + static_cast<std::ptrdiff_t>(pos));
         }
         return true;
     };

@@ -157,6 +157,13 @@ class Master {
     // open ports in the order 0 -> 3 -> 1 -> 2, so slave i hangs on the nearest slave before it that still
     // has an open port left, at the next of its ports in that order.
     void compute_topology();
+    // What one SII read command returns (ETG.1000.4 6.4; 0x0502 bit 6 says whether the ESC reads 4 or 8
+    // bytes): the bytes from the word address on.
+    struct SiiBlock {
+        std::array<std::uint8_t, 8> bytes{};
+        unsigned size = 0;  // 4 or 8
+    };
+    std::optional<SiiBlock> read_sii_block(std::uint16_t station, std::uint32_t word);
     std::optional<std::uint32_t> read_sii_dword(std::uint16_t station, std::uint32_t word);
     std::optional<std::vector<std::uint8_t>> read_sii_image(std::uint16_t station);
     bool configure_mailboxes();  // SM0/SM1 from the SII
