@@ -1,4 +1,4 @@
-// The project's master (about 870 lines): one start-up sequence in the order of the masters' checklist
+// The project's master (about 900 lines): one start-up sequence in the order of the masters' checklist
 // (scan, SII, topology, mailboxes, PDO sizes and mapped entries by CoE, SoE or SII, FMMUs per SyncManager, DC
 // on a tree, state changes) and the cyclic exchange (its frames back to back, Master::transact_frames), each
 // step a function that builds on the SlaveInfo the steps before filled; one sequence, so one file. The

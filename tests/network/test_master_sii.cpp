@@ -19,12 +19,15 @@ devices:
   - {name: reads-4, device: drive, esc: {sii_read_bytes: 4}}
 )";
 
+// The two slaves found, reset and given station addresses: the start-up up to the SII reads.
+bool addressed(master::Master& m) {
+    return m.count_slaves() == 2 && m.reset_slaves() && m.assign_station_addresses();
+}
+
 TEST(MasterSii, TheImageIsReadAsTheEscHoldsItWithTwoFramesACommand) {
     test::ServedNetwork n(kDrives);
     master::Master& m = n.master;
-    ASSERT_EQ(m.count_slaves(), 2);
-    ASSERT_TRUE(m.reset_slaves());
-    ASSERT_TRUE(m.assign_station_addresses());
+    ASSERT_TRUE(addressed(m));
     std::vector<std::uint64_t> frames;
     for (std::size_t k = 0; k < 2; ++k) {
         const std::uint64_t before = n.built.segment->counters().frames;
@@ -51,9 +54,7 @@ TEST(MasterSii, TheImageIsReadAsTheEscHoldsItWithTwoFramesACommand) {
 TEST(MasterSii, ADoubleWordAtAnyWordAddress) {
     test::ServedNetwork n(kDrives);
     master::Master& m = n.master;
-    ASSERT_EQ(m.count_slaves(), 2);
-    ASSERT_TRUE(m.reset_slaves());
-    ASSERT_TRUE(m.assign_station_addresses());
+    ASSERT_TRUE(addressed(m));
     for (std::size_t k = 0; k < 2; ++k) {
         const std::vector<std::uint8_t>& eeprom = n.built.segment->slave(k).esc().eeprom();
         for (const std::uint32_t word : {0u, 1u, 7u, 8u, 0x41u}) {
