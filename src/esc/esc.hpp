@@ -186,12 +186,12 @@ class Esc {
     const DistributedClock& dc() const { return dc_; }
     // SYNC pulses due up to now_ns, as the PDI sees its SYNC0/SYNC1 interrupts (sets the AL event bits).
     unsigned pdi_take_sync_pulses(std::uint64_t now_ns, SyncPulse* out, unsigned max);
-
-    // ---- Raw access for tests, tools and the application's own registers
-    std::uint8_t peek(std::uint16_t a) const { return a < mem_.size() ? mem_[a] : 0; }
     // Asks the caches for what a process data datagram reads and writes here (its FMMUs and SyncManagers,
     // their buffers), so that a frame's slaves are fetched together rather than one after the other.
     void prefetch_for_frame() const;
+
+    // ---- Raw access for tests, tools and the application's own registers
+    std::uint8_t peek(std::uint16_t a) const { return a < mem_.size() ? mem_[a] : 0; }
     std::uint16_t peek16(std::uint16_t a) const {
         return static_cast<std::uint16_t>(peek(a) | (peek(a + 1) << 8));
     }

@@ -230,42 +230,45 @@ bool Master::assign_station_addresses(std::uint16_t first) {
 
 std::optional<Master::SiiBlock> Master::read_sii_block(std::uint16_t station, std::uint32_t word) {
     namespace ctl = protocol::sii_ctrl;
-    const auto busy = [](std::uint16_t st) { return (st & (ctl::Busy | ctl::CmdMask)) != 0; };
-    // Control/status (0x0502), address (0x0504) and data (0x0508) in one read: the ESC datasheet's
-    // registers 0x0502-0x050F, 14 bytes.
+    // Control/status, address and data in one read: registers 0x0502-0x050F of the ESC datasheet.
+    const std::uint16_t first = ra(Reg::SiiControl);
+    const std::size_t at_address = ra(Reg::SiiAddress) - first, at_data = ra(Reg::SiiData) - first;
     std::array<std::uint8_t, 14> regs{};
-    const auto read_regs = [&]() -> std::optional<std::uint16_t> {
-        const auto w = fprd(station, ra(Reg::SiiControl), regs);
-        if (!w || *w != 1) return std::nullopt;
-        return ld_le16(regs.data());
+    // The status once the interface is idle (a busy one is polled every 50 us); nullopt: no answer, or busy
+    // for 5 ms.
+    const auto idle_status = [&]() -> std::optional<std::uint16_t> {
+        for (int i = 0; i < 100; ++i) {
+            const auto w = fprd(station, first, regs);
+            if (!w || *w != 1) return std::nullopt;
+            const std::uint16_t st = ld_le16(regs.data());
+            if (!(st & (ctl::Busy | ctl::CmdMask))) return st;
+            std::this_thread::sleep_for(std::chrono::microseconds(50));
+        }
+        return std::nullopt;
     };
     for (int attempt = 0; attempt < 3; ++attempt) {
         if (attempt > 0) {
             // The command before was refused or not taken: wait until the interface is idle, clear its error
             // bits, then command again.
-            std::optional<std::uint16_t> st;
-            for (int i = 0; i < 100 && (st = read_regs()) && busy(*st); ++i)
-                std::this_thread::sleep_for(std::chrono::microseconds(50));
-            if (!st || busy(*st)) return std::nullopt;
-            if (*st & (ctl::ErrorAck | ctl::ErrorWriteEnable)) write16(station, ra(Reg::SiiControl), 0);
+            const auto st = idle_status();
+            if (!st) return std::nullopt;
+            if (*st & (ctl::ErrorAck | ctl::ErrorWriteEnable)) write16(station, first, 0);
         }
         // The command at once (a new command clears the error bits of the one before), then its result: one
-        // frame each while the ESC is quick; a busy interface is polled every 50 us.
+        // frame each while the ESC is quick.
         std::uint8_t cmd[6];
         st_le16(cmd, ctl::CmdRead);
         st_le32(cmd + 2, word);
-        const auto w = fpwr(station, ra(Reg::SiiControl), cmd);
+        const auto w = fpwr(station, first, cmd);
         if (!w || *w != 1) return std::nullopt;
-        std::optional<std::uint16_t> st;
-        for (int i = 0; i < 100 && (st = read_regs()) && busy(*st); ++i)
-            std::this_thread::sleep_for(std::chrono::microseconds(50));
-        if (!st || busy(*st)) return std::nullopt;
+        const auto st = idle_status();
+        if (!st) return std::nullopt;
         if (*st & ctl::ErrorAck) continue;  // NACK: again
         // An interface busy with something else when the command came did not take it: its address tells.
-        if (ld_le32(regs.data() + 2) != word) continue;
+        if (ld_le32(regs.data() + at_address) != word) continue;
         SiiBlock b;
         b.size = (*st & ctl::Read8Bytes) ? 8 : 4;
-        std::copy_n(regs.begin() + 6, b.size, b.bytes.begin());
+        std::copy_n(regs.begin() + static_cast<std::ptrdiff_t>(at_data), b.size, b.bytes.begin());
         return b;
     }
     return std::nullopt;
