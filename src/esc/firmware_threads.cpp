@@ -56,6 +56,7 @@ bool FirmwareThreads::set_fifo_priority(int priority, std::string* why) {
 }
 
 FirmwareThreads::~FirmwareThreads() {
+    join();
     stop_.store(true);
     wake_.fetch_add(1);
     wake_.notify_all();
@@ -87,6 +88,12 @@ std::size_t FirmwareThreads::work_through(std::uint32_t batch) {
 }
 
 void FirmwareThreads::run(std::size_t count, Work work, void* context) {
+    start(count, work, context);
+    join();
+}
+
+void FirmwareThreads::start(std::size_t count, Work work, void* context) {
+    if (started_) join();
     if (count == 0) return;
     if (workers_.empty() || count == 1) {
         for (std::size_t i = 0; i < count; ++i)
@@ -94,6 +101,8 @@ void FirmwareThreads::run(std::size_t count, Work work, void* context) {
         return;
     }
     ++batch_;
+    batch_count_ = count;
+    started_ = true;
     claim_.store(pack(batch_, kNotReady));  // late claimers of the last batch fail from here on
     done_.store(0, std::memory_order_relaxed);
     count_.store(count);
@@ -108,6 +117,12 @@ void FirmwareThreads::run(std::size_t count, Work work, void* context) {
         wake_.fetch_add(1);
         wake_.notify_all();
     }
+}
+
+void FirmwareThreads::join() {
+    if (!started_) return;
+    started_ = false;
+    const std::size_t count = batch_count_;
     work_through(batch_);
     if (done_.load(std::memory_order_acquire) >= count) return;
     // Items a worker claimed and still runs. (Sleeping here instead, after a while, was tried: the soaks

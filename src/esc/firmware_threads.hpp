@@ -1,7 +1,8 @@
 // Threads for the slaves' firmware (vecat run --threads N). The segment hands a batch of independent work
 // items (groups of slaves whose firmware shares no state, Segment::set_firmware_threads) to the thread that
-// calls run() and to N - 1 workers, and run() returns when all are done: a fork and a join around each batch,
-// so nothing else ever runs beside a slave's firmware.
+// calls run() and to N - 1 workers, and run() returns when all are done: a fork and a join around each batch.
+// A caller that has other work that touches none of the batch's state (the serve loop answering a frame for
+// other slaves, Segment::start_deferred_firmware) splits run() into start() and join() around it.
 //
 // The hand-off is wait-free for the caller and takes no lock: a batch is published with one atomic store;
 // the caller and the workers claim items, a chunk at a time, with compare-and-swap on one word holding the
@@ -44,6 +45,15 @@ class FirmwareThreads {
     // when all calls have returned. Only one thread may call it (the serve loop's).
     using Work = void (*)(void* context, std::size_t item);
     void run(std::size_t count, Work work, void* context);
+    // The same in two steps, so that the caller can do other work while the workers run the batch: start()
+    // hands the batch to the workers and returns at once; join() works through the items no worker has
+    // claimed yet and returns when all are done. The caller must touch nothing the items touch in between,
+    // and join() each batch before it starts or runs another. With one thread (or one item), start() runs
+    // the batch itself.
+    void start(std::size_t count, Work work, void* context);
+    void join();
+    // A batch is started and not joined yet.
+    bool started() const { return started_; }
 
     // A worker that has had no batch for this long sleeps until the next one (by default).
     static constexpr std::uint64_t kSpinNs = 100'000;
@@ -85,7 +95,9 @@ class FirmwareThreads {
     std::atomic<std::uint64_t> on_workers_{0};
     std::uint64_t long_waits_ = 0, longest_wait_ns_ = 0;  // the caller's (run())
     const std::uint64_t spin_ns_;
-    std::uint32_t batch_ = 0;  // the caller's last batch number
+    std::uint32_t batch_ = 0;      // the caller's last batch number
+    std::size_t batch_count_ = 0;  // its items
+    bool started_ = false;         // it is not joined yet
     std::vector<std::thread> workers_;
 };
 

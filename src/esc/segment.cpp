@@ -27,6 +27,7 @@ void Segment::add(std::unique_ptr<Slave> s) {
 }
 
 void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
+    finish_background_firmware();
     const std::size_t i = slaves_.size();
     slaves_.push_back(std::move(s));
     ++slaves_epoch_;
@@ -39,6 +40,7 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     cycle_ns_.push_back(0);
     picked_.push_back(0);
     picked_list_.reserve(slaves_.size());
+    background_list_.reserve(slaves_.size());
     marked_.reserve(slaves_.size());
     marks_valid_ = false;
     earliest_deadline_ns_ = 0;

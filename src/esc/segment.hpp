@@ -33,6 +33,9 @@ struct SegmentCounters {
     std::uint64_t firmware_runs = 0;  // runs of one slave's firmware (Segment::run), for any reason
     // Frames processed while the firmware of frames before them stayed deferred (set_deferred_firmware)
     std::uint64_t past_deferred_firmware = 0;
+    // ... of them, frames whose datagrams the ESCs processed while that firmware ran on the firmware
+    // threads (Segment::start_deferred_firmware)
+    std::uint64_t beside_firmware = 0;
 };
 
 // Damage a frame suffers on one cable of the line (fault injection). Cable k joins the master (k == 0) or
@@ -55,6 +58,7 @@ using ApplicationFactory = std::function<std::unique_ptr<Application>(const devi
 class Segment {
   public:
     Segment() = default;
+    ~Segment();  // (waits for firmware runs on the workers, start_deferred_firmware)
     // The ESCs count their port changes into the segment (port_epoch_): it stays where it was made.
     Segment(const Segment&) = delete;
     Segment& operator=(const Segment&) = delete;
@@ -105,6 +109,18 @@ class Segment {
     // frame's time, in the frames' order, as if it had run after each frame: the replies are the same.
     bool firmware_deferred() const { return deferred_count_ != 0; }
     static constexpr std::size_t kMaxDeferredFrames = 32;
+    // On several firmware threads (set_firmware_threads) such a server may also hand the deferred firmware
+    // to the workers when it has sent a reply, and go on beside them: to look for the next frame and answer
+    // it. The first deferred frame's runs start on the workers (FirmwareThreads::start), at its time as
+    // run_deferred_firmware would run them, and the segment waits for them (FirmwareThreads::join) where it
+    // would have run them: before a frame that may see what they do, before any other batch of runs (a
+    // frame's catch-ups), and in run_deferred_firmware, tick and tick_part. A frame that goes on beside them
+    // touches none of their slaves nor anything they write (the rule of keep_deferred above: no deadline due,
+    // other groups only). Until one of process_frame, run_deferred_firmware, tick, tick_part or this the
+    // caller must call nothing else on the segment or its slaves. Starts nothing unless the only deferred
+    // frame marked kMinParallelRuns slaves or more and nothing else is due at its time; the runs then stay
+    // deferred as before.
+    void start_deferred_firmware();
     // Host time of the next SYNC pulse of any slave (DistributedClock::kNever if none).
     std::uint64_t next_event_ns() const;
 
@@ -137,7 +153,7 @@ class Segment {
     // serve loop's thread takes part and returns when the batch is done (FirmwareThreads::run): nothing runs
     // beside the firmware, and the frame's datagrams are processed on the serve loop's thread as before.
     // Batches of fewer than kMinParallelRuns runs stay on the calling thread. nullptr: one thread.
-    void set_firmware_threads(FirmwareThreads* threads) { threads_ = threads; }
+    void set_firmware_threads(FirmwareThreads* threads);
     static constexpr std::size_t kMinParallelRuns = 4;
     // From this many slaves on, a frame asks the caches for its slaves' ESC state before it passes them
     // (Slave::prefetch_for_frame): BM_CyclicReplyPath/512 140 us against 153 us without (medians of 4
@@ -271,6 +287,14 @@ class Segment {
     std::vector<std::uint64_t> group_batch_;  // per group: the batch it was last put in
     std::uint64_t batch_serial_ = 0;
     std::vector<std::uint32_t> batch_groups_;  // the groups of the batch being run
+    // Batches: the groups of the picked slaves into batch_groups_ (their order: the slaves').
+    void make_batch(std::uint64_t now_ns);
+    // The runs of the first deferred frame on the workers (start_deferred_firmware): the slaves they run
+    // (capacity: one per slave). finish_background_firmware waits for them and takes the frame off the
+    // deferred ones.
+    bool background_ = false;
+    std::vector<std::uint32_t> background_list_;
+    void finish_background_firmware();
     void count_corruption(const FrameDamage& d, std::size_t reached);
     void update_links(std::size_t i);
     void return_receive_times(const protocol::ParsedFrame& pf, Bytes frame);

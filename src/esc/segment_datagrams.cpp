@@ -14,6 +14,7 @@ using protocol::DatagramView;
 using protocol::ParsedFrame;
 
 void Segment::refresh_addressing() {
+    finish_background_firmware();  // (it reads every ESC)
     addressing_.resize(slaves_.size());
     for (std::size_t k = 0; k < slaves_.size(); ++k)
         addressing_[k] = slaves_[k]->esc().addressing();
@@ -191,6 +192,7 @@ void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t 
             indexed = find_candidates(pf, intact);
         }
     }
+    if (background_) ++counters_.beside_firmware;
     // The datagrams at slave k.
     const auto pass = [&](std::size_t k, std::uint16_t position) {
         Esc* esc = nullptr;

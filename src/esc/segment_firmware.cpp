@@ -46,6 +46,7 @@ void Segment::run_due_firmware(std::uint64_t now_ns) {
 }
 
 void Segment::run_deferred_firmware() {
+    finish_background_firmware();
     if (deferred_count_ == 0) return;
     const std::size_t count = std::exchange(deferred_count_, 0);
     deferred_marks_ = 0;
@@ -59,6 +60,51 @@ void Segment::run_deferred_firmware() {
         run_picked(deferred_[f].at_ns);
     }
     run_due_firmware(deferred_[count - 1].at_ns);
+}
+
+void Segment::start_deferred_firmware() {
+    finish_background_firmware();  // (one batch at a time)
+    // Only the first frame's runs (those of several frames would have to keep their order in each group),
+    // and only when its marks are all there is to run at its time (run_due_firmware's quick way).
+    if (deferred_count_ != 1 || !threads_ || threads_->threads() < 2 || marked_.size() < kMinParallelRuns ||
+        !marks_valid_ || deferred_[0].at_ns < latest_run_ns_ || grouped_epoch_ != slaves_epoch_ ||
+        picked_count_ != 0)
+        return;
+    const std::uint64_t at = deferred_[0].at_ns;
+    deliver_coupled_pulses(at);
+    for (const std::uint32_t k : marked_)
+        if (last_run_ns_[k] == 0) pick(k);
+    marked_.clear();
+    deferred_[0].marks_end = 0;
+    deferred_marks_ = 0;
+    if (picked_count_ < kMinParallelRuns) {
+        // (Some had run since they were marked: a frame's catch-up.) Few enough for this thread, now.
+        run_picked(at);
+        deferred_count_ = 0;
+        return;
+    }
+    make_batch(at);
+    counters_.firmware_runs += picked_count_;
+    picked_count_ = 0;
+    background_list_.swap(picked_list_);  // (both hold one per slave)
+    background_ = true;
+    threads_->start(batch_groups_.size(), &Segment::run_group, this);
+}
+
+void Segment::finish_background_firmware() {
+    if (!background_) return;
+    threads_->join();
+    background_ = false;
+    // The deadlines the runs set.
+    for (const std::uint32_t k : background_list_)
+        earliest_deadline_ns_ = std::min(earliest_deadline_ns_, deadline_ns_[k]);
+    background_list_.clear();
+    // Its frame is done; the frames deferred beside it move up, their groups marked anew.
+    std::copy(deferred_.begin() + 1, deferred_.begin() + deferred_count_, deferred_.begin());
+    if (--deferred_count_ == 0 || grouped_epoch_ != slaves_epoch_) return;
+    ++deferral_serial_;
+    for (std::size_t i = 0; i < deferred_marks_; ++i)
+        group_deferred_[group_of_[marked_[i]]] = deferral_serial_;
 }
 
 // (A frame comes here with a place left: keep_deferred let the frames before it stay only then.)
@@ -197,13 +243,23 @@ std::uint64_t Segment::next_firmware_ns() const {
 
 // ---- Batches on several threads
 
+void Segment::set_firmware_threads(FirmwareThreads* threads) {
+    finish_background_firmware();
+    threads_ = threads;
+}
+
+Segment::~Segment() {
+    finish_background_firmware();
+}
+
 void Segment::run_picked(std::uint64_t now_ns) {
     if (picked_count_ == 0) return;
-    // In the slaves' order (slaves that share state run in order). Picked in order, mostly.
-    if (picked_count_ > 1 && !std::is_sorted(picked_list_.begin(), picked_list_.end()))
-        std::sort(picked_list_.begin(), picked_list_.end());
-    latest_run_ns_ = std::max(latest_run_ns_, now_ns == 0 ? 1 : now_ns);
+    finish_background_firmware();  // (one batch at a time)
     if (!threads_ || threads_->threads() < 2 || picked_count_ < kMinParallelRuns) {
+        // In the slaves' order (slaves that share state run in order). Picked in order, mostly.
+        if (picked_count_ > 1 && !std::is_sorted(picked_list_.begin(), picked_list_.end()))
+            std::sort(picked_list_.begin(), picked_list_.end());
+        latest_run_ns_ = std::max(latest_run_ns_, now_ns == 0 ? 1 : now_ns);
         for (const std::uint32_t k : picked_list_) {
             picked_[k] = 0;
             run(k, now_ns);
@@ -213,6 +269,20 @@ void Segment::run_picked(std::uint64_t now_ns) {
         picked_count_ = 0;
         return;
     }
+    make_batch(now_ns);
+    threads_->run(batch_groups_.size(), &Segment::run_group, this);
+    // The deadlines the workers set.
+    for (const std::uint32_t k : picked_list_)
+        earliest_deadline_ns_ = std::min(earliest_deadline_ns_, deadline_ns_[k]);
+    picked_list_.clear();
+    counters_.firmware_runs += picked_count_;
+    picked_count_ = 0;
+}
+
+void Segment::make_batch(std::uint64_t now_ns) {
+    if (picked_count_ > 1 && !std::is_sorted(picked_list_.begin(), picked_list_.end()))
+        std::sort(picked_list_.begin(), picked_list_.end());
+    latest_run_ns_ = std::max(latest_run_ns_, now_ns == 0 ? 1 : now_ns);
     if (grouped_epoch_ != slaves_epoch_) refresh_groups();
     ++batch_serial_;
     batch_groups_.clear();
@@ -224,13 +294,6 @@ void Segment::run_picked(std::uint64_t now_ns) {
         }
     }
     batch_now_ns_ = now_ns;
-    threads_->run(batch_groups_.size(), &Segment::run_group, this);
-    // The deadlines the workers set.
-    for (const std::uint32_t k : picked_list_)
-        earliest_deadline_ns_ = std::min(earliest_deadline_ns_, deadline_ns_[k]);
-    picked_list_.clear();
-    counters_.firmware_runs += picked_count_;
-    picked_count_ = 0;
 }
 
 void Segment::run_group(void* self, std::size_t item) {

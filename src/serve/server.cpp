@@ -177,12 +177,17 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             }
         }
         if (opt.counters && n == 0) bump(opt.counters->wakeups);
-        // Wake up for the next deadline of the firmware or the faults' timeline, or to catch up.
-        std::uint64_t due = std::min(seg.next_firmware_ns(), last_tick + catch_up.period_ns());
-        if (opt.filter) due = std::min(due, opt.filter->next_event_ns());
+        // Wake up for the next deadline of the firmware or the faults' timeline, or to catch up. (Only when
+        // no frame is at hand: the deferred firmware has run then, Segment::start_deferred_firmware.)
+        std::uint64_t due = ~std::uint64_t{0};
         std::int64_t wait_us = 0;
-        if (const std::uint64_t t = monotonic_ns(); due > t)  // rounded up: not awake before it is due
-            wait_us = static_cast<std::int64_t>(std::min<std::uint64_t>((due - t + 999) / 1000, 1'000'000));
+        if (n == 0) {
+            due = std::min(seg.next_firmware_ns(), last_tick + catch_up.period_ns());
+            if (opt.filter) due = std::min(due, opt.filter->next_event_ns());
+            if (const std::uint64_t t = monotonic_ns(); due > t)  // rounded up: not awake before it is due
+                wait_us =
+                    static_cast<std::int64_t>(std::min<std::uint64_t>((due - t + 999) / 1000, 1'000'000));
+        }
         if (opt.filter && n == 0) send_due_replies(sock, opt, buf, st, wait_us);
         bool from_down = false;
         if (n != 0) {
@@ -279,6 +284,9 @@ ServeStats serve(esc::Segment& seg, RawSocket& sock, const ServeOptions& opt, co
             }
             if (plain && seg.firmware_deferred() && deferred < deferred_at.size()) {
                 deferred_at[deferred++] = at;  // runs when no frame waits (above)
+                // On the firmware threads meanwhile, if nothing but the segment looks at the slaves before
+                // the next frame (the observer looks before the segment does, the filter around it).
+                if (!opt.observer && !opt.filter) seg.start_deferred_firmware();
             } else {
                 run_deferred();  // this frame's firmware, and any before it
                 if (opt.after_frame) opt.after_frame(opt.after_frame_context, at);

@@ -1,6 +1,7 @@
 // The slaves' firmware on several threads (esc::FirmwareThreads, Segment::set_firmware_threads, vecat run
 // --threads): every item of every batch runs once; slaves that share state form one group; and a network
-// served with three threads answers the master byte for byte as with one.
+// served with three threads answers the master byte for byte as with one, also with the firmware after each
+// frame running beside the next frame (Segment::start_deferred_firmware).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -181,18 +182,31 @@ TEST(FirmwareGroups, SlavesThatShareStateRunInOneGroup) {
     EXPECT_EQ(line->firmware_groups(), 3u);
 }
 
+// How the second copy of a network runs its firmware (answers_as_with_one_thread).
+enum class Threaded {
+    Batches,  // each batch of runs on three threads, the caller waiting for it
+    Beside,   // the firmware after each frame on three threads beside the next frame (as the serve loop)
+};
+
 // The same network twice, one copy with three firmware threads: the master reads the same bytes from both
 // in every cycle, with every drive moving in cyclic synchronous position mode and the wired outputs
-// toggling; and the workers did take part.
-TEST(FirmwareThreads, ANetworkAnswersAsWithOneThread) {
+// toggling; and the workers did take part. frame_gap_ns: the time between the frames of a cycle.
+void answers_as_with_one_thread(const std::string& network, Threaded how, std::uint64_t frame_gap_ns = 0) {
     constexpr std::uint64_t kStart = 1'000'000'000;
-    test::ServedNetwork plain{kNetwork, test::ServedNetwork::From::Text, kStart};
-    test::ServedNetwork threaded{kNetwork, test::ServedNetwork::From::Text, kStart};
+    test::ServedNetwork plain{network, test::ServedNetwork::From::Text, kStart};
+    test::ServedNetwork threaded{network, test::ServedNetwork::From::Text, kStart};
     esc::FirmwareThreads threads(3);
-    threaded.built.segment->set_firmware_threads(&threads);
+    esc::Segment& seg = *threaded.built.segment;
+    seg.set_firmware_threads(&threads);
     for (test::ServedNetwork* n : {&plain, &threaded})
         ASSERT_TRUE(n->master.startup(AlState::Op));
     ASSERT_EQ(plain.link.now_ns(), threaded.link.now_ns()) << "both start-ups took the same time";
+    if (how == Threaded::Beside) {
+        seg.set_deferred_firmware(true);
+        threaded.link.set_firmware_beside(true);
+    }
+    for (test::ServedNetwork* n : {&plain, &threaded})
+        n->link.set_time_step(frame_gap_ns);
     const std::size_t n_slaves = plain.master.slaves().size();
     const test::CspOutputs csp(plain.master.slaves()[5]);  // every drive has the default mapping
     ASSERT_TRUE(csp.valid());
@@ -220,6 +234,8 @@ TEST(FirmwareThreads, ANetworkAnswersAsWithOneThread) {
             n->link.set_time(t);
             ASSERT_EQ(n->master.exchange_process_data().value_or(0), n->master.expected_wkc());
         }
+        // (As the serve loop does when no frame comes.)
+        seg.run_deferred_firmware();
         differences += test::differing_inputs(plain.master, threaded.master);
         // The input "sensors" channel 0 is wired to the output "valves" channel 0 (bit 0 of i).
         wired_ones += threaded.master.inputs(2)[0] & 1u;
@@ -227,14 +243,32 @@ TEST(FirmwareThreads, ANetworkAnswersAsWithOneThread) {
     }
     EXPECT_EQ(differences, 0u);
     // The drives did move, the wires did carry, and the workers ran some of the groups.
-    auto* drive = dynamic_cast<cia402::Drive*>(&threaded.built.segment->slave(10).app());
+    auto* drive = dynamic_cast<cia402::Drive*>(&seg.slave(10).app());
     ASSERT_NE(drive, nullptr);
     EXPECT_GT(drive->position_actual(), 1'000'000);
     EXPECT_GT(wired_ones, cycles / 3);  // the output toggles every cycle: about half of them
     EXPECT_LT(wired_ones, 2 * cycles / 3);
     EXPECT_GT(threads.items_on_workers(), on_workers_before);
-    EXPECT_EQ(plain.built.segment->counters().firmware_runs,
-              threaded.built.segment->counters().firmware_runs);
+    EXPECT_EQ(plain.built.segment->counters().firmware_runs, seg.counters().firmware_runs);
+    if (how == Threaded::Beside) {
+        // Frames were answered while the firmware of the frames before them ran: several in every cycle.
+        EXPECT_GT(seg.counters().beside_firmware, static_cast<std::uint64_t>(cycles));
+    }
+}
+
+TEST(FirmwareThreads, ANetworkAnswersAsWithOneThread) {
+    answers_as_with_one_thread(kNetwork, Threaded::Batches);
+}
+
+// kNetwork and 300 more drives: the process data takes several frames a cycle, the outputs first, each
+// frame for other drives than the one before. The firmware after each frame runs on the workers while the
+// next frame is answered, at the frame's time (frames 20 us apart), and every answer is the same as with one
+// thread and the firmware run after each frame.
+TEST(FirmwareThreads, FirmwareBesideTheNextFrameAnswersAsAfterEachFrame) {
+    std::string network = kNetwork;
+    for (int i = 7; i < 307; ++i)
+        network += "  - {name: a" + std::to_string(i) + ", device: drive}\n";
+    answers_as_with_one_thread(network, Threaded::Beside, 20'000);
 }
 
 }  // namespace
