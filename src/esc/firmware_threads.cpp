@@ -131,8 +131,11 @@ void FirmwareThreads::join() {
     while (done_.load(std::memory_order_acquire) < count)
         pause();
     const std::uint64_t waited = steady_ns() - since;
-    if (waited >= kLongWaitNs) ++long_waits_;
-    longest_wait_ns_ = std::max(longest_wait_ns_, waited);
+    // (Only this thread writes them; others may read them while it runs: relaxed, no locked instruction.)
+    if (waited >= kLongWaitNs)
+        long_waits_.store(long_waits_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    if (waited > longest_wait_ns_.load(std::memory_order_relaxed))
+        longest_wait_ns_.store(waited, std::memory_order_relaxed);
 }
 
 void FirmwareThreads::worker() {

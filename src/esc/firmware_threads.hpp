@@ -67,8 +67,8 @@ class FirmwareThreads {
     // (a worker preempted in the middle of its chunk, or the machine stalled), and the caller's longest such
     // wait: figures for the soak and the tests.
     static constexpr std::uint64_t kLongWaitNs = 50'000;
-    std::uint64_t long_waits() const { return long_waits_; }
-    std::uint64_t longest_wait_ns() const { return longest_wait_ns_; }
+    std::uint64_t long_waits() const { return long_waits_.load(std::memory_order_relaxed); }
+    std::uint64_t longest_wait_ns() const { return longest_wait_ns_.load(std::memory_order_relaxed); }
 
   private:
     void worker();
@@ -93,7 +93,7 @@ class FirmwareThreads {
     std::atomic<std::uint32_t> wake_{0};
     std::atomic<bool> stop_{false};
     std::atomic<std::uint64_t> on_workers_{0};
-    std::uint64_t long_waits_ = 0, longest_wait_ns_ = 0;  // the caller's (run())
+    std::atomic<std::uint64_t> long_waits_{0}, longest_wait_ns_{0};  // the caller's (join())
     const std::uint64_t spin_ns_;
     std::uint32_t batch_ = 0;      // the caller's last batch number
     std::size_t batch_count_ = 0;  // its items
