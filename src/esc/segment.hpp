@@ -150,9 +150,10 @@ class Segment {
     // threads by group: slaves whose applications share state (Application::shared_state: drives coupled
     // by TWINsync, I/O wired to each other) form one group, which runs on one thread in the slaves'
     // order; groups share nothing, so they run in any order on any thread with the same results. The
-    // serve loop's thread takes part and returns when the batch is done (FirmwareThreads::run): nothing runs
-    // beside the firmware, and the frame's datagrams are processed on the serve loop's thread as before.
-    // Batches of fewer than kMinParallelRuns runs stay on the calling thread. nullptr: one thread.
+    // serve loop's thread takes part and returns when the batch is done (FirmwareThreads::run), and the
+    // frame's datagrams are processed on the serve loop's thread as before (the one exception: the runs after
+    // a frame may go on beside the next frame, start_deferred_firmware). Batches of fewer than
+    // kMinParallelRuns runs stay on the calling thread. nullptr: one thread.
     void set_firmware_threads(FirmwareThreads* threads);
     static constexpr std::size_t kMinParallelRuns = 4;
     // From this many slaves on, a frame asks the caches for its slaves' ESC state before it passes them
