@@ -513,8 +513,10 @@ int run(const Options& o) {
     if (sc.frames > 0)
         fmt::print(
             "  segment: {} frames, {} firmware runs of a slave, {} frames answered while the firmware of "
-            "frames before them was still to run ({} of them while it ran on the firmware threads)\n",
-            sc.frames, sc.firmware_runs, sc.past_deferred_firmware, sc.beside_firmware);
+            "frames before them was still to run ({} of them while it ran on the firmware threads; the "
+            "firmware of {} frames in {} batches there)\n",
+            sc.frames, sc.firmware_runs, sc.past_deferred_firmware, sc.beside_firmware, sc.background_frames,
+            sc.background_batches);
     return rc;
 }
 

@@ -54,6 +54,8 @@ class FirmwareThreads {
     void join();
     // A batch is started and not joined yet.
     bool started() const { return started_; }
+    // ... and the workers have run all of its items (join() then only takes note).
+    bool finished() const { return started_ && done_.load(std::memory_order_acquire) >= batch_count_; }
 
     // A worker that has had no batch for this long sleeps until the next one (by default).
     static constexpr std::uint64_t kSpinNs = 100'000;

@@ -60,6 +60,7 @@ bool Segment::can_move_group(std::size_t head, std::size_t parent, unsigned port
 bool Segment::move_group(std::size_t head, std::size_t parent, unsigned port, std::vector<std::size_t>& order,
                          std::string* why) {
     if (!can_move_group(head, parent, port, why)) return false;
+    finish_background_firmware();
     const std::size_t n = slaves_.size();
     // The new cabling, by the slaves' present numbers.
     std::vector<std::array<int, 4>> child = child_;

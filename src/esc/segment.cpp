@@ -39,6 +39,7 @@ void Segment::add(std::unique_ptr<Slave> s, ApplicationFactory own) {
     pulse_ns_.push_back(0);
     cycle_ns_.push_back(0);
     picked_.push_back(0);
+    run_at_ns_.push_back(0);
     picked_list_.reserve(slaves_.size());
     background_list_.reserve(slaves_.size());
     marked_.reserve(slaves_.size());
@@ -227,6 +228,7 @@ void Segment::return_receive_times(const ParsedFrame& pf, Bytes frame) {
 }
 
 void Segment::set_cable(std::size_t k, bool connected) {
+    finish_background_firmware();
     if (redundant() && k == slaves_.size()) {
         red_cable_up_ = connected;
         ++port_epoch_;
@@ -246,6 +248,7 @@ std::size_t Segment::reachable() const {
 }
 
 void Segment::set_firmware_halted(std::size_t i, bool halted) {
+    finish_background_firmware();
     // (Unchanged: the slave keeps its schedule. The fault injector states every slave's halt whenever a
     // fault starts or ends.)
     if (i >= halted_.size() || halted_[i] == (halted ? 1 : 0)) return;
@@ -257,6 +260,7 @@ void Segment::set_firmware_halted(std::size_t i, bool halted) {
 }
 
 bool Segment::restart_slave(std::size_t i) {
+    finish_background_firmware();
     if (i >= slaves_.size()) return false;
     const ApplicationFactory& factory = own_factory_[i] ? own_factory_[i] : factory_;
     if (!factory) return false;

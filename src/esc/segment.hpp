@@ -36,6 +36,10 @@ struct SegmentCounters {
     // ... of them, frames whose datagrams the ESCs processed while that firmware ran on the firmware
     // threads (Segment::start_deferred_firmware)
     std::uint64_t beside_firmware = 0;
+    // Batches of runs handed to the firmware threads that way, and the frames whose firmware they ran (a
+    // batch takes all the frames deferred while the batch before it ran)
+    std::uint64_t background_batches = 0;
+    std::uint64_t background_frames = 0;
 };
 
 // Damage a frame suffers on one cable of the line (fault injection). Cable k joins the master (k == 0) or
@@ -142,6 +146,7 @@ class Segment {
     // or released on an application whose inputs otherwise do not change with time, which says
     // Application::next_cycle_ns kNever): the next frame that reads it finds it caught up first.
     void wake_slave(std::size_t k) {
+        finish_background_firmware();
         if (k < cycle_ns_.size()) cycle_ns_[k] = 0;
     }
 
@@ -290,11 +295,15 @@ class Segment {
     std::vector<std::uint32_t> batch_groups_;  // the groups of the batch being run
     // Batches: the groups of the picked slaves into batch_groups_ (their order: the slaves').
     void make_batch(std::uint64_t now_ns);
-    // The runs of the first deferred frame on the workers (start_deferred_firmware): the slaves they run
-    // (capacity: one per slave). finish_background_firmware waits for them and takes the frame off the
-    // deferred ones.
+    // The runs of the deferred frames on the workers (start_deferred_firmware): the slaves they run
+    // (capacity: one per slave), how many of the deferred frames they are, and each slave's time (the
+    // time of the frame that marked it; timed_batch_: run_group takes it). finish_background_firmware
+    // waits for them and takes the frames off the deferred ones.
     bool background_ = false;
+    bool timed_batch_ = false;
+    std::size_t background_frames_ = 0;
     std::vector<std::uint32_t> background_list_;
+    std::vector<std::uint64_t> run_at_ns_;  // per slave
     void finish_background_firmware();
     void count_corruption(const FrameDamage& d, std::size_t reached);
     void update_links(std::size_t i);

@@ -63,31 +63,54 @@ void Segment::run_deferred_firmware() {
 }
 
 void Segment::start_deferred_firmware() {
-    finish_background_firmware();  // (one batch at a time)
-    // Only the first frame's runs (those of several frames would have to keep their order in each group),
-    // and only when its marks are all there is to run at its time (run_due_firmware's quick way).
-    if (deferred_count_ != 1 || !threads_ || threads_->threads() < 2 || marked_.size() < kMinParallelRuns ||
+    if (background_) {
+        // The workers are still at the frames before: the frames since stay deferred until they are done, so
+        // that this thread is free for the next frame.
+        if (!threads_->finished()) return;
+        finish_background_firmware();
+    }
+    // Only when the marks are all there is to run at the frames' times (run_due_firmware's quick way).
+    if (deferred_count_ == 0 || !threads_ || threads_->threads() < 2 || marked_.size() < kMinParallelRuns ||
         !marks_valid_ || deferred_[0].at_ns < latest_run_ns_ || grouped_epoch_ != slaves_epoch_ ||
         picked_count_ != 0)
         return;
-    const std::uint64_t at = deferred_[0].at_ns;
-    deliver_coupled_pulses(at);
-    for (const std::uint32_t k : marked_)
-        if (last_run_ns_[k] == 0) pick(k);
-    marked_.clear();
-    deferred_[0].marks_end = 0;
-    deferred_marks_ = 0;
+    // Each frame's marks at its time. No group has marks of two of the frames (a frame that concerns a group
+    // a frame before it marked runs the deferred firmware first: candidates_share_deferred_groups), so one
+    // batch of groups runs them all as run_deferred_firmware would, and the frames' order within a group
+    // does not arise. A coupled drive can only be among the last frame's marks (keep_deferred): its SYNC
+    // pulses up to that frame's time come first, as run_due_firmware hands them out.
+    const std::uint64_t last = deferred_[deferred_count_ - 1].at_ns;
+    deliver_coupled_pulses(last);
+    std::size_t begin = 0;
+    for (std::size_t f = 0; f < deferred_count_; ++f) {
+        const std::size_t end = f + 1 < deferred_count_ ? deferred_[f].marks_end : marked_.size();
+        for (std::size_t i = begin; i < end; ++i)
+            if (const std::uint32_t k = marked_[i]; last_run_ns_[k] == 0) {
+                pick(k);
+                run_at_ns_[k] = deferred_[f].at_ns;
+            }
+        begin = end;
+    }
     if (picked_count_ < kMinParallelRuns) {
         // (Some had run since they were marked: a frame's catch-up.) Few enough for this thread, now.
-        run_picked(at);
-        deferred_count_ = 0;
+        for (std::size_t i = 0; i < picked_list_.size(); ++i)
+            picked_[picked_list_[i]] = 0;
+        picked_list_.clear();
+        picked_count_ = 0;
+        run_deferred_firmware();
         return;
     }
-    make_batch(at);
+    marked_.clear();
+    deferred_marks_ = 0;
+    make_batch(last);
+    timed_batch_ = true;
     counters_.firmware_runs += picked_count_;
     picked_count_ = 0;
     background_list_.swap(picked_list_);  // (both hold one per slave)
     background_ = true;
+    background_frames_ = deferred_count_;
+    ++counters_.background_batches;
+    counters_.background_frames += deferred_count_;
     threads_->start(batch_groups_.size(), &Segment::run_group, this);
 }
 
@@ -95,13 +118,15 @@ void Segment::finish_background_firmware() {
     if (!background_) return;
     threads_->join();
     background_ = false;
+    timed_batch_ = false;
     // The deadlines the runs set.
     for (const std::uint32_t k : background_list_)
         earliest_deadline_ns_ = std::min(earliest_deadline_ns_, deadline_ns_[k]);
     background_list_.clear();
-    // Its frame is done; the frames deferred beside it move up, their groups marked anew.
-    std::copy(deferred_.begin() + 1, deferred_.begin() + deferred_count_, deferred_.begin());
-    if (--deferred_count_ == 0 || grouped_epoch_ != slaves_epoch_) return;
+    // Its frames are done; the frames deferred beside it move up, their groups marked anew.
+    std::copy(deferred_.begin() + background_frames_, deferred_.begin() + deferred_count_, deferred_.begin());
+    deferred_count_ -= background_frames_;
+    if (deferred_count_ == 0 || grouped_epoch_ != slaves_epoch_) return;
     ++deferral_serial_;
     for (std::size_t i = 0; i < deferred_marks_; ++i)
         group_deferred_[group_of_[marked_[i]]] = deferral_serial_;
@@ -303,7 +328,7 @@ void Segment::run_group(void* self, std::size_t item) {
         const std::uint32_t k = s.members_[m];
         if (!s.picked_[k]) continue;
         s.picked_[k] = 0;
-        s.run_slave(k, s.batch_now_ns_);
+        s.run_slave(k, s.timed_batch_ ? s.run_at_ns_[k] : s.batch_now_ns_);
     }
 }
 

@@ -29,7 +29,7 @@ class InProcessLink final : public Link {
         const bool reply = filter_ ? filter_->process_frame(buf, slot.len, now_ns())
                                    : seg_.process_frame(buf, slot.len, now_ns());
         if (reply) ++count_;
-        if (beside_ && !filter_ && !observer_) seg_.start_deferred_firmware();
+        if (beside_ && !filter_ && !observer_ && ++frames_ % beside_ == 0) seg_.start_deferred_firmware();
         return true;
     }
     long receive(Bytes out, std::int64_t) override {
@@ -56,11 +56,11 @@ class InProcessLink final : public Link {
     void set_filter(FrameFilter* f) { filter_ = f; }
     // Sees each frame before the segment and each reply as the master receives it (nullptr: none).
     void set_observer(FrameObserver* o) { observer_ = o; }
-    // After each frame, the segment's deferred firmware goes to its firmware threads as the serve loop hands
-    // it (Segment::start_deferred_firmware, with set_deferred_firmware and set_firmware_threads): the next
-    // frame sent is processed beside it. The caller runs the segment's run_deferred_firmware() before it
-    // looks at the slaves.
-    void set_firmware_beside(bool on) { beside_ = on; }
+    // After every n-th frame (1: each, as the serve loop does; 0: never), the segment's deferred firmware
+    // goes to its firmware threads (Segment::start_deferred_firmware, with set_deferred_firmware and
+    // set_firmware_threads): the next frames sent are processed beside it. The caller runs the segment's
+    // run_deferred_firmware() before it looks at the slaves.
+    void set_firmware_beside(unsigned every_nth_frame) { beside_ = every_nth_frame; }
     void set_time(std::uint64_t ns) {
         manual_time_ = true;
         manual_now_ = ns;
@@ -82,7 +82,8 @@ class InProcessLink final : public Link {
     std::array<Slot, kQueued> queue_{};
     std::size_t head_ = 0, count_ = 0;
     bool manual_time_ = false;
-    bool beside_ = false;
+    unsigned beside_ = 0;
+    unsigned frames_ = 0;
     std::uint64_t manual_now_ = 0;
     std::uint64_t step_ns_ = 0;
 };
