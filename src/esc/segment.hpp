@@ -115,15 +115,17 @@ class Segment {
     static constexpr std::size_t kMaxDeferredFrames = 32;
     // On several firmware threads (set_firmware_threads) such a server may also hand the deferred firmware
     // to the workers when it has sent a reply, and go on beside them: to look for the next frame and answer
-    // it. The first deferred frame's runs start on the workers (FirmwareThreads::start), at its time as
-    // run_deferred_firmware would run them, and the segment waits for them (FirmwareThreads::join) where it
-    // would have run them: before a frame that may see what they do, before any other batch of runs (a
-    // frame's catch-ups), and in run_deferred_firmware, tick and tick_part. A frame that goes on beside them
-    // touches none of their slaves nor anything they write (the rule of keep_deferred above: no deadline due,
-    // other groups only). Until one of process_frame, run_deferred_firmware, tick, tick_part or this the
-    // caller must call nothing else on the segment or its slaves. Starts nothing unless the only deferred
-    // frame marked kMinParallelRuns slaves or more and nothing else is due at its time; the runs then stay
-    // deferred as before.
+    // it. The deferred frames' runs start on the workers (FirmwareThreads::start), each slave at its frame's
+    // time as run_deferred_firmware would run it, and the segment waits for them (FirmwareThreads::join)
+    // where it would have run them: before a frame that may see what they do, before any other batch of runs
+    // (a frame's catch-ups), in run_deferred_firmware, tick and tick_part, and before a change of the slaves
+    // or their cabling. A frame that goes on beside them touches none of their slaves nor anything they write
+    // (the rule of keep_deferred above: no deadline due, other groups only). While the workers are still at
+    // a batch, this returns at once and the frames since stay deferred; the next call once the batch is done
+    // hands them over together. Until one of process_frame, run_deferred_firmware, tick, tick_part or this
+    // the caller must call nothing else on the segment or its slaves. Starts nothing unless the deferred
+    // frames marked kMinParallelRuns slaves or more and nothing else is due at their times; the runs then
+    // stay deferred as before.
     void start_deferred_firmware();
     // Host time of the next SYNC pulse of any slave (DistributedClock::kNever if none).
     std::uint64_t next_event_ns() const;
