@@ -54,8 +54,9 @@ class FirmwareThreads {
     void join();
     // A batch is started and not joined yet.
     bool started() const { return started_; }
-    // ... and the workers have run all of its items (join() then only takes note).
-    bool finished() const { return started_ && done_.load(std::memory_order_acquire) >= batch_count_; }
+    // No batch is started, or the workers have run all of its items (join() then only takes note). (A batch
+    // that start() ran itself is never started.)
+    bool finished() const { return !started_ || done_.load(std::memory_order_acquire) >= batch_count_; }
 
     // A worker that has had no batch for this long sleeps until the next one (by default).
     static constexpr std::uint64_t kSpinNs = 100'000;
