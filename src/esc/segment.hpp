@@ -299,10 +299,9 @@ class Segment {
     void make_batch(std::uint64_t now_ns);
     // The runs of the deferred frames on the workers (start_deferred_firmware): the slaves they run
     // (capacity: one per slave), how many of the deferred frames they are, and each slave's time (the
-    // time of the frame that marked it; timed_batch_: run_group takes it). finish_background_firmware
+    // time of the frame that marked it; run_group takes it while background_). finish_background_firmware
     // waits for them and takes the frames off the deferred ones.
     bool background_ = false;
-    bool timed_batch_ = false;
     std::size_t background_frames_ = 0;
     std::vector<std::uint32_t> background_list_;
     std::vector<std::uint64_t> run_at_ns_;  // per slave

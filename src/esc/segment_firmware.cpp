@@ -103,7 +103,6 @@ void Segment::start_deferred_firmware() {
     marked_.clear();
     deferred_marks_ = 0;
     make_batch(last);
-    timed_batch_ = true;
     counters_.firmware_runs += picked_count_;
     picked_count_ = 0;
     background_list_.swap(picked_list_);  // (both hold one per slave)
@@ -118,7 +117,6 @@ void Segment::finish_background_firmware() {
     if (!background_) return;
     threads_->join();
     background_ = false;
-    timed_batch_ = false;
     // The deadlines the runs set.
     for (const std::uint32_t k : background_list_)
         earliest_deadline_ns_ = std::min(earliest_deadline_ns_, deadline_ns_[k]);
@@ -328,7 +326,7 @@ void Segment::run_group(void* self, std::size_t item) {
         const std::uint32_t k = s.members_[m];
         if (!s.picked_[k]) continue;
         s.picked_[k] = 0;
-        s.run_slave(k, s.timed_batch_ ? s.run_at_ns_[k] : s.batch_now_ns_);
+        s.run_slave(k, s.background_ ? s.run_at_ns_[k] : s.batch_now_ns_);
     }
 }
 
