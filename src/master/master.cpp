@@ -85,14 +85,21 @@ bool Master::take_reply(Bytes buf, const protocol::ParsedFrame& pf, std::span<Da
 std::uint32_t Master::wait_replies(std::span<const std::span<DatagramRequest>> frames,
                                    const std::uint8_t* first, std::uint32_t pending) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::microseconds(opt_.reply_timeout_us);
+    // Past the deadline the replies that are already there are still taken (a few, without waiting), as
+    // SOEM's ecx_waitinframe looks once more before it gives up: a master thread that the scheduler kept
+    // from running for longer than the timeout must not count replies that came in time as lost.
+    std::size_t late_looks = 2 * kMaxFramesInFlight;
     while (pending != 0) {
         const auto left =
             std::chrono::duration_cast<std::chrono::microseconds>(deadline - std::chrono::steady_clock::now())
                 .count();
-        if (left <= 0) break;
-        const long n = link_.receive(Bytes(rx_.data(), rx_.size()), left);
+        if (left <= 0 && late_looks-- == 0) break;
+        const long n = link_.receive(Bytes(rx_.data(), rx_.size()), std::max<std::int64_t>(left, 0));
         if (n < 0) break;
-        if (n == 0) continue;
+        if (n == 0) {
+            if (left <= 0) break;
+            continue;
+        }
         const Bytes reply(rx_.data(), static_cast<std::size_t>(n));
         const auto pf = protocol::parse_frame(reply);
         if (pf.error != protocol::FrameError::None) continue;

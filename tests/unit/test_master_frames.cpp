@@ -3,7 +3,9 @@
 // and matches each reply to its frame by the datagrams' indexes, whatever order the replies come in.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "master/master.hpp"
@@ -26,6 +28,13 @@ class LoggingLink final : public net::Link {
         return inner_.send(frame);
     }
     long receive(Bytes out, std::int64_t timeout_us) override {
+        if (stall_next_receive) {
+            // The master's thread kept from running for longer than its whole timeout, the replies arriving
+            // meanwhile: this look finds nothing, and the time is up when it returns.
+            stall_next_receive = false;
+            std::this_thread::sleep_for(std::chrono::microseconds(timeout_us) + std::chrono::milliseconds(1));
+            return 0;
+        }
         if (reverse && held_.empty()) {
             std::array<std::uint8_t, 1600> b{};
             while (const long n = inner_.receive(Bytes(b.data(), b.size()), 0))
@@ -44,6 +53,7 @@ class LoggingLink final : public net::Link {
     }
     std::string log;
     bool reverse = false;
+    bool stall_next_receive = false;
     // Loses the n-th frame sent from now on (1: the next one; 0: none).
     void lose_frame(unsigned n) {
         sent_ = 0;
@@ -100,4 +110,14 @@ TEST_F(MasterCyclicFrames, ALostFrameFailsTheCycleAndLeavesTheNextOneWhole) {
     EXPECT_FALSE(m.exchange_process_data().has_value());
     link.lose_frame(0);
     EXPECT_EQ(m.exchange_process_data(), m.expected_wkc());
+}
+
+// Replies that came in time are taken even when the master's thread first looks after its deadline (a
+// scheduler that kept it from running): the cycle is whole, and no frame goes out again.
+TEST_F(MasterCyclicFrames, RepliesThereAtTheDeadlineAreTakenNotSentAgain) {
+    m.options().retries = 1;
+    link.stall_next_receive = true;
+    EXPECT_EQ(m.exchange_process_data(), m.expected_wkc());
+    const std::size_t n = m.process_data_frames();
+    EXPECT_EQ(link.log, std::string(n, 'S') + std::string(n, 'R'));
 }
