@@ -160,8 +160,13 @@ void Segment::process_datagrams(Bytes frame, const ParsedFrame& pf, std::size_t 
     if (indexed && slaves_.size() >= kPrefetchSlaves)
         for (const std::uint32_t k : candidates_)
             slaves_[k]->prefetch_for_frame();
-    // The deferred frames' firmware runs first if this frame may see what it does (set_deferred_firmware).
-    if (deferred_count_ != 0 && (!indexed || candidates_share_deferred_groups())) run_deferred_firmware();
+    // The deferred frames' firmware runs first if this frame may see what it does (set_deferred_firmware),
+    // and then the deadlines those runs set that are due at this frame's time (a watchdog shorter than the
+    // time since the deferred frames), as the catch-up before the frame would have taken them.
+    if (deferred_count_ != 0 && (!indexed || candidates_share_deferred_groups())) {
+        run_deferred_firmware();
+        catch_up_deadlines(now_ns);
+    }
     if (deferred_count_ != 0) ++counters_.past_deferred_firmware;
     if (any_reads) {
         const auto pick_if_read = [&](std::size_t k, std::uint16_t position) {

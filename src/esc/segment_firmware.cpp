@@ -151,7 +151,11 @@ void Segment::defer_frame_firmware(std::uint64_t now_ns) {
 // nothing but those drives) runs no slave the deferred frames marked, and the marks are all in marked_.
 // The deferred runs have not set their slaves' next deadlines yet: the frame comes within a local cycle of
 // the first deferred frame, before a deadline a run sets a local cycle ahead (a pending state change's poll)
-// falls due. Which slaves the frame concerns is known later (candidates_share_deferred_groups).
+// falls due. Which slaves the frame concerns is known later (candidates_share_deferred_groups). A deadline
+// sooner than that (a process data watchdog shorter than the local cycle) is taken before the next frame that
+// concerns the slave reads it (process_datagrams), or when the deferred firmware runs: not at the first
+// frame past it, as without the deferral, when that frame does not concern the slave. (Knowing it before
+// the run would cost each deferred slave a look at its deadlines on the serve loop's thread.)
 bool Segment::keep_deferred(std::uint64_t now_ns, const FrameDamage& damage) const {
     return deferred_count_ < kMaxDeferredFrames && now_ns < deferred_[0].at_ns + local_cycle_ns_ &&
            marks_valid_ && now_ns >= latest_run_ns_ && now_ns < earliest_deadline_ns_ &&

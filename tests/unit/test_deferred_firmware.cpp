@@ -88,4 +88,26 @@ TEST(DeferredFirmware, AFrameALocalCycleLaterRunsTheDeferredFirmwareFirst) {
     EXPECT_EQ(app(0)->runs.back(), t2);
 }
 
+// A frame that concerns a deferred slave runs its deferred firmware first; a deadline that run sets at or
+// before this frame's time (a watchdog shorter than the time between the frames, here the application's
+// own) is then due, and is taken before the frame reads the slave, as without the deferral.
+TEST(DeferredFirmware, ADeadlineTheDeferredRunSetsBeforeTheFrameIsTakenBeforeTheFrameReads) {
+    auto seg = three_slaves();
+    const auto app = [&](std::size_t k) { return dynamic_cast<Recording*>(&seg->slave(k).app()); };
+    seg->tick(t0);
+    // Slave 0 gets work at t1; its run there will set a deadline 20 us later.
+    const std::uint64_t t1 = t0 + 10 * kUs;
+    EXPECT_EQ(raw_datagram(*seg, kFpwr, phys(0x1001, 0x0120), {0x02, 0}, t1).wkc, 1);
+    ASSERT_TRUE(seg->firmware_deferred());
+    app(0)->deadline = t1 + 20 * kUs;
+    // A frame 50 us after t1 (within the local cycle) reads slave 0.
+    const std::uint64_t t2 = t1 + 50 * kUs;
+    ASSERT_LT(t2, t1 + seg->local_cycle_ns());
+    EXPECT_EQ(raw_datagram(*seg, kFprd, phys(0x1001, 0x0130), {0, 0}, t2).wkc, 1);
+    // Slave 0 ran at t1, then for its deadline before the frame read it.
+    ASSERT_GE(app(0)->runs.size(), 2u);
+    EXPECT_EQ(app(0)->runs[app(0)->runs.size() - 2], t1);
+    EXPECT_EQ(app(0)->runs.back(), t2);
+}
+
 }  // namespace
