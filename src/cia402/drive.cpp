@@ -250,6 +250,10 @@ Drive::Drive(const device::DeviceDescription& d,
         if (e) e->hooks().writes = &parameter_writes_;
     for (coe::Entry* e : variant_->command_entries())
         if (e) e->hooks().writes = &command_writes_;
+    // P0302 and the synchronisation are read with the parameters (configure()).
+    if (o_->tw_switching_frequency.bound())
+        o_->tw_switching_frequency.entry()->hooks().writes = &parameter_writes_;
+    watch_synchronisation(&parameter_writes_);
     variant_->install([this] { core_->zero_position(); });
     core_ = std::make_unique<DriveCore>(motor_from(*o_));
     configure();
@@ -513,22 +517,26 @@ void Drive::configure() {
         for_each_parameter([&](auto& v, auto&) {
             if (v.entry() && pd.is_rx_mapped(*v.entry())) maps_parameters_ = true;
         });
+        if (const coe::Entry* e = o_->tw_switching_frequency.entry(); e && pd.is_rx_mapped(*e))
+            maps_parameters_ = true;
     }
     if (pd.outputs_changed() != outputs_seen_) {
         outputs_seen_ = pd.outputs_changed();
         ++command_writes_;
         if (maps_parameters_) ++parameter_writes_;
     }
+    // The rest only when a parameter was written since they were read, or the AL state changed (the
+    // synchronisation changes only then: watch_synchronisation; P0302 counts as a parameter): a run that
+    // finds nothing written looks at none of their cache lines.
+    if (parameter_writes_ == parameters_read_) return;
     const bool dc = sync_mode() == coe::SyncMode::DcSync0 || sync_mode() == coe::SyncMode::DcSync1;
     // A device that takes its interpolation period from SYNC0 (HIWIN 9.1.2) writes it now.
     if (variant_->synchronised(dc ? static_cast<std::uint32_t>(cycle_time_ns()) : 0)) ++parameter_writes_;
     io_.parameters.fieldbus_synchronised = dc;
-    // The parameters only when one was written since they were read, and the core's settings that follow
-    // from them (DriveCore::configure reads nothing else).
-    if (parameter_writes_ != parameters_read_) {
-        read_parameters();
-        core_->configure(io_);
-    }
+    // The parameters, and the core's settings that follow from them (DriveCore::configure reads nothing
+    // else).
+    read_parameters();
+    core_->configure(io_);
     // The servo period is the speed control's sampling time, the TWIN sampling time of the switching
     // frequency P0302 (TWINsync specification chapter 2: 250 us, 125 us at 8 kHz); the option card
     // exchanges its telegram in the same cycle. A device without P0302 keeps 250 us. Worked out again

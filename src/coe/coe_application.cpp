@@ -59,6 +59,8 @@ void CoeApplication::clear_faults() {
 
 protocol::AlStatusCode CoeApplication::check_transition(AlState from, AlState to) {
     requested_ = to;
+    if (sync_watch_)
+        ++*sync_watch_;  // (check_safeop chooses the mode, whether the transition is made or not)
     if (from == AlState::PreOp && to == AlState::SafeOp) {
         // The modules first (ETG.5001.1): a device configured for other modules has no valid mapping to
         // check.
@@ -78,6 +80,7 @@ void CoeApplication::on_state_change(AlState from, AlState to) {
     if (to != AlState::Op) outputs_received_ = false;
     outputs_pending_ = false;
     sync_->on_state_change(from, to);
+    if (sync_watch_) ++*sync_watch_;
 }
 
 void CoeApplication::attach(esc::Slave& slave) {

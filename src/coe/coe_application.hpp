@@ -91,6 +91,10 @@ class CoeApplication : public esc::Application {
     SyncParameters& sync_parameters() { return *sync_; }
 
   protected:
+    // A counter of the device's that each AL state change and each transition checked increments: the
+    // synchronisation (sync_mode, cycle_time_ns) changes only then (SyncParameters), so that the device can
+    // tell that it did not change without looking (cia402::Drive counts it with its parameters' writes).
+    void watch_synchronisation(std::uint32_t* counter) { sync_watch_ = counter; }
     // The device's own step, after new outputs were stored in the dictionary and before the inputs are
     // read from it. outputs_applied is false below OP or without new outputs. In free run and SM-synchronous
     // mode it runs on every process data exchange; in DC mode on every SYNC0 (SYNC1) event, after the outputs
@@ -107,6 +111,7 @@ class CoeApplication : public esc::Application {
     std::unique_ptr<ProcessDataMap> map_;
     std::unique_ptr<SdoServer> sdo_;
     std::unique_ptr<SyncParameters> sync_;
+    std::uint32_t* sync_watch_ = nullptr;  // watch_synchronisation
     std::unique_ptr<ParameterStore> store_;
     device::Identity identity_;
     bool outputs_received_ = false;  // in OP, outputs were applied (DC mode cycles use the last ones)
