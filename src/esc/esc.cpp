@@ -109,6 +109,7 @@ Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
     st_le16(&mem_[addr(Reg::WatchdogDivider)], kDefaultWatchdogDivider);
     st_le16(&mem_[addr(Reg::WatchdogTimePdi)], kDefaultWatchdogTime);
     st_le16(&mem_[addr(Reg::WatchdogTimeProcessData)], kDefaultWatchdogTime);
+    update_watchdog_time();
     mem_[addr(Reg::WatchdogStatusProcessData)] = 0x01;
     std::uint16_t sii = 0;
     if (cfg_.sii_read_8_bytes) sii |= sii_ctrl::Read8Bytes;
@@ -639,6 +640,9 @@ void Esc::after_register_write(std::uint16_t lo, std::uint16_t hi, const FrameTi
         mem_[addr(Reg::EcatProcessingUnitErrorCounter)] = 0;
     if (overlaps(lo, hi, addr(Reg::PdiErrorCounter), 1)) mem_[addr(Reg::PdiErrorCounter)] = 0;
     if (overlaps(lo, hi, addr(Reg::LostLinkCounter), 4)) std::memset(&mem_[addr(Reg::LostLinkCounter)], 0, 4);
+    if (overlaps(lo, hi, addr(Reg::WatchdogDivider), 2) ||
+        overlaps(lo, hi, addr(Reg::WatchdogTimeProcessData), 2))
+        update_watchdog_time();
     if (overlaps(lo, hi, addr(Reg::WatchdogCounterProcessData), 1))
         mem_[addr(Reg::WatchdogCounterProcessData)] = 0;
     if (overlaps(lo, hi, addr(Reg::WatchdogCounterPdi), 1)) mem_[addr(Reg::WatchdogCounterPdi)] = 0;
@@ -760,11 +764,14 @@ void Esc::sii_command(std::uint8_t cmd_byte) {
 // ---------------------------------------------------------------------------------------------
 // Watchdogs
 
-std::uint64_t Esc::watchdog_deadline_ns() const {
-    const std::uint16_t wd_time = ld_le16(&mem_[addr(Reg::WatchdogTimeProcessData)]);
-    if (wd_time == 0 || !wd_armed_) return DistributedClock::kNever;
+void Esc::update_watchdog_time() {
     const std::uint64_t divider = ld_le16(&mem_[addr(Reg::WatchdogDivider)]);
-    return wd_last_trigger_ns_ + (divider + 2) * 40 * wd_time + 1;
+    wd_time_ns_ = ld_le16(&mem_[addr(Reg::WatchdogTimeProcessData)]) * (divider + 2) * 40;
+}
+
+std::uint64_t Esc::watchdog_deadline_ns() const {
+    if (wd_time_ns_ == 0 || !wd_armed_) return DistributedClock::kNever;
+    return wd_last_trigger_ns_ + wd_time_ns_ + 1;
 }
 
 void Esc::prefetch_for_frame() const {

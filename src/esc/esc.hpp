@@ -357,6 +357,13 @@ class Esc {
     std::uint64_t fmmu_log_write_first_bit_ = ~std::uint64_t{0}, fmmu_log_write_last_bit_ = 0;
     std::array<FmmuState, protocol::kMaxFmmus> fmmu_{};
     std::array<SmState, protocol::kMaxSms> sm_{};
+    // The process data watchdog (ESC datasheet section II 0x0400, 0x0420, 0x0440): triggered by a write of a
+    // process data SyncManager with its watchdog bit, looked at by every run (tick). Its time, 0x0420 x
+    // (0x0400 + 2) x 40 ns, is worked out when either register is written (0: off), so that a run need
+    // not read them.
+    bool wd_armed_ = false;
+    std::uint64_t wd_last_trigger_ns_ = 0;
+    std::uint64_t wd_time_ns_ = 0;
     EscConfig cfg_;
     DistributedClock dc_;  // works on mem_'s DC registers
     std::vector<std::uint8_t> eeprom_;
@@ -365,6 +372,7 @@ class Esc {
     std::atomic<std::uint64_t>* port_changes_ = nullptr;
     std::atomic<std::uint64_t>* address_changes_ = nullptr;
     void address_changed();
+    void update_watchdog_time();    // wd_time_ns_ from 0x0400 and 0x0420
     std::uint8_t auto_closed_ = 0;  // ports that "auto close" closed at a link loss, until the master reopens
     std::uint8_t link_mask_ = 0x01;
     // Bit p: port_open(p), as update_dl_status last found it (it runs whenever a link, the loop setting of
@@ -376,8 +384,6 @@ class Esc {
     bool al_control_unread_ = false;
     std::uint64_t al_control_written_ns_ = 0;
     bool sm_activation_event_ = false;
-    bool wd_armed_ = false;
-    std::uint64_t wd_last_trigger_ns_ = 0;
     std::array<std::uint8_t, 2048 + 16> scratch_{};
 };
 
