@@ -191,6 +191,24 @@ TEST(AlStateMachine, ProcessDataWatchdogDropsToSafeOp) {
     EXPECT_EQ(b.escx().peek(0x0442), 1);
 }
 
+// The master sets the watchdog's time: 0x0420 x (0x0400 + 2) x 40 ns (ESC datasheet section II), here
+// 20 x (498 + 2) x 40 ns = 400 us, written after the default; it expires then, not after 100 ms.
+TEST(AlStateMachine, TheProcessDataWatchdogExpiresAtTheTimeTheMasterWrote) {
+    Bench b(1);
+    reach(b, S::Op);
+    const auto st = b.master.slaves()[0].station;
+    ASSERT_TRUE(b.master.write16(st, 0x0400, 498));
+    ASSERT_TRUE(b.master.write16(st, 0x0420, 20));
+    b.master.outputs(0)[0] = 0x0F;
+    b.master.exchange_process_data();
+    ASSERT_EQ(b.slave().state(), S::Op);
+    b.advance(300'000);
+    EXPECT_EQ(b.slave().state(), S::Op);
+    b.advance(200'000);
+    EXPECT_EQ(b.slave().state(), S::SafeOp);
+    EXPECT_EQ(b.slave().status_code(), AlStatusCode::SyncManagerWatchdog);
+}
+
 // The watchdog expires at its time, also when no tick ran since and the next frame only writes: the slave
 // catches up with its deadline before that frame retriggers the watchdog (Segment::catch_up_deadlines).
 TEST(AlStateMachine, AWatchdogDueBeforeAWriteOnlyFrameExpiresBeforeTheFrameRetriggersIt) {
