@@ -16,6 +16,7 @@ CoeApplication::CoeApplication(const device::DeviceDescription& d,
     if (d.quirks.no_complete_access) sdo_->set_complete_access_served(false);
     if (d.quirks.sdo_download_echo) sdo_->set_download_echo(true);
     sync_ = std::make_unique<SyncParameters>(od_, d);
+    dc_ = sync_->dc_mode();
     pending_outputs_.reserve(1536);  // a whole frame's worth: no allocation in the cycle
     error_register_ = od_.find(protocol::obj::error_register);
     error_code_ = od_.find(protocol::obj::error_code);
@@ -66,8 +67,10 @@ protocol::AlStatusCode CoeApplication::check_transition(AlState from, AlState to
         // check.
         if (const auto modules = check_module_idents(od_); modules != protocol::AlStatusCode::NoError)
             return modules;
-        const auto code = map_->validate();
-        return code != protocol::AlStatusCode::NoError ? code : sync_->check_safeop();
+        if (const auto code = map_->validate(); code != protocol::AlStatusCode::NoError) return code;
+        const auto code = sync_->check_safeop();
+        dc_ = sync_->dc_mode();  // (it chooses the mode, whether the transition is made or not)
+        return code;
     }
     if (from == AlState::SafeOp && to == AlState::Op) return sync_->check_op();
     return protocol::AlStatusCode::NoError;
@@ -80,6 +83,7 @@ void CoeApplication::on_state_change(AlState from, AlState to) {
     if (to != AlState::Op) outputs_received_ = false;
     outputs_pending_ = false;
     sync_->on_state_change(from, to);
+    dc_ = sync_->dc_mode();
     if (sync_watch_) ++*sync_watch_;
 }
 
@@ -97,12 +101,12 @@ esc::OpReadiness CoeApplication::op_readiness(std::uint64_t now_ns, std::uint64_
 }
 
 void CoeApplication::tick(std::uint64_t now_ns) {
-    sync_->tick(now_ns, state_);
+    if (dc_) sync_->tick(now_ns, state_);  // (outside DC mode it has nothing to watch)
     sdo_->tick(now_ns);
 }
 
 std::uint64_t CoeApplication::next_event_ns() const {
-    return std::min(sync_->next_deadline_ns(state_), sdo_->next_deadline_ns());
+    return std::min(dc_ ? sync_->next_deadline_ns(state_) : ~std::uint64_t{0}, sdo_->next_deadline_ns());
 }
 
 void CoeApplication::sync_event(unsigned signal, std::uint64_t now_ns) {
@@ -118,7 +122,7 @@ void CoeApplication::sync_event(unsigned signal, std::uint64_t now_ns) {
 }
 
 bool CoeApplication::refresh_inputs(Bytes inputs) {
-    if (!sync_->dc_mode()) return false;
+    if (!dc_) return false;
     map_->copy_inputs(inputs);
     inputs_latched_ = true;
     return true;
@@ -148,7 +152,7 @@ void CoeApplication::on_al_error(protocol::AlStatusCode code) {
 void CoeApplication::exchange(std::uint64_t now_ns, ConstBytes outputs, bool apply, Bytes inputs) {
     const bool applied = apply && !outputs.empty();
     advance_to(now_ns);
-    if (applied && sync_->dc_mode()) {
+    if (applied && dc_) {
         // DC synchronous: the outputs take effect at the next SYNC0 (SYNC1) event, whenever in the cycle
         // the frame came (ETG.1020 synchronisation: the application reads SM2 at the sync event). Taken at
         // once, a set-point would start its interpolation at a time that jitters with the frame's arrival.
@@ -158,11 +162,11 @@ void CoeApplication::exchange(std::uint64_t now_ns, ConstBytes outputs, bool app
         map_->copy_outputs(outputs);
     }
     outputs_received_ |= applied && state_ == AlState::Op;
-    if (!sync_->dc_mode()) cycle(now_ns, applied);
+    if (!dc_) cycle(now_ns, applied);
     // DC synchronous: the input buffer holds what the device latched at the last SYNC0 (SYNC1) event
     // (ETG.1020 synchronisation: inputs are latched at the sync event and written once per cycle), not
     // whatever its state is when the firmware happens to run; before the first event, its state.
-    if (!sync_->dc_mode() || !inputs_latched_) map_->copy_inputs(inputs);
+    if (!dc_ || !inputs_latched_) map_->copy_inputs(inputs);
     ++exchanges_;
 }
 

@@ -115,6 +115,9 @@ class CoeApplication : public esc::Application {
     std::unique_ptr<ParameterStore> store_;
     device::Identity identity_;
     bool outputs_received_ = false;  // in OP, outputs were applied (DC mode cycles use the last ones)
+    // sync_->dc_mode(), kept here: it changes only at a transition (SyncParameters), and a run of a device
+    // outside DC mode then need not look at the SyncParameters at all.
+    bool dc_ = false;
     // DC mode: the outputs of the last frame, stored into the dictionary at the next sync event.
     std::vector<std::uint8_t> pending_outputs_;
     bool outputs_pending_ = false;
