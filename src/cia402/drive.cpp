@@ -326,12 +326,12 @@ void Drive::advance(std::uint64_t now_ns) {
     if (now_ns - sim_ns_ > kMaxCatchUp) sim_ns_ = now_ns - kMaxCatchUp;
     // Drives coupled by TWINsync step in lockstep, end 0 before end 1 at every instant, so that each
     // receives the other's telegram of the previous control cycle whatever order the line runs them in.
-    Drive* partner = twin_partner_;
-    const bool first = twin_->end() == 0;
     if (now_ns - sim_ns_ < period_ns_) return;
+    Drive* partner = twin_partner_;
+    const bool first = !partner || twin_->end() == 0;
     // The dictionary cannot change while the steps run (frames and SDO requests come in between calls).
+    // (The synchronisation changes only with a count in parameter_writes_: configure().)
     const bool unread = parameter_writes_ != parameters_read_ || command_writes_ != command_read_;
-    const bool synchronised = io_.parameters.fieldbus_synchronised;
     configure();
     // Only the last period's feedback values reach the dictionary: nothing reads them in between (the
     // periods before it publish their events only). Coupled drives, and a drive whose TWINsync link is on,
@@ -346,8 +346,7 @@ void Drive::advance(std::uint64_t now_ns) {
     // port's state in the DriveIo cannot change then (the link is on only with a cable, and what it received
     // moves only while it is on), and the port's status, which its work of a period keeps, has no reader.
     bool unchanged = quiet_ && !unread && parameter_writes_ == parameters_read_ &&
-                     command_writes_ == command_read_ &&
-                     io_.parameters.fieldbus_synchronised == synchronised && !twin_->channel();
+                     command_writes_ == command_read_ && !twin_->channel();
     while (now_ns - sim_ns_ >= period_ns_) {
         sim_ns_ += period_ns_;
         const bool publish = each || now_ns - sim_ns_ < period_ns_;

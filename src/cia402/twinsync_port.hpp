@@ -27,7 +27,8 @@ namespace vecat::twinsync {
 
 // LocalState, what the drive tells the port about itself every cycle: twinsync/status.hpp.
 
-class Port {
+// (One cache line for what every run of the drive asks: the cable, the role and the end, first.)
+class alignas(64) Port {
   public:
     Port(coe::ObjectDictionary& od, std::uint64_t period_ns);
     ~Port();
@@ -92,13 +93,13 @@ class Port {
     void apply_fault_injection();
     void monitor(const LocalState& local, bool valid);
 
-    coe::ObjectDictionary& od_;
-    std::uint64_t period_ns_;
     std::shared_ptr<Channel> channel_;
     int end_ = 0;
+    Role role_ = Role::Off;
+    coe::ObjectDictionary& od_;
+    std::uint64_t period_ns_;
     std::unique_ptr<Config> c_;
 
-    Role role_ = Role::Off;
     const ModeInfo* mode_ = nullptr;
     Layout layout_ = Layout::Standard;
     std::size_t pdo_size_ = 0;
