@@ -81,6 +81,13 @@ void Segment::start_deferred_firmware() {
     // pulses up to that frame's time come first, as run_due_firmware hands them out.
     const std::uint64_t last = deferred_[deferred_count_ - 1].at_ns;
     deliver_coupled_pulses(last);
+    const auto due =
+        std::count_if(marked_.begin(), marked_.end(), [&](std::uint32_t k) { return last_run_ns_[k] == 0; });
+    if (static_cast<std::size_t>(due) < kMinParallelRuns) {
+        // (Some had run since they were marked: a frame's catch-up.) Few enough for this thread, now.
+        run_deferred_firmware();
+        return;
+    }
     std::size_t begin = 0;
     for (std::size_t f = 0; f < deferred_count_; ++f) {
         const std::size_t end = f + 1 < deferred_count_ ? deferred_[f].marks_end : marked_.size();
@@ -90,15 +97,6 @@ void Segment::start_deferred_firmware() {
                 run_at_ns_[k] = deferred_[f].at_ns;
             }
         begin = end;
-    }
-    if (picked_count_ < kMinParallelRuns) {
-        // (Some had run since they were marked: a frame's catch-up.) Few enough for this thread, now.
-        for (std::size_t i = 0; i < picked_list_.size(); ++i)
-            picked_[picked_list_[i]] = 0;
-        picked_list_.clear();
-        picked_count_ = 0;
-        run_deferred_firmware();
-        return;
     }
     marked_.clear();
     deferred_marks_ = 0;
