@@ -528,7 +528,7 @@ void Drive::configure() {
     // synchronisation changes only then: watch_synchronisation; P0302 counts as a parameter): a run that
     // finds nothing written looks at none of their cache lines.
     if (parameter_writes_ == parameters_read_) return;
-    const bool dc = sync_mode() == coe::SyncMode::DcSync0 || sync_mode() == coe::SyncMode::DcSync1;
+    const bool dc = dc_mode();
     // A device that takes its interpolation period from SYNC0 (HIWIN 9.1.2) writes it now.
     if (variant_->synchronised(dc ? static_cast<std::uint32_t>(cycle_time_ns()) : 0)) ++parameter_writes_;
     io_.parameters.fieldbus_synchronised = dc;

@@ -95,6 +95,8 @@ class CoeApplication : public esc::Application {
     // synchronisation (sync_mode, cycle_time_ns) changes only then (SyncParameters), so that the device can
     // tell that it did not change without looking (cia402::Drive counts it with its parameters' writes).
     void watch_synchronisation(std::uint32_t* counter) { sync_watch_ = counter; }
+    // In DC mode (SYNC0 or SYNC1 synchronous), as of the last transition.
+    bool dc_mode() const { return dc_; }
     // The device's own step, after new outputs were stored in the dictionary and before the inputs are
     // read from it. outputs_applied is false below OP or without new outputs. In free run and SM-synchronous
     // mode it runs on every process data exchange; in DC mode on every SYNC0 (SYNC1) event, after the outputs
