@@ -8,8 +8,10 @@
 //   callgrind_annotate --sort=DLmr callgrind.out.<pid>
 //
 // The totals' DLmr + DLmw are the lines a cycle misses in a 512 KB L2 cache (this machine's), times cycles.
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <thread>
 #include <exception>
 #include <memory>
 #include <vector>
@@ -37,6 +39,7 @@ int main(int argc, char** argv) {
     unsigned threads = 1;
     unsigned frame_gap_us = 0;
     unsigned evict_mb = 0;
+    unsigned period_us = 0;
     app.add_option("--slaves", slaves, "Virtual drives on the line")->check(CLI::Range(1, 4096));
     app.add_option("--cycles", cycles, "Measured cycles (after 5 unmeasured ones)")
         ->check(CLI::Range(1, 100000));
@@ -55,6 +58,11 @@ int main(int argc, char** argv) {
                    "other programs do between the cycles of a soak: each cycle then starts with the caches "
                    "cold")
         ->check(CLI::Range(0, 1024));
+    app.add_option("--period-us", period_us,
+                   "Start a cycle every this many us, sleeping in between, as a master's cycles come (default "
+                   "0: one after the other); the report then also says how the cycles' times spread, and how "
+                   "many windows of 50 cycles were slower than 1.25 times the median on average")
+        ->check(CLI::Range(0, 1'000'000));
     CLI11_PARSE(app, argc, argv);
 
     std::unique_ptr<bench::DriveLine> line;
@@ -86,6 +94,9 @@ int main(int argc, char** argv) {
     std::vector<std::uint8_t> elsewhere(std::size_t{evict_mb} << 20);
     const std::uint64_t runs_before = seg.counters().firmware_runs;
     Clock::duration timed{};
+    std::vector<std::uint32_t> each;  // --period-us: every cycle's time, ns
+    each.reserve(period_us ? cycles : 0);
+    auto next = Clock::now();
     CALLGRIND_START_INSTRUMENTATION;
     for (unsigned c = 0; c < cycles; ++c) {
         if (!elsewhere.empty()) {
@@ -94,9 +105,17 @@ int main(int argc, char** argv) {
                 elsewhere[i] = static_cast<std::uint8_t>(elsewhere[i] + c);
             CALLGRIND_START_INSTRUMENTATION;
         }
+        if (period_us) {
+            next += std::chrono::microseconds(period_us);
+            std::this_thread::sleep_until(next);
+        }
         const auto t0 = Clock::now();
         cycle();
-        timed += Clock::now() - t0;
+        const auto took = Clock::now() - t0;
+        timed += took;
+        if (period_us)
+            each.push_back(static_cast<std::uint32_t>(
+                std::min<std::int64_t>(std::chrono::nanoseconds(took).count(), 0xFFFFFFFF)));
     }
     CALLGRIND_STOP_INSTRUMENTATION;
     fmt::print(
@@ -105,5 +124,32 @@ int main(int argc, char** argv) {
         slaves, cycles, threads, frame_gap_us,
         static_cast<double>(seg.counters().firmware_runs - runs_before) / cycles,
         std::chrono::duration<double, std::micro>(timed).count() / cycles);
+    if (!each.empty()) {
+        // The cycles do the same work every time. Stretches of slower ones (windows of 50 cycles whose mean
+        // is more than 1.25 times the median cycle) are the machine's doing: a neighbour on the host taking
+        // the shared cache or the memory bus, a slower clock (bench/README.md, "Runs of misses").
+        std::vector<std::uint32_t> sorted = each;
+        std::sort(sorted.begin(), sorted.end());
+        const auto at = [&](double q) {
+            return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))] / 1e3;
+        };
+        const double median = sorted[sorted.size() / 2] / 1e3;
+        constexpr std::size_t kWindow = 50;
+        std::size_t windows = 0, slow = 0;
+        double slowest = 0;
+        for (std::size_t i = 0; i + kWindow <= each.size(); i += kWindow, ++windows) {
+            double sum = 0;
+            for (std::size_t k = i; k < i + kWindow; ++k)
+                sum += each[k] / 1e3;
+            const double mean = sum / kWindow;
+            slow += mean > 1.25 * median;
+            slowest = std::max(slowest, mean);
+        }
+        fmt::print("  a cycle every {} us: median {:.1f} us, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; {} of {} "
+                   "windows of {} cycles took more than 1.25 times the median on average, the slowest "
+                   "{:.1f} us\n",
+                   period_us, median, at(0.99), at(0.999), sorted.back() / 1e3, slow, windows, kWindow,
+                   slowest);
+    }
     return 0;
 }

@@ -121,6 +121,7 @@ struct Options {
     std::string network;   // a network file instead of a line of drives
     unsigned threads = 1;  // threads that run the slaves' firmware (vecat run --threads)
     std::uint64_t spin_us = esc::FirmwareThreads::kSpinNs / 1000;
+    std::string cycle_log;  // soak: a line per cycle into this file (CSV)
 };
 
 // The drives are enabled (6, 7, 15) in CSP and hold the position they had, so that every cycle runs the
@@ -190,6 +191,35 @@ struct Miss {
     std::uint32_t wake_ns = 0;
     bool reflector = false;
 };
+
+// --cycle-log: one soak cycle. Times in ns; an exchange that missed keeps the time the master gave up.
+struct CycleRow {
+    std::uint32_t wake_ns = 0;
+    std::uint32_t vecat_ns = 0;
+    std::uint32_t reflector_ns = 0;
+    std::uint32_t serve_cpu_ns = 0;  // the serve loop's thread's CPU time since the cycle before
+    std::uint32_t long_waits = 0;    // the serve thread's waits for a worker's items since the cycle before
+    std::uint32_t wakeups = 0;       // the serve loop's wake-ups since the cycle before
+    bool vecat_ok = true, reflector_ok = true, reflector_first = false;
+};
+
+void write_cycle_log(const std::string& path, const std::vector<CycleRow>& rows) {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    if (!f) {
+        fmt::print(stderr, "vecat-roundtrip: cannot write {}\n", path);
+        return;
+    }
+    fmt::print(f, "cycle,wake_us,vecat_us,vecat_ok,reflector_us,reflector_ok,reflector_first,serve_cpu_us,"
+                  "long_waits,serve_wakeups\n");
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        const CycleRow& r = rows[i];
+        fmt::print(f, "{},{:.1f},{:.1f},{},{:.1f},{},{},{:.1f},{},{}\n", i, r.wake_ns / 1e3, r.vecat_ns / 1e3,
+                   int{r.vecat_ok}, r.reflector_ns / 1e3, int{r.reflector_ok}, int{r.reflector_first},
+                   r.serve_cpu_ns / 1e3, r.long_waits, r.wakeups);
+    }
+    const bool written = std::fclose(f) == 0;
+    fmt::print("cycle log: {} cycles {} {}\n", rows.size(), written ? "written to" : "NOT written to", path);
+}
 
 struct CpuSplit {
     int master = -1, server = -1;
@@ -322,6 +352,8 @@ int run(const Options& o) {
         std::vector<Miss> miss_log;
         miss_log.reserve(64);
         const bool soak_refl = !latency && o.with_reflector;
+        std::vector<CycleRow> rows;
+        rows.reserve(!latency && !o.cycle_log.empty() ? cycles : 0);
         std::uint16_t worst_wkc = 0xFFFF;
         // Warm-up: drives enabled, caches and branch predictors warm.
         for (std::uint64_t c = 0; c < 200; ++c) {
@@ -344,10 +376,15 @@ int run(const Options& o) {
         std::uint64_t done = 0;
         bool refl_turn = latency;
         // Soak with the reflector: one exchange with it, its losses and late replies counted apart.
+        CycleRow row;
+        std::uint64_t row_cpu = cpu0, row_waits = firmware ? firmware->long_waits() : 0,
+                      row_wakeups = wakeups0;
         const auto exchange_reflector = [&] {
             const std::uint64_t r0 = now_ns();
             const bool ok = rf.exchange(r);
             const std::uint64_t r1 = now_ns();
+            row.reflector_ns = static_cast<std::uint32_t>(std::min<std::uint64_t>(r1 - r0, 0xFFFFFFFF));
+            row.reflector_ok = ok;
             if (!ok) {
                 ++refl_lost;
                 if (miss_log.size() < miss_log.capacity())
@@ -388,12 +425,17 @@ int run(const Options& o) {
                     // cycle. Whichever goes second finds both CPUs awake, so the order alternates from cycle
                     // to cycle.
                     const bool refl_first = soak_refl && (done & 1) != 0;
+                    row = CycleRow{};
+                    row.wake_ns = wake.empty() ? 0 : wake.back();
+                    row.reflector_first = refl_first;
                     if (refl_first) exchange_reflector();
                     set_drive_outputs(m, 200 + c_vecat, hold);
                     const std::uint64_t t0 = now_ns();
                     const auto w = m.exchange_process_data();
                     const std::uint64_t t1 = now_ns();
                     ++c_vecat;
+                    row.vecat_ns = static_cast<std::uint32_t>(std::min<std::uint64_t>(t1 - t0, 0xFFFFFFFF));
+                    row.vecat_ok = w && *w == m.expected_wkc();
                     if (!w || *w != m.expected_wkc()) {
                         ++misses;
                         no_reply += !w;
@@ -405,6 +447,18 @@ int run(const Options& o) {
                         if (measured || !latency) rt_vecat.push_back(static_cast<std::uint32_t>(t1 - t0));
                     }
                     if (soak_refl && !refl_first) exchange_reflector();
+                    if (rows.capacity() > rows.size()) {
+                        const std::uint64_t cpu_now = thread_cpu_ns(srv_handle),
+                                            waits = firmware ? firmware->long_waits() : 0,
+                                            wakeups_now = serve_count.wakeups.load();
+                        row.serve_cpu_ns = static_cast<std::uint32_t>(cpu_now - row_cpu);
+                        row.long_waits = static_cast<std::uint32_t>(waits - row_waits);
+                        row.wakeups = static_cast<std::uint32_t>(wakeups_now - row_wakeups);
+                        row_cpu = cpu_now;
+                        row_waits = waits;
+                        row_wakeups = wakeups_now;
+                        rows.push_back(row);
+                    }
                 }
                 ++done;
                 if (!latency && done % report_every == 0) {
@@ -503,6 +557,7 @@ int run(const Options& o) {
                 "  frames that arrived while a tick ran: {:.2f} per cycle, waiting {:.1f} us on average\n",
                 static_cast<double>(behind) / static_cast<double>(c_vecat),
                 behind ? static_cast<double>(behind_ns) / static_cast<double>(behind) / 1000.0 : 0.0);
+        if (!o.cycle_log.empty()) write_cycle_log(o.cycle_log, rows);
         if (misses) rc = 1;
     }
     stop = true;
@@ -559,6 +614,10 @@ int main(int argc, char** argv) {
     app.add_option("--catch-up-us", o.catch_up_us,
                    "Budget of firmware work a frame may find waiting (net::ServeOptions::catch_up_budget_us)")
         ->check(CLI::Range(10, 100000));
+    app.add_option("--cycle-log", o.cycle_log,
+                   "Soak: write a line per cycle to this CSV file (how late the master woke, both exchanges, "
+                   "the serve thread's CPU time and wake-ups, its long waits for a worker), to see what a "
+                   "run of misses looked like");
     CLI11_PARSE(app, argc, argv);
     struct sigaction sa {};
     sa.sa_handler = on_signal;
