@@ -11,9 +11,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
-#include <thread>
 #include <exception>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
@@ -58,10 +58,11 @@ int main(int argc, char** argv) {
                    "other programs do between the cycles of a soak: each cycle then starts with the caches "
                    "cold")
         ->check(CLI::Range(0, 1024));
-    app.add_option("--period-us", period_us,
-                   "Start a cycle every this many us, sleeping in between, as a master's cycles come (default "
-                   "0: one after the other); the report then also says how the cycles' times spread, and how "
-                   "many windows of 50 cycles were slower than 1.25 times the median on average")
+    app.add_option(
+           "--period-us", period_us,
+           "Start a cycle every this many us, sleeping in between, as a master's cycles come (default "
+           "0: one after the other); the report then also says how the cycles' times spread, and how "
+           "many windows of 50 cycles were slower than 1.25 times the median on average")
         ->check(CLI::Range(0, 1'000'000));
     CLI11_PARSE(app, argc, argv);
 
@@ -130,8 +131,9 @@ int main(int argc, char** argv) {
         // the shared cache or the memory bus, a slower clock (bench/README.md, "Runs of misses").
         std::vector<std::uint32_t> sorted = each;
         std::sort(sorted.begin(), sorted.end());
-        const auto at = [&](double q) {
-            return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))] / 1e3;
+        const auto at = [&](double q) {  // the q-quantile, us
+            const auto i = static_cast<std::size_t>(q * static_cast<double>(sorted.size()));
+            return sorted[std::min(i, sorted.size() - 1)] / 1e3;
         };
         const double median = sorted[sorted.size() / 2] / 1e3;
         constexpr std::size_t kWindow = 50;
@@ -145,11 +147,11 @@ int main(int argc, char** argv) {
             slow += mean > 1.25 * median;
             slowest = std::max(slowest, mean);
         }
-        fmt::print("  a cycle every {} us: median {:.1f} us, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; {} of {} "
-                   "windows of {} cycles took more than 1.25 times the median on average, the slowest "
-                   "{:.1f} us\n",
-                   period_us, median, at(0.99), at(0.999), sorted.back() / 1e3, slow, windows, kWindow,
-                   slowest);
+        fmt::print(
+            "  a cycle every {} us: median {:.1f} us, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; {} of {} "
+            "windows of {} cycles took more than 1.25 times the median on average, the slowest "
+            "{:.1f} us\n",
+            period_us, median, at(0.99), at(0.999), sorted.back() / 1e3, slow, windows, kWindow, slowest);
     }
     return 0;
 }

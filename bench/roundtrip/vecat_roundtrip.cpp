@@ -209,8 +209,9 @@ void write_cycle_log(const std::string& path, const std::vector<CycleRow>& rows)
         fmt::print(stderr, "vecat-roundtrip: cannot write {}\n", path);
         return;
     }
-    fmt::print(f, "cycle,wake_us,vecat_us,vecat_ok,reflector_us,reflector_ok,reflector_first,serve_cpu_us,"
-                  "long_waits,serve_wakeups\n");
+    fmt::print(f,
+               "cycle,wake_us,vecat_us,vecat_ok,reflector_us,reflector_ok,reflector_first,serve_cpu_us,"
+               "long_waits,serve_wakeups\n");
     for (std::size_t i = 0; i < rows.size(); ++i) {
         const CycleRow& r = rows[i];
         fmt::print(f, "{},{:.1f},{:.1f},{},{:.1f},{},{},{:.1f},{},{}\n", i, r.wake_ns / 1e3, r.vecat_ns / 1e3,
