@@ -776,18 +776,20 @@ std::uint64_t Esc::watchdog_deadline_ns() const {
 
 void Esc::prefetch_for_frame() const {
     // This object's cyclic part (it comes first, see esc.hpp), the AL event request and the SyncManagers'
-    // registers that a buffer access updates, and the three buffers of each process data SyncManager.
+    // registers that a buffer access updates, and of each process data SyncManager its state and its three
+    // buffers. Only the first line is read here (mem_ and the plan beside it, prefetch_sms_): the loads of
+    // a frame's slaves do not wait for one another.
     const auto* self = reinterpret_cast<const char*>(this);
     for (std::size_t b = 0; b < 4 * 64; b += 64)
         __builtin_prefetch(self + b);
     const std::uint8_t* m = mem_.data();
     __builtin_prefetch(m + addr(Reg::AlEventRequest));
     __builtin_prefetch(m + protocol::sm_addr(0));
-    for (unsigned i = 0; i < cfg_.sm_count && i < sm_.size(); ++i) {
-        const SmState& sm = sm_[i];
-        if (!sm.active || sm.mailbox) continue;
-        for (std::size_t b = 0; b < std::size_t{sm.length} * 3 && sm.start + b < mem_.size(); b += 64)
-            __builtin_prefetch(m + sm.start + b);
+    for (unsigned k = 0; k < prefetch_sm_count_; ++k) {
+        const PrefetchSm& p = prefetch_sms_[k];
+        __builtin_prefetch(&sm_[p.index]);
+        for (std::size_t b = 0; b < p.span; b += 64)
+            __builtin_prefetch(m + p.start + b);
     }
 }
 

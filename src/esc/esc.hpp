@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <cstring>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -189,6 +190,15 @@ class Esc {
     // Asks the caches for what a process data datagram reads and writes here (its FMMUs and SyncManagers,
     // their buffers), so that a frame's slaves are fetched together rather than one after the other.
     void prefetch_for_frame() const;
+    // What it asks for of the SyncManagers, kept as they change (update_sm): each active process data
+    // SyncManager, at most kPrefetchSms of them, with the area of its buffers (three of length bytes, one
+    // of a 1-byte SyncManager).
+    struct PrefetchSm {
+        std::uint8_t index = 0;
+        std::uint16_t start = 0, span = 0;
+    };
+    static constexpr unsigned kPrefetchSms = 4;
+    std::span<const PrefetchSm> prefetch_sms() const { return {prefetch_sms_.data(), prefetch_sm_count_}; }
 
     // ---- Raw access for tests, tools and the application's own registers
     std::uint8_t peek(std::uint16_t a) const { return a < mem_.size() ? mem_[a] : 0; }
@@ -325,6 +335,7 @@ class Esc {
     void refresh_dynamic_registers(std::uint16_t first, std::uint16_t last, const FrameTiming& t);
     void after_register_write(std::uint16_t first, std::uint16_t last, const FrameTiming& t);
     void update_sm(unsigned i);
+    void update_prefetch_sms();  // prefetch_sms_ from sm_
     void update_sm_status(unsigned i);
     void update_fmmu(unsigned i);
     void sii_command(std::uint8_t cmd_byte);
@@ -341,6 +352,9 @@ class Esc {
     // What a cyclic datagram touches comes first, together: a frame of a large network visits hundreds of
     // ESCs, each of them out of the core's caches, and every cache line the visit reads is a miss.
     std::vector<std::uint8_t> mem_;  // 0x0000 .. 0x1000 + ram_bytes
+    // prefetch_sms(), beside mem_ in the first line: prefetch_for_frame reads nothing else of this object.
+    std::array<PrefetchSm, kPrefetchSms> prefetch_sms_{};
+    std::uint8_t prefetch_sm_count_ = 0;
     EscCounters counters_;
     std::uint64_t last_host_ns_ = 0;
     // The configured station address 0x0010, the alias 0x0012 and its enable bit (DL control 0x0100 bit

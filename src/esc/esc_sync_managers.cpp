@@ -165,6 +165,7 @@ void Esc::update_sm(unsigned i) {
         }
         sm_activation_event_ = true;
         set_al_event(al_event::SmActivation);
+        update_prefetch_sms();
     }
     if (repeat != was_repeat) {
         repeat_bits_ = repeat ? (repeat_bits_ | (1u << i)) : (repeat_bits_ & ~(1u << i));
@@ -176,6 +177,16 @@ void Esc::update_sm(unsigned i) {
     else
         sm_guard_mask_ &= ~(1u << i);
     update_sm_status(i);
+}
+
+void Esc::update_prefetch_sms() {
+    prefetch_sm_count_ = 0;
+    for (unsigned i = 0; i < cfg_.sm_count && prefetch_sm_count_ < kPrefetchSms; ++i) {
+        const SmState& s = sm_[i];
+        if (!s.active || s.mailbox) continue;
+        prefetch_sms_[prefetch_sm_count_++] = {static_cast<std::uint8_t>(i), s.start,
+                                               static_cast<std::uint16_t>(s.single ? s.length : 3u * s.length)};
+    }
 }
 
 bool Esc::has_digital_io() const {

@@ -164,6 +164,35 @@ TEST_F(EscOnly, SyncManagerDeactivatedByThePdiLocksItsArea) {
 
 // ESC datasheet section II 0x0120: without device emulation (0x0141 bit 0 = 0) AL control behaves like a
 // mailbox: once written by the master it takes no further write until the PDI has read it.
+// What Esc::prefetch_for_frame asks the caches for follows the process data SyncManagers as the master
+// configures them: their buffers' areas, and not the mailboxes'.
+TEST_F(EscOnly, ThePrefetchPlanFollowsTheProcessDataSyncManagers) {
+    EXPECT_TRUE(esc.prefetch_sms().empty());
+    sm(0, 0x1000, 128, 0x26);
+    sm(1, 0x1080, 128, 0x22);
+    sm(2, 0x1100, 16, 0x64);
+    sm(3, 0x1180, 20, 0x20);
+    auto plan = esc.prefetch_sms();
+    ASSERT_EQ(plan.size(), 2u);
+    EXPECT_EQ(plan[0].index, 2);
+    EXPECT_EQ(plan[0].start, 0x1100);
+    EXPECT_EQ(plan[0].span, 48);
+    EXPECT_EQ(plan[1].index, 3);
+    EXPECT_EQ(plan[1].start, 0x1180);
+    EXPECT_EQ(plan[1].span, 60);
+    ASSERT_EQ(write(sm_addr(2) + 6, {0}), 1);  // SM2 disabled
+    plan = esc.prefetch_sms();
+    ASSERT_EQ(plan.size(), 1u);
+    EXPECT_EQ(plan[0].index, 3);
+    ASSERT_EQ(write(sm_addr(3) + 6, {0}), 1);  // disabled (an enabled one keeps its area), then moved
+    EXPECT_TRUE(esc.prefetch_sms().empty());
+    sm(3, 0x1200, 8, 0x20);
+    plan = esc.prefetch_sms();
+    ASSERT_EQ(plan.size(), 1u);
+    EXPECT_EQ(plan[0].start, 0x1200);
+    EXPECT_EQ(plan[0].span, 24);
+}
+
 TEST_F(EscOnly, AlControlIsAMailboxWithoutDeviceEmulation) {
     ASSERT_EQ(esc.peek(addr(Reg::EscConfiguration)) & esc_config::DeviceEmulation, 0);
     EXPECT_EQ(write(addr(Reg::AlControl), {0x02, 0x00}), 1);
