@@ -184,8 +184,9 @@ void Esc::update_prefetch_sms() {
     for (unsigned i = 0; i < cfg_.sm_count && prefetch_sm_count_ < kPrefetchSms; ++i) {
         const SmState& s = sm_[i];
         if (!s.active || s.mailbox) continue;
-        prefetch_sms_[prefetch_sm_count_++] = {static_cast<std::uint8_t>(i), s.start,
-                                               static_cast<std::uint16_t>(s.single ? s.length : 3u * s.length)};
+        prefetch_sms_[prefetch_sm_count_++] = {
+            static_cast<std::uint8_t>(i), s.start,
+            static_cast<std::uint16_t>(s.single ? s.length : 3u * s.length)};
     }
 }
 
