@@ -29,7 +29,9 @@ struct CoeCounters {
 // ends the transfer in progress. A transfer the master leaves alone for kSdoTimeoutNs is dropped (CiA 301
 // 7.2.4.3: the SDO protocol timeout, abort code 0x05040000); a late segment request is then answered with
 // that abort.
-class SdoServer final : public esc::MailboxProtocol {
+// On a cache line of its own, as the fields every firmware run asks (has_output: the emergencies and the
+// transfer's kind, below) are with the vtable pointer: a run of a large line asks them out of the caches.
+class alignas(64) SdoServer final : public esc::MailboxProtocol {
   public:
     // The timeout of a transfer left alone: 1 s, the SDO server timeout real CANopen devices use (the
     // SDOserverTimeoutTime_ms of CANopenNode's configurations); well above a master's time between two
@@ -127,8 +129,8 @@ class SdoServer final : public esc::MailboxProtocol {
 
     // What each firmware run asks (has_output, tick) first, together: a line of hundreds of drives asks it
     // out of the caches.
+    std::size_t emcy_count_ = 0, emcy_head_ = 0;
     Transfer transfer_ = Idle{};
-    std::size_t emcy_head_ = 0, emcy_count_ = 0;
     // Since when the transfer has not moved: set by the first tick() after a change (the server has no
     // clock of its own), so that a transfer is dropped kSdoTimeoutNs after its last request at the latest.
     static constexpr std::uint64_t kNotYet = ~std::uint64_t{0};
