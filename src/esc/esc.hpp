@@ -361,8 +361,9 @@ class Esc {
     // 24), as address_changed() last found them in mem_ (addressing(), addressed_fixed()).
     std::uint16_t station_ = 0, alias_ = 0;
     bool alias_enabled_ = false;
-    bool firmware_work_ = false;       // see take_firmware_work
-    std::uint32_t sm_guard_mask_ = 0;  // active or locked SMs: the ones that control their memory area
+    bool firmware_work_ = false;        // see take_firmware_work
+    bool sm_activation_event_ = false;  // pdi_take_sm_activation_event, which every run asks
+    std::uint32_t sm_guard_mask_ = 0;   // active or locked SMs: the ones that control their memory area
     // Active FMMUs that read / write (a logical datagram outside the ranges below is rejected without
     // looking at each FMMU).
     std::uint32_t fmmu_read_mask_ = 0, fmmu_write_mask_ = 0;
@@ -397,7 +398,6 @@ class Esc {
     // register then refuses further writes (ESC datasheet section II 0x0120, "behaves like a mailbox").
     bool al_control_unread_ = false;
     std::uint64_t al_control_written_ns_ = 0;
-    bool sm_activation_event_ = false;
     std::array<std::uint8_t, 2048 + 16> scratch_{};
 };
 

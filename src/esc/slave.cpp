@@ -467,10 +467,11 @@ void Slave::service_mailbox() {
             esc_.pdi_set_repeat_ack(in_idx, req);
         }
     }
-    // The ESC copies at most rx_.size() bytes: never look further.
-    const std::size_t rx_len = std::min<std::size_t>(esc_.sm_config(out_idx).length, rx_.size());
     if (esc_.sm_mailbox_full(out_idx) && esc_.pdi_mailbox_take(out_idx, Bytes(rx_.data(), rx_.size()))) {
         ++counters_.mailbox_requests;
+        // The ESC copies at most rx_.size() bytes: never look further. (Asked only now: a run without a
+        // request need not read the SyncManager's registers.)
+        const std::size_t rx_len = std::min<std::size_t>(esc_.sm_config(out_idx).length, rx_.size());
         const auto h = parse_mailbox_header(ConstBytes(rx_.data(), std::min(rx_len, rx_.size())));
         auto& sink = *sink_;
         auto error_reply = [&](MailboxError e) {
