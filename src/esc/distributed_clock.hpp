@@ -112,6 +112,8 @@ class DistributedClock {
         std::uint64_t first_sync0 = 0;  // system time of the first pulse since activation
     };
     SyncState sync_state() const;
+    // Whether the SYNC out unit runs (0x0981 bit 0 latched): without it advance() has no pulse to give.
+    bool cyclic_active() const { return cyclic_active_; }
 
     // ---- Latch units (PDI side: the latch input pins)
     void latch_input(unsigned unit, bool level, std::uint64_t host_ns);

@@ -120,6 +120,8 @@ Esc::Esc(const EscConfig& cfg, std::vector<std::uint8_t> eeprom)
 }
 
 unsigned Esc::pdi_take_sync_pulses(std::uint64_t now_ns, SyncPulse* out, unsigned max) {
+    // (Asked first: a device outside DC mode then reads one line of the DC unit, not its counters too.)
+    if (!dc_.cyclic_active()) return 0;
     const std::uint64_t before0 = dc_.counters().sync_pulses[0], before1 = dc_.counters().sync_pulses[1];
     const unsigned n = dc_.advance(now_ns, out, max);
     if (dc_.counters().sync_pulses[0] != before0) set_al_event(al_event::Sync0);
