@@ -357,6 +357,13 @@ class Esc {
     std::uint8_t prefetch_sm_count_ = 0;
     EscCounters counters_;
     std::uint64_t last_host_ns_ = 0;
+    // The process data watchdog (ESC datasheet section II 0x0400, 0x0420, 0x0440): triggered by a write of a
+    // process data SyncManager with its watchdog bit, looked at by every run (tick, beside last_host_ns_,
+    // which it writes). Its time, 0x0420 x (0x0400 + 2) x 40 ns, is worked out when either register is
+    // written (0: off), so that a run need not read them.
+    std::uint64_t wd_last_trigger_ns_ = 0;
+    std::uint64_t wd_time_ns_ = 0;
+    bool wd_armed_ = false;
     // The configured station address 0x0010, the alias 0x0012 and its enable bit (DL control 0x0100 bit
     // 24), as address_changed() last found them in mem_ (addressing(), addressed_fixed()).
     std::uint16_t station_ = 0, alias_ = 0;
@@ -372,13 +379,6 @@ class Esc {
     std::uint64_t fmmu_log_write_first_bit_ = ~std::uint64_t{0}, fmmu_log_write_last_bit_ = 0;
     std::array<FmmuState, protocol::kMaxFmmus> fmmu_{};
     std::array<SmState, protocol::kMaxSms> sm_{};
-    // The process data watchdog (ESC datasheet section II 0x0400, 0x0420, 0x0440): triggered by a write of a
-    // process data SyncManager with its watchdog bit, looked at by every run (tick). Its time, 0x0420 x
-    // (0x0400 + 2) x 40 ns, is worked out when either register is written (0: off), so that a run need
-    // not read them.
-    bool wd_armed_ = false;
-    std::uint64_t wd_last_trigger_ns_ = 0;
-    std::uint64_t wd_time_ns_ = 0;
     EscConfig cfg_;
     DistributedClock dc_;  // works on mem_'s DC registers
     std::vector<std::uint8_t> eeprom_;
