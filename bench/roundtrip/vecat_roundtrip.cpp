@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "cia402/drive.hpp"
+#include "cycle_log.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
@@ -192,36 +193,6 @@ struct Miss {
     bool reflector = false;
 };
 
-// --cycle-log: one soak cycle. Times in ns; an exchange that missed keeps the time the master gave up.
-struct CycleRow {
-    std::uint32_t wake_ns = 0;
-    std::uint32_t vecat_ns = 0;
-    std::uint32_t reflector_ns = 0;
-    std::uint32_t serve_cpu_ns = 0;  // the serve loop's thread's CPU time since the cycle before
-    std::uint32_t long_waits = 0;    // the serve thread's waits for a worker's items since the cycle before
-    std::uint32_t wakeups = 0;       // the serve loop's wake-ups since the cycle before
-    bool vecat_ok = true, reflector_ok = true, reflector_first = false;
-};
-
-void write_cycle_log(const std::string& path, const std::vector<CycleRow>& rows) {
-    std::FILE* f = std::fopen(path.c_str(), "w");
-    if (!f) {
-        fmt::print(stderr, "vecat-roundtrip: cannot write {}\n", path);
-        return;
-    }
-    fmt::print(f,
-               "cycle,wake_us,vecat_us,vecat_ok,reflector_us,reflector_ok,reflector_first,serve_cpu_us,"
-               "long_waits,serve_wakeups\n");
-    for (std::size_t i = 0; i < rows.size(); ++i) {
-        const CycleRow& r = rows[i];
-        fmt::print(f, "{},{:.1f},{:.1f},{},{:.1f},{},{},{:.1f},{},{}\n", i, r.wake_ns / 1e3, r.vecat_ns / 1e3,
-                   int{r.vecat_ok}, r.reflector_ns / 1e3, int{r.reflector_ok}, int{r.reflector_first},
-                   r.serve_cpu_ns / 1e3, r.long_waits, r.wakeups);
-    }
-    const bool written = std::fclose(f) == 0;
-    fmt::print("cycle log: {} cycles {} {}\n", rows.size(), written ? "written to" : "NOT written to", path);
-}
-
 struct CpuSplit {
     int master = -1, server = -1;
 };
@@ -353,7 +324,7 @@ int run(const Options& o) {
         std::vector<Miss> miss_log;
         miss_log.reserve(64);
         const bool soak_refl = !latency && o.with_reflector;
-        std::vector<CycleRow> rows;
+        std::vector<bench::CycleRow> rows;
         rows.reserve(!latency && !o.cycle_log.empty() ? cycles : 0);
         std::uint16_t worst_wkc = 0xFFFF;
         // Warm-up: drives enabled, caches and branch predictors warm.
@@ -377,7 +348,7 @@ int run(const Options& o) {
         std::uint64_t done = 0;
         bool refl_turn = latency;
         // Soak with the reflector: one exchange with it, its losses and late replies counted apart.
-        CycleRow row;
+        bench::CycleRow row;
         std::uint64_t row_cpu = cpu0, row_waits = firmware ? firmware->long_waits() : 0,
                       row_wakeups = wakeups0;
         const auto exchange_reflector = [&] {
@@ -426,7 +397,7 @@ int run(const Options& o) {
                     // cycle. Whichever goes second finds both CPUs awake, so the order alternates from cycle
                     // to cycle.
                     const bool refl_first = soak_refl && (done & 1) != 0;
-                    row = CycleRow{};
+                    row = bench::CycleRow{};
                     row.wake_ns = wake.empty() ? 0 : wake.back();
                     row.reflector_first = refl_first;
                     if (refl_first) exchange_reflector();
@@ -558,7 +529,7 @@ int run(const Options& o) {
                 "  frames that arrived while a tick ran: {:.2f} per cycle, waiting {:.1f} us on average\n",
                 static_cast<double>(behind) / static_cast<double>(c_vecat),
                 behind ? static_cast<double>(behind_ns) / static_cast<double>(behind) / 1000.0 : 0.0);
-        if (!o.cycle_log.empty()) write_cycle_log(o.cycle_log, rows);
+        if (!o.cycle_log.empty()) bench::write_cycle_log(o.cycle_log, rows);
         if (misses) rc = 1;
     }
     stop = true;
