@@ -251,6 +251,9 @@ class Replayer {
             const std::size_t n = std::min<std::size_t>(want.length(), mine.length());
             const std::size_t message_end = mailbox_message_end(want);
             Verdict v = Verdict::Same;
+            // The offset of d.first_byte in the data: the address wraps at 16 bits (an ADO near 0xFFFF, a
+            // logical address's low half), the offset does not.
+            std::size_t first = 0;
             for (std::size_t k = 0; k < n; ++k) {
                 if (want.data()[k] == mine.data()[k]) continue;
                 const Verdict b = logical(cmd)       ? Verdict::ProcessData
@@ -258,10 +261,16 @@ class Replayer {
                                   : want.ado() + k < protocol::kRegisterSpaceSize
                                       ? register_class(static_cast<std::uint16_t>(want.ado() + k))
                                       : Verdict::Differs;
-                if (v == Verdict::Same) d.first_byte = static_cast<std::uint16_t>(want.ado() + k);
+                if (v == Verdict::Same) {
+                    first = k;
+                    d.first_byte = static_cast<std::uint16_t>(want.ado() + k);
+                }
                 if (b > v) {
                     v = b;
-                    if (b == Verdict::Differs) d.first_byte = static_cast<std::uint16_t>(want.ado() + k);
+                    if (b == Verdict::Differs) {
+                        first = k;
+                        d.first_byte = static_cast<std::uint16_t>(want.ado() + k);
+                    }
                 }
             }
             if (v > Verdict::Same && v != Verdict::ProcessData && nearby(want, mine.wkc(), mine.data()))
@@ -279,7 +288,7 @@ class Replayer {
             }
             if (v == Verdict::Same) continue;
             d.verdict = v;
-            const std::size_t from = d.first_byte - want.ado();
+            const std::size_t from = first;
             const std::size_t shown = std::min(Difference::kShownBytes, n - from);
             d.recorded.assign(want.data() + from, want.data() + from + shown);
             d.replayed.assign(mine.data() + from, mine.data() + from + shown);

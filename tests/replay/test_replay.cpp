@@ -135,6 +135,37 @@ TEST(Replay, AChangedReplyIsReportedAtItsFrame) {
     fs::remove(cap);
 }
 
+// A reply whose address's low half is near 0xFFFF and whose data differs past the wrap (a fuzzed capture
+// found it): the difference is shown from its offset in the data, not from the wrapped address.
+TEST(Replay, ADifferenceWhoseAddressWrapsIsShownFromItsOffset) {
+    const fs::path cap = record_mixed_line("wrapped.pcapng", 20);
+    replay::Capture c = replay::read_capture(cap.string());
+    const replay::Pairing p = replay::pair_frames(c);
+    ASSERT_FALSE(p.exchanges.empty());
+    auto& reply = c.frames[p.exchanges.back().reply];
+    const protocol::ParsedFrame pf = protocol::parse_frame(reply.bytes);
+    ASSERT_GT(pf.count, 0u);
+    std::size_t lrw = pf.count;
+    for (std::size_t i = 0; i < pf.count && lrw == pf.count; ++i)
+        if (pf.datagram(reply.bytes, i).command() == protocol::Command::LRW &&
+            pf.datagram(reply.bytes, i).length() >= 4)
+            lrw = i;
+    ASSERT_LT(lrw, pf.count) << "no LRW in the last cycle's reply";
+    protocol::DatagramView d = pf.datagram(reply.bytes, lrw);
+    st_le16(d.data() - protocol::kDatagramHeaderSize + protocol::datagram::Ado, 0xFFFE);
+    d.data()[3] = static_cast<std::uint8_t>(d.data()[3] ^ 0x5A);  // at 0xFFFE + 3: past the wrap
+    auto line = mixed_line();
+    const replay::ReplayReport r = replay::replay(c, p, *line);
+    const replay::Difference* found = nullptr;
+    for (const auto& x : r.differences)
+        if (x.frame == reply.number && !x.working_counter) found = &x;
+    ASSERT_NE(found, nullptr);
+    EXPECT_EQ(found->first_byte, 0x0001);  // 0xFFFE + 3, as the 16-bit address shows it
+    ASSERT_FALSE(found->recorded.empty());
+    EXPECT_EQ(found->recorded.front(), d.data()[3]);
+    fs::remove(cap);
+}
+
 // A capture whose frames are minutes apart (a fuzzed one, or a master left waiting) costs work by its frames,
 // not by its length: between two frames the firmware runs at the slaves' deadlines, at most 64 passes of the
 // line (the rest of a pause in the last one), and a pause past a second is skipped over. Ticking every 250 us
