@@ -20,6 +20,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench/drive_line.hpp"
+#include "bench/summary.hpp"
 #include "esc/firmware_threads.hpp"
 
 #if __has_include(<valgrind/callgrind.h>)
@@ -130,12 +131,8 @@ int main(int argc, char** argv) {
         // is more than 1.25 times the median cycle) are the machine's doing: a neighbour on the host taking
         // the shared cache or the memory bus, a slower clock (bench/README.md, "Runs of misses").
         std::vector<std::uint32_t> sorted = each;
-        std::sort(sorted.begin(), sorted.end());
-        const auto at = [&](double q) {  // the q-quantile, us
-            const auto i = static_cast<std::size_t>(q * static_cast<double>(sorted.size()));
-            return sorted[std::min(i, sorted.size() - 1)] / 1e3;
-        };
-        const double median = sorted[sorted.size() / 2] / 1e3;
+        const bench::Summary spread = bench::summarize(sorted);
+        const double median = spread.p50 / 1e3;
         constexpr std::size_t kWindow = 50;
         std::size_t windows = 0, slow = 0;
         double slowest = 0;
@@ -151,7 +148,8 @@ int main(int argc, char** argv) {
             "  a cycle every {} us: median {:.1f} us, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; {} of {} "
             "windows of {} cycles took more than 1.25 times the median on average, the slowest "
             "{:.1f} us\n",
-            period_us, median, at(0.99), at(0.999), sorted.back() / 1e3, slow, windows, kWindow, slowest);
+            period_us, median, spread.p99 / 1e3, spread.p999 / 1e3, spread.max / 1e3, slow, windows, kWindow,
+            slowest);
     }
     return 0;
 }

@@ -28,8 +28,9 @@
 #include <thread>
 #include <vector>
 
+#include "bench/roundtrip/cycle_log.hpp"
+#include "bench/summary.hpp"
 #include "cia402/drive.hpp"
-#include "cycle_log.hpp"
 #include "master/master.hpp"
 #include "net/netns.hpp"
 #include "net/raw_socket.hpp"
@@ -70,31 +71,8 @@ void wait_until(std::uint64_t t) {
     }
 }
 
-struct Summary {
-    std::size_t n = 0;
-    double mean = 0;
-    std::uint32_t p50 = 0, p99 = 0, p999 = 0, max = 0;
-};
-
-Summary summarize(std::vector<std::uint32_t>& v) {
-    Summary s;
-    s.n = v.size();
-    if (v.empty()) return s;
-    std::sort(v.begin(), v.end());
-    auto q = [&](double p) {
-        return v[std::min(v.size() - 1,
-                          static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
-    };
-    double sum = 0;
-    for (auto x : v)
-        sum += x;
-    s.mean = sum / static_cast<double>(v.size());
-    s.p50 = q(0.5);
-    s.p99 = q(0.99);
-    s.p999 = q(0.999);
-    s.max = v.back();
-    return s;
-}
+using bench::summarize;
+using bench::Summary;
 
 void print_summary(const char* name, const Summary& s) {
     fmt::print(
@@ -325,7 +303,8 @@ int run(const Options& o) {
         miss_log.reserve(64);
         const bool soak_refl = !latency && o.with_reflector;
         std::vector<bench::CycleRow> rows;
-        rows.reserve(!latency && !o.cycle_log.empty() ? cycles : 0);
+        const bool log_cycles = !latency && !o.cycle_log.empty();
+        rows.reserve(log_cycles ? cycles : 0);  // no allocation in the cycles
         std::uint16_t worst_wkc = 0xFFFF;
         // Warm-up: drives enabled, caches and branch predictors warm.
         for (std::uint64_t c = 0; c < 200; ++c) {
@@ -419,7 +398,7 @@ int run(const Options& o) {
                         if (measured || !latency) rt_vecat.push_back(static_cast<std::uint32_t>(t1 - t0));
                     }
                     if (soak_refl && !refl_first) exchange_reflector();
-                    if (rows.capacity() > rows.size()) {
+                    if (log_cycles && rows.size() < cycles) {
                         const std::uint64_t cpu_now = thread_cpu_ns(srv_handle),
                                             waits = firmware ? firmware->long_waits() : 0,
                                             wakeups_now = serve_count.wakeups.load();
@@ -529,7 +508,7 @@ int run(const Options& o) {
                 "  frames that arrived while a tick ran: {:.2f} per cycle, waiting {:.1f} us on average\n",
                 static_cast<double>(behind) / static_cast<double>(c_vecat),
                 behind ? static_cast<double>(behind_ns) / static_cast<double>(behind) / 1000.0 : 0.0);
-        if (!o.cycle_log.empty()) bench::write_cycle_log(o.cycle_log, rows);
+        if (log_cycles) bench::write_cycle_log(o.cycle_log, rows);
         if (misses) rc = 1;
     }
     stop = true;

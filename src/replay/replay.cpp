@@ -1,4 +1,4 @@
-// The replay (about 600 lines): the frames of a capture sent to a line in their recorded order and time,
+// The replay (about 620 lines): the frames of a capture sent to a line in their recorded order and time,
 // each reply datagram judged against the recorded one, and the line rebuilt from the capture that it is
 // replayed against (build_recovered_line: device, ESC variant and quirks per recovered slave). The two share
 // the rules of what a capture tells; the recovery of those facts from the datagrams is in recover.cpp.
